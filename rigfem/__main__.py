@@ -1,0 +1,5 @@
+import sys
+
+from rigfem.cli import main
+
+sys.exit(main())
