@@ -1,0 +1,260 @@
+"""CalculiX cross-check: write rigfem's exact model as a ccx deck, run ccx, read the .frd.
+
+Units: mm, N, MPa (density in kg/m³ on input, written as t/mm³).  Node numbers in the
+deck are the 0-based indices of ``nodes`` plus one.  Element connectivity uses
+scikit-fem's P2 tetrahedron order, which is CalculiX's C3D10 order: vertices 0..3,
+then the midside nodes of edges (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — exactly
+what ``Basis(MeshTet, ElementTetP2()).element_dofs`` gives (scalar P2, one dof per
+node).  Negatively oriented tetrahedra are renumbered, never rejected.
+
+Stress arrays hold six components in the order xx, yy, zz, xy, yz, zx.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from rigfem.errors import InputError, check_range
+
+#: ccx reads at most 20 characters per field: 14 significant digits fit
+#: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
+_FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}
+
+
+class CalculixError(RuntimeError):
+    """ccx is missing, failed, or wrote no usable results."""
+
+
+@dataclass
+class FrdResult:
+    """Nodal results of a .frd file, one entry per step; rows indexed by node number − 1."""
+
+    displacement: np.ndarray  #: (S, N, 3) mm, NaN where the file has no value
+    stress: np.ndarray  #: (S, N, 6) MPa, xx yy zz xy yz zx, element-extrapolated and averaged
+    node_ids: np.ndarray  #: (N_file,) node numbers present in the file
+
+
+@dataclass
+class CcxResult:
+    """What :func:`run_ccx` returns: the .frd contents plus run facts."""
+
+    displacement: np.ndarray  #: (S, N, 3) mm
+    stress: np.ndarray  #: (S, N, 6) MPa
+    wall_time: float  #: s, the whole ccx process
+    ccx_time: float  #: s, "Total CalculiX Time" reported by ccx (NaN if absent)
+    threads: int
+    log: str  #: ccx's stdout and stderr
+
+
+def _material(material: Any) -> tuple[float, float, float | None]:
+    """(E MPa, nu, density kg/m³ or None) from an object with E, nu[, density] or a tuple."""
+    if isinstance(material, Sequence) and not isinstance(material, str):
+        vals = list(material) + [None] * (3 - len(material))
+        e, nu, rho = vals[:3]
+    else:
+        e, nu, rho = getattr(material, "E", None), getattr(material, "nu", None), getattr(material, "density", None)
+    e = check_range("material.E", e, 0.0, None, "MPa", lo_open=True)
+    nu = check_range("material.nu", nu, -1.0, 0.4999)
+    if rho is not None:
+        rho = check_range("material.density", rho, 0.0, None, "kg/m³", lo_open=True)
+    return e, nu, rho
+
+
+def _fixed_pairs(fixed: Any, n_nodes: int) -> np.ndarray:
+    """(K, 2) int array of (node, dof 0..2) from a (N, 3) bool mask or (K, 2) pairs."""
+    arr = np.asarray(fixed)
+    if arr.dtype == bool:
+        if arr.shape != (n_nodes, 3):
+            raise InputError(f"fixed mask must have shape ({n_nodes}, 3), got {arr.shape}")
+        return np.argwhere(arr)
+    arr = arr.reshape(-1, 2) if arr.size else np.zeros((0, 2), int)
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise InputError("fixed must be a bool mask (N, 3) or integer (node, dof) pairs")
+    if arr.size and (arr[:, 0].min() < 0 or arr[:, 0].max() >= n_nodes):
+        raise InputError(f"fixed node index outside [0, {n_nodes - 1}]")
+    if arr.size and (arr[:, 1].min() < 0 or arr[:, 1].max() > 2):
+        raise InputError("fixed dof outside [0, 2]")
+    return np.unique(arr, axis=0)
+
+
+def _orient(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """Elements with every tetrahedron positively oriented (vertex 3 above face 0-1-2)."""
+    p = nodes[elements[:, :4]]
+    vol = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0])
+    if np.any(vol == 0.0):
+        raise InputError(f"elements: {int(np.sum(vol == 0.0))} tetrahedra have zero volume")
+    out = elements.copy()
+    out[vol < 0] = elements[vol < 0][:, _FLIP[elements.shape[1]]]
+    return out
+
+
+def _lines(rows: np.ndarray, fmt: str) -> str:
+    return "".join(fmt % tuple(r) for r in rows.tolist())
+
+
+def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, material: Any,
+              fixed: Any, nodal_forces: np.ndarray | Sequence[np.ndarray],
+              equations: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]] = (),
+              heading: str = "rigfem model") -> Path:
+    """Write a CalculiX static deck of the model and return its path.
+
+    ``nodes`` (N, 3) mm; ``elements`` (M, 10) C3D10 or (M, 4) C3D4, 0-based, in the order
+    described in the module docstring; ``material`` has ``E`` (MPa), ``nu`` and optionally
+    ``density`` (kg/m³), as attributes or a tuple; ``fixed`` is a (N, 3) bool mask or
+    (K, 2) (node, dof) pairs held at zero; ``nodal_forces`` is one (N, 3) N array or a list
+    of them, each one *STEP (load case); ``equations`` are homogeneous linear constraints
+    ``sum c_i u[node_i, dof_i] = 0`` given as (nodes, dofs, coeffs), the first term being
+    the dependent one (it must not also be fixed).
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
+        raise InputError(f"nodes must be a finite (N, 3) array, got shape {nodes.shape}")
+    elements = np.asarray(elements)
+    if elements.ndim != 2 or elements.shape[1] not in (4, 10) or not np.issubdtype(elements.dtype, np.integer):
+        raise InputError(f"elements must be an integer (M, 10) or (M, 4) array, got {elements.shape}")
+    n = len(nodes)
+    if elements.size == 0 or elements.min() < 0 or elements.max() >= n:
+        raise InputError(f"elements must be non-empty with node indices in [0, {n - 1}]")
+    e_mod, nu, rho = _material(material)
+    pairs = _fixed_pairs(fixed, n)
+    cases = [nodal_forces] if isinstance(nodal_forces, np.ndarray) and nodal_forces.ndim == 2 else list(nodal_forces)
+    if not cases:
+        raise InputError("nodal_forces must hold at least one load case")
+    cases = [np.asarray(f, dtype=float) for f in cases]
+    for i, f in enumerate(cases):
+        if f.shape != (n, 3) or not np.all(np.isfinite(f)):
+            raise InputError(f"nodal_forces[{i}] must be a finite ({n}, 3) array, got {f.shape}")
+    elements = _orient(nodes, elements)
+    etype = "C3D10" if elements.shape[1] == 10 else "C3D4"
+
+    out = [f"*HEADING\n{heading.splitlines()[0] if heading else ''}\n", "*NODE, NSET=NALL\n"]
+    out.append(_lines(np.column_stack([np.arange(1, n + 1), nodes]), "%d,%.14g,%.14g,%.14g\n"))
+    out.append(f"*ELEMENT, TYPE={etype}, ELSET=EALL\n")
+    out.append(_lines(np.column_stack([np.arange(1, len(elements) + 1), elements + 1]),
+                      "%d" + ",%d" * elements.shape[1] + "\n"))
+    out.append(f"*MATERIAL, NAME=MAT\n*ELASTIC\n{e_mod:.14g},{nu:.14g}\n")
+    if rho is not None:
+        out.append(f"*DENSITY\n{rho * 1e-12:.14g}\n")
+    out.append("*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n")
+    if len(pairs):
+        out.append("*BOUNDARY\n" + _lines(np.column_stack([pairs[:, 0] + 1, pairs[:, 1] + 1, pairs[:, 1] + 1]),
+                                          "%d,%d,%d\n"))
+    for k, (eq_nodes, eq_dofs, eq_coef) in enumerate(equations):
+        eq_nodes, eq_dofs = np.asarray(eq_nodes, int).ravel(), np.asarray(eq_dofs, int).ravel()
+        eq_coef = np.asarray(eq_coef, float).ravel()
+        if not (len(eq_nodes) == len(eq_dofs) == len(eq_coef) >= 1) or eq_coef[0] == 0.0:
+            raise InputError(f"equations[{k}] needs equal-length nodes, dofs, coeffs with a nonzero first coefficient")
+        if eq_nodes.min() < 0 or eq_nodes.max() >= n or eq_dofs.min() < 0 or eq_dofs.max() > 2:
+            raise InputError(f"equations[{k}]: node outside [0, {n - 1}] or dof outside [0, 2]")
+        terms = np.column_stack([eq_nodes + 1, eq_dofs + 1, eq_coef]).tolist()
+        out.append(f"*EQUATION\n{len(terms)}\n")
+        # at most 4 terms (12 entries) per line
+        out.extend(",".join("%d,%d,%.14g" % tuple(t) for t in terms[i:i + 4]) + "\n" for i in range(0, len(terms), 4))
+    for f in cases:
+        idx = np.argwhere(f != 0.0)
+        out.append("*STEP\n*STATIC\n*CLOAD, OP=NEW\n")
+        out.append(_lines(np.column_stack([idx[:, 0] + 1, idx[:, 1] + 1, f[idx[:, 0], idx[:, 1]]]), "%d,%d,%.14g\n"))
+        out.append("*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n")
+    path = Path(path)
+    path.write_text("".join(out))
+    return path
+
+
+def _n_nodes(inp_text: str) -> int:
+    """Largest node number in the *NODE block of a deck written by :func:`write_inp`."""
+    m = re.search(r"^\*NODE[^\n]*\n(.*?)^\*", inp_text, flags=re.M | re.S)
+    if not m:
+        raise CalculixError("deck has no *NODE block")
+    return max(int(line.split(",", 1)[0]) for line in m.group(1).splitlines() if line.strip())
+
+
+def read_frd(path: str | os.PathLike, n_nodes: int | None = None) -> FrdResult:
+    """Read the nodal DISP and STRESS blocks of an ASCII CalculiX .frd file."""
+    blocks: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {"DISP": [], "STRESS": []}
+    node_ids = np.zeros(0, int)
+    with open(path) as fh:
+        lines = iter(fh)
+        for line in lines:
+            if line[:6] == "    2C":  # node block: " -1" + I10 + 3 E12.5
+                rows = []
+                for rec in lines:
+                    if rec.startswith(" -3"):
+                        break
+                    rows.append(int(rec[3:13]))
+                node_ids = np.array(rows, int)
+            elif line.startswith(" -4") and line[5:13].strip() in blocks:
+                name = line[5:13].strip()
+                ids, vals = [], []
+                for rec in lines:
+                    if rec.startswith(" -3"):
+                        break
+                    if rec.startswith(" -1"):
+                        ids.append(int(rec[3:13]))
+                        rec = rec.rstrip()
+                        vals.append([float(rec[i:i + 12]) for i in range(13, len(rec), 12)])
+                blocks[name].append((np.array(ids, int), np.array(vals, float)))
+    if not blocks["DISP"]:
+        raise CalculixError(f"{path}: no DISP block")
+    n = int(n_nodes if n_nodes is not None else max(node_ids.max(initial=0), *(b[0].max() for b in blocks["DISP"])))
+
+    def dense(items: list[tuple[np.ndarray, np.ndarray]], ncomp: int) -> np.ndarray:
+        out = np.full((len(items), n, ncomp), np.nan)
+        for s, (ids, vals) in enumerate(items):
+            out[s, ids - 1] = vals[:, :ncomp]
+        return out
+
+    return FrdResult(dense(blocks["DISP"], 3), dense(blocks["STRESS"], 6), node_ids)
+
+
+def run_ccx(inp_path: str | os.PathLike, threads: int = 1, workdir: str | os.PathLike | None = None,
+            timeout: float | None = None) -> CcxResult:
+    """Run ccx on a deck in a temporary directory (or ``workdir``, kept) and read its results.
+
+    ``threads`` sets OMP_NUM_THREADS and CCX_NPROC_* for the run.  Raises
+    :class:`CalculixError` with the tail of ccx's output when ccx fails.
+    """
+    exe = shutil.which("ccx")
+    if exe is None:
+        raise CalculixError("ccx not found on PATH (Debian/Ubuntu: apt-get install calculix-ccx)")
+    threads = int(check_range("threads", threads, 1, 256))
+    inp_path = Path(inp_path)
+    text = inp_path.read_text()
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), CCX_NPROC_STIFFNESS=str(threads),
+               CCX_NPROC_EQUATION_SOLVER=str(threads), CCX_NPROC_RESULTS=str(threads))
+    with tempfile.TemporaryDirectory(prefix="rigfem-ccx-") as tmp:
+        wd = Path(workdir) if workdir is not None else Path(tmp)
+        wd.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(inp_path, wd / "job.inp")
+        t0 = time.perf_counter()
+        try:
+            proc = subprocess.run([exe, "-i", "job"], cwd=wd, env=env, capture_output=True, text=True,
+                                  timeout=timeout)
+        except subprocess.TimeoutExpired as exc:
+            raise CalculixError(f"ccx timed out after {timeout} s on {inp_path}") from exc
+        wall = time.perf_counter() - t0
+        log = proc.stdout + proc.stderr
+        frd = wd / "job.frd"
+        if proc.returncode != 0 or "*ERROR" in log or not frd.exists() or frd.stat().st_size == 0:
+            tail = "\n".join(log.strip().splitlines()[-15:])
+            raise CalculixError(f"ccx failed on {inp_path} (exit code {proc.returncode}):\n{tail}")
+        res = read_frd(frd, _n_nodes(text))
+    m = re.search(r"Total CalculiX Time:\s*([0-9.eE+-]+)", log)
+    return CcxResult(res.displacement, res.stress, wall, float(m.group(1)) if m else float("nan"), threads, log)
+
+
+def von_mises(stress: np.ndarray) -> np.ndarray:
+    """Von Mises stress of (..., 6) tensors ordered xx, yy, zz, xy, yz, zx (shear order irrelevant)."""
+    s = np.asarray(stress, dtype=float)
+    d = s[..., :3]
+    return np.sqrt(0.5 * ((d[..., 0] - d[..., 1]) ** 2 + (d[..., 1] - d[..., 2]) ** 2 + (d[..., 2] - d[..., 0]) ** 2)
+                   + 3.0 * np.sum(s[..., 3:] ** 2, axis=-1))

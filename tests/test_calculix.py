@@ -1,0 +1,183 @@
+"""CalculiX deck writer, runner and .frd reader against closed form and an independent skfem solve."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+from skfem import Basis, ElementTetP2, ElementVector, FacetBasis, LinearForm, MeshTet, asm, condense, solve
+from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+from rigfem.calculix import CalculixError, read_frd, run_ccx, von_mises, write_inp
+from rigfem.errors import InputError
+
+needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) not installed")
+
+E, NU = 210_000.0, 0.3  # MPa
+
+
+def _p2_model(mesh: MeshTet):
+    """Scalar P2 basis (node numbering) and vector basis; vector dof of node k, comp c = 3k + c."""
+    scalar = Basis(mesh, ElementTetP2())
+    vector = Basis(mesh, ElementVector(ElementTetP2()))
+    assert np.array_equal(vector.nodal_dofs[0] // 3, scalar.nodal_dofs[0])  # interleaved layout
+    return scalar, vector
+
+
+def _skfem_solve(vector: Basis, fixed_dofs: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Plain scikit-fem linear elasticity + scipy direct solve; returns (N, 3) displacement."""
+    K = asm(linear_elasticity(*lame_parameters(E, NU)), vector)
+    return solve(*condense(K, f, D=fixed_dofs)).reshape(-1, 3)
+
+
+def _nodal_stress(scalar: Basis, u: np.ndarray) -> np.ndarray:
+    """Element stress evaluated at each element's 10 nodes, averaged over the elements (ccx's recovery)."""
+    mesh, el = scalar.mesh, scalar.elem
+    lam, mu = lame_parameters(E, NU)
+    X = el.doflocs.T  # (3, 10) reference node locations
+    dphi = np.array([el.lbasis(X, i)[1] for i in range(10)])  # (10 basis, 3 ref dirs, 10 points)
+    invJ = mesh.mapping().invDF(X)  # (3, 3, nelems, 10)
+    ue = u[scalar.element_dofs]  # (10, nelems, 3)
+    # grad u[c, j] at (elem, point) = sum_b ue[b, e, c] * dphi[b, k, p] * invJ[k, j, e, p]
+    G = np.einsum("bec,bkp,kjep->epcj", ue, dphi, invJ)
+    eps = 0.5 * (G + G.transpose(0, 1, 3, 2))
+    tr = np.trace(eps, axis1=2, axis2=3)
+    sig = 2 * mu * eps + lam * tr[..., None, None] * np.eye(3)
+    voigt = np.stack([sig[..., 0, 0], sig[..., 1, 1], sig[..., 2, 2], sig[..., 0, 1], sig[..., 1, 2], sig[..., 2, 0]], -1)
+    acc = np.zeros((scalar.N, 6))
+    cnt = np.zeros(scalar.N)
+    dofs = scalar.element_dofs.T  # (nelems, 10)
+    np.add.at(acc, dofs, voigt)
+    np.add.at(cnt, dofs, 1.0)
+    return acc / cnt[:, None]
+
+
+def _cantilever(L=200.0, h=10.0, nx=40, ny=3):
+    mesh = MeshTet.init_tensor(np.linspace(0, L, nx + 1), np.linspace(0, h, ny + 1), np.linspace(0, h, ny + 1))
+    return mesh.with_boundaries({"root": lambda x: x[0] < 1e-9, "tip": lambda x: x[0] > L - 1e-9})
+
+
+@needs_ccx
+def test_cantilever_against_euler_bernoulli_and_skfem(tmp_path):
+    L, h, P = 200.0, 10.0, 100.0  # mm, mm, N (tip shear in -z)
+    mesh = _cantilever(L, h)
+    scalar, vector = _p2_model(mesh)
+    # consistent nodal loads of a uniform traction on the tip face, total P
+    tip = FacetBasis(mesh, ElementVector(ElementTetP2()), facets=mesh.boundaries["tip"])
+    f = asm(LinearForm(lambda v, w: -P / h**2 * v[2]), tip)
+    assert np.isclose(f.sum(), -P)
+    fixed_nodes = scalar.get_dofs("root").all()
+    fixed_dofs = (3 * fixed_nodes[:, None] + np.arange(3)).ravel()
+
+    u_sk = _skfem_solve(vector, fixed_dofs, f)
+    s_sk = _nodal_stress(scalar, u_sk)
+
+    nodes = scalar.doflocs.T
+    mask = np.zeros((scalar.N, 3), bool)
+    mask[fixed_nodes] = True
+    deck = write_inp(tmp_path / "cantilever.inp", nodes, scalar.element_dofs.T, (E, NU, 7850.0), mask, f.reshape(-1, 3))
+    res = run_ccx(deck, threads=1)
+    u_cx, s_cx = res.displacement[0], res.stress[0]
+
+    tip_nodes = scalar.get_dofs("tip").all()
+    w_cx, w_sk = u_cx[tip_nodes, 2].mean(), u_sk[tip_nodes, 2].mean()
+    # Timoshenko: bending P L^3 / 3EI plus shear P L / (kappa G A), kappa = 10(1+nu)/(12+11nu)
+    inertia, area, G = h**4 / 12, h**2, E / (2 * (1 + NU))
+    w_eb = -P * L**3 / (3 * E * inertia)
+    w_timo = w_eb - P * L / (10 * (1 + NU) / (12 + 11 * NU) * G * area)
+    assert w_cx == pytest.approx(w_eb, rel=0.03)  # Euler-Bernoulli, a few %
+    assert w_cx == pytest.approx(w_timo, rel=0.01)  # with shear, 1 %
+    # same model solved twice: frd holds 5 significant digits, so agreement is ~1e-5
+    assert w_cx == pytest.approx(w_sk, rel=5e-3)
+    assert np.abs(u_cx - u_sk).max() <= 1e-4 * np.abs(u_sk).max()
+    vm_cx, vm_sk = von_mises(s_cx), von_mises(s_sk)
+    assert vm_cx.max() == pytest.approx(vm_sk.max(), rel=1e-2)
+    assert np.abs(vm_cx - vm_sk).max() <= 1e-4 * vm_sk.max()
+    # root bending stress at mid-span (away from the clamp): M c / I
+    mid = np.isclose(nodes[:, 0], L / 2) & np.isclose(nodes[:, 2], h)
+    assert s_cx[mid, 0].mean() == pytest.approx(P * (L / 2) * (h / 2) / inertia, rel=0.01)
+
+
+@needs_ccx
+def test_node_order_on_distorted_mesh(tmp_path):
+    """Randomly distorted P2 tets, random loads: ccx and skfem agree node by node."""
+    rng = np.random.default_rng(4)
+    mesh = MeshTet.init_tensor(*(np.linspace(0, 1, 4),) * 3)
+    p = mesh.p.copy()
+    interior = np.all((p > 1e-9) & (p < 1 - 1e-9), axis=0)
+    p[:, interior] += rng.uniform(-0.15, 0.15, (3, interior.sum()))
+    p = p * np.array([[20.0], [8.0], [5.0]])
+    mesh = MeshTet(p, mesh.t)
+    scalar, vector = _p2_model(mesh)
+    nodes = scalar.doflocs.T
+    fixed_nodes = np.flatnonzero(nodes[:, 0] < 1e-9)
+    fixed_dofs = (3 * fixed_nodes[:, None] + np.arange(3)).ravel()
+    f = np.zeros((scalar.N, 3))
+    loaded = np.flatnonzero(nodes[:, 0] > 20 - 1e-9)
+    f[loaded] = rng.normal(0.0, 10.0, (len(loaded), 3))
+    u_sk = _skfem_solve(vector, fixed_dofs, f.ravel())
+    s_sk = _nodal_stress(scalar, u_sk)
+    # flip half of the elements: the writer must renumber them, not reject or mis-order
+    elements = scalar.element_dofs.T.copy()
+    elements[::2] = elements[::2][:, [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]]
+    pairs = np.column_stack([np.repeat(fixed_nodes, 3), np.tile(np.arange(3), len(fixed_nodes))])
+    res = run_ccx(write_inp(tmp_path / "d.inp", nodes, elements, (E, NU), pairs, [f, -2 * f]))
+    assert res.displacement.shape == (2, scalar.N, 3)
+    assert np.abs(res.displacement[0] - u_sk).max() <= 1e-4 * np.abs(u_sk).max()
+    assert np.abs(res.displacement[1] + 2 * u_sk).max() <= 2e-4 * np.abs(u_sk).max()
+    vm = von_mises(s_sk)
+    assert np.abs(von_mises(res.stress[0]) - vm).max() <= 1e-4 * vm.max()
+
+
+def test_p2_edge_order_is_c3d10():
+    """skfem's P2 midside nodes sit on C3D10's edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4, in that order."""
+    rng = np.random.default_rng(0)
+    mesh = MeshTet(rng.uniform(size=(3, 4)) + np.eye(3, 4), np.array([[0], [1], [2], [3]]))
+    x = Basis(mesh, ElementTetP2()).doflocs[:, Basis(mesh, ElementTetP2()).element_dofs[:, 0]].T
+    for k, (a, b) in enumerate([(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)]):
+        assert np.allclose(x[4 + k], 0.5 * (x[a] + x[b]))
+
+
+def test_von_mises_closed_form():
+    assert von_mises(np.array([100.0, 0, 0, 0, 0, 0])) == pytest.approx(100.0)
+    assert von_mises(np.array([0.0, 0, 0, 50.0, 0, 0])) == pytest.approx(50.0 * np.sqrt(3))
+    assert von_mises(np.array([[7.0, 7, 7, 0, 0, 0]]))[0] == pytest.approx(0.0)
+
+
+def test_bad_input(tmp_path):
+    nodes = np.eye(4, 3)
+    tet = np.array([[0, 1, 2, 3]])
+    f = np.zeros((4, 3))
+    with pytest.raises(InputError, match="material.nu"):
+        write_inp(tmp_path / "x.inp", nodes, tet, (E, 0.5), np.zeros((0, 2), int), f)
+    with pytest.raises(InputError, match="elements"):
+        write_inp(tmp_path / "x.inp", nodes, np.array([[0, 1, 2, 4]]), (E, NU), np.zeros((0, 2), int), f)
+    with pytest.raises(InputError, match="fixed"):
+        write_inp(tmp_path / "x.inp", nodes, tet, (E, NU), np.array([[0, 3]]), f)
+    with pytest.raises(InputError, match="nodal_forces"):
+        write_inp(tmp_path / "x.inp", nodes, tet, (E, NU), np.array([[0, 0]]), np.zeros((3, 3)))
+
+
+@needs_ccx
+def test_ccx_failure_reports_tail(tmp_path):
+    """A deck ccx rejects raises CalculixError carrying ccx's own message."""
+    deck = tmp_path / "bad.inp"
+    deck.write_text("*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4,ELSET=E\n1,1,2,3,4\n"
+                    "*STEP\n*STATIC\n*END STEP\n")
+    with pytest.raises(CalculixError, match="no material was assigned"):
+        run_ccx(deck)
+
+
+def test_read_frd_fixed_width(tmp_path):
+    """Values written edge to edge (negative signs) are split by column, not by whitespace."""
+    frd = tmp_path / "r.frd"
+    frd.write_text(
+        "    1C\n    2C                             2                                     1\n"
+        " -1         1 0.00000E+00 0.00000E+00 0.00000E+00\n -1         2 1.00000E+00 0.00000E+00 0.00000E+00\n"
+        " -3\n -4  DISP        4    1\n -5  D1          1    2    1    0\n"
+        " -1         1 0.00000E+00 0.00000E+00 0.00000E+00\n -1         2-9.17108E-01-1.00000E-03-4.28571E-05\n"
+        " -3\n 9999\n")
+    r = read_frd(frd)
+    assert np.allclose(r.displacement[0, 1], [-0.917108, -1e-3, -4.28571e-5])
+    assert r.stress.shape == (0, 2, 6)
