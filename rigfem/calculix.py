@@ -1,6 +1,6 @@
 """CalculiX cross-check: write rigfem's exact model as a ccx deck, run ccx, read the .frd.
 
-Units: mm, N, MPa (density in kg/m³ on input, written as t/mm³).  Node numbers in the
+Units: mm, N, MPa, t (density in t/mm³, as in :mod:`rigfem.material`).  Node numbers in the
 deck are the 0-based indices of ``nodes`` plus one.  Element connectivity uses
 scikit-fem's P2 tetrahedron order, which is CalculiX's C3D10 order: vertices 0..3,
 then the midside nodes of edges (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — exactly
@@ -57,7 +57,7 @@ class CcxResult:
 
 
 def _material(material: Any) -> tuple[float, float, float | None]:
-    """(E MPa, nu, density kg/m³ or None) from an object with E, nu[, density] or a tuple."""
+    """(E MPa, nu, density t/mm³ or None) from an object with E, nu[, density] or a tuple."""
     if isinstance(material, Sequence) and not isinstance(material, str):
         vals = list(material) + [None] * (3 - len(material))
         e, nu, rho = vals[:3]
@@ -66,7 +66,7 @@ def _material(material: Any) -> tuple[float, float, float | None]:
     e = check_range("material.E", e, 0.0, None, "MPa", lo_open=True)
     nu = check_range("material.nu", nu, -1.0, 0.4999)
     if rho is not None:
-        rho = check_range("material.density", rho, 0.0, None, "kg/m³", lo_open=True)
+        rho = check_range("material.density", rho, 0.0, None, "t/mm³")
     return e, nu, rho
 
 
@@ -110,11 +110,11 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
 
     ``nodes`` (N, 3) mm; ``elements`` (M, 10) C3D10 or (M, 4) C3D4, 0-based, in the order
     described in the module docstring; ``material`` has ``E`` (MPa), ``nu`` and optionally
-    ``density`` (kg/m³), as attributes or a tuple; ``fixed`` is a (N, 3) bool mask or
-    (K, 2) (node, dof) pairs held at zero; ``nodal_forces`` is one (N, 3) N array or a list
-    of them, each one *STEP (load case); ``equations`` are homogeneous linear constraints
-    ``sum c_i u[node_i, dof_i] = 0`` given as (nodes, dofs, coeffs), the first term being
-    the dependent one (it must not also be fixed).
+    ``density`` (t/mm³), as attributes (:class:`rigfem.material.Material`) or a tuple;
+    ``fixed`` is a (N, 3) bool mask or (K, 2) (node, dof) pairs held at zero;
+    ``nodal_forces`` is one (N, 3) array (N) or a list of them, each one *STEP (load case);
+    ``equations`` are homogeneous linear constraints ``sum c_i u[node_i, dof_i] = 0`` given
+    as (nodes, dofs, coeffs), the first term being the dependent one (not also fixed).
     """
     nodes = np.asarray(nodes, dtype=float)
     if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
@@ -144,7 +144,7 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
                       "%d" + ",%d" * elements.shape[1] + "\n"))
     out.append(f"*MATERIAL, NAME=MAT\n*ELASTIC\n{e_mod:.14g},{nu:.14g}\n")
     if rho is not None:
-        out.append(f"*DENSITY\n{rho * 1e-12:.14g}\n")
+        out.append(f"*DENSITY\n{rho:.14g}\n")
     out.append("*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n")
     if len(pairs):
         out.append("*BOUNDARY\n" + _lines(np.column_stack([pairs[:, 0] + 1, pairs[:, 1] + 1, pairs[:, 1] + 1]),

@@ -76,7 +76,7 @@ def test_cantilever_against_euler_bernoulli_and_skfem(tmp_path):
     nodes = scalar.doflocs.T
     mask = np.zeros((scalar.N, 3), bool)
     mask[fixed_nodes] = True
-    deck = write_inp(tmp_path / "cantilever.inp", nodes, scalar.element_dofs.T, (E, NU, 7850.0), mask, f.reshape(-1, 3))
+    deck = write_inp(tmp_path / "cantilever.inp", nodes, scalar.element_dofs.T, (E, NU, 7.85e-9), mask, f.reshape(-1, 3))
     res = run_ccx(deck, threads=1)
     u_cx, s_cx = res.displacement[0], res.stress[0]
 
