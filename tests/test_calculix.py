@@ -6,6 +6,7 @@ import shutil
 
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix
 from skfem import Basis, ElementTetP2, ElementVector, FacetBasis, LinearForm, MeshTet, asm, condense, solve
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
@@ -181,3 +182,36 @@ def test_read_frd_fixed_width(tmp_path):
     r = read_frd(frd)
     assert np.allclose(r.displacement[0, 1], [-0.917108, -1e-3, -4.28571e-5])
     assert r.stress.shape == (0, 2, 6)
+
+
+@needs_ccx
+def test_equations_match_elimination(tmp_path):
+    """*EQUATION constraints (tip tied in z, inclined n·u = 0 on the top edge) vs skfem with u = T u_r."""
+    mesh = MeshTet.init_tensor(np.linspace(0, 40, 9), np.linspace(0, 6, 3), np.linspace(0, 6, 3))
+    scalar, vector = _p2_model(mesh)
+    nodes = scalar.doflocs.T
+    root = np.flatnonzero(nodes[:, 0] < 1e-9)
+    tip = np.flatnonzero(nodes[:, 0] > 40 - 1e-9)
+    edge = np.flatnonzero((nodes[:, 2] > 6 - 1e-9) & (nodes[:, 1] < 1e-9) & (nodes[:, 0] > 1e-9) & (nodes[:, 0] < 40))
+    f = np.zeros((scalar.N, 3))
+    f[tip] = [5.0, 3.0, -20.0]
+    n = np.array([1.0, 2.0, 2.0]) / 3.0
+    eqs = [(np.array([k, tip[0]]), np.array([2, 2]), np.array([1.0, -1.0])) for k in tip[1:]]
+    eqs += [(np.array([k, k, k]), np.array([2, 0, 1]), n[[2, 0, 1]]) for k in edge]
+    # independent solve: eliminate each dependent dof, u_dep = -sum(c_i u_i) / c_dep
+    ndof = 3 * scalar.N
+    T = np.eye(ndof)
+    for nd, dd, cc in eqs:
+        dep = 3 * nd[0] + dd[0]
+        T[dep] = 0.0
+        T[dep, 3 * nd[1:] + dd[1:]] = -cc[1:] / cc[0]
+    keep = np.setdiff1d(np.arange(ndof), [3 * nd[0] + dd[0] for nd, dd, _ in eqs])
+    fixed = np.searchsorted(keep, (3 * root[:, None] + np.arange(3)).ravel())
+    K = asm(linear_elasticity(*lame_parameters(E, NU)), vector).toarray()
+    T = T[:, keep]
+    u_sk = (T @ solve(*condense(csr_matrix(T.T @ K @ T), T.T @ f.ravel(), D=fixed))).reshape(-1, 3)
+    assert np.allclose(u_sk[tip, 2], u_sk[tip[0], 2]) and np.allclose(u_sk[edge] @ n, 0.0, atol=1e-12)
+    mask = np.zeros((scalar.N, 3), bool)
+    mask[root] = True
+    res = run_ccx(write_inp(tmp_path / "eq.inp", nodes, scalar.element_dofs.T, (E, NU), mask, f, equations=eqs))
+    assert np.abs(res.displacement[0] - u_sk).max() <= 1e-4 * np.abs(u_sk).max()
