@@ -1,0 +1,572 @@
+"""General planar rigid-body linkage solver: bodies, revolute and prismatic joints, one driver.
+
+Coordinates: per moving body the global position of its frame origin and the angle
+of its x axis, q = (x, y, phi) (SI inside: m, rad).  The ground is fixed at the
+origin with zero angle and has no coordinates.  With one driver constraint the
+constraint Jacobian Phi_q is square:
+
+* positions: Newton on Phi(q, theta) = 0, continuation in crank angle theta with a
+  second-order Taylor predictor and step halving, so the assembly branch never jumps;
+* velocities: Phi_q qdot = -Phi_t;  accelerations: Phi_q qddot = gamma;
+* inverse dynamics: Phi_q^T lambda = Q_ext - Q_inertia (Newton–Euler about the centre
+  of mass of every body, point masses as particles), giving every joint reaction and
+  the driver torque (or force).
+
+Every stage after the coarse continuation pass is vectorised over crank angles.
+The public interface is in mm, N, N·m, degrees (see ``rigfem.reactions``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from rigfem.errors import InputError
+from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, singular_ranges
+
+GROUND = "ground"
+#: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
+#: flagged as a toggle (for the rig four-bar this is mu within about 3 deg of 0 or 180)
+RCOND_SINGULAR = 1e-2
+
+
+class AssemblyError(InputError):
+    """The loop cannot close at some driver positions (message names the angle range)."""
+
+
+@dataclass
+class Body:
+    """A rigid body: own mass (kg), centre of mass and inertia about it (local frame, mm, kg·mm²).
+
+    ``point_masses`` are particles (label, kg, local position mm) carried by the body,
+    e.g. a carriage or plate lumped at a joint.
+    """
+
+    name: str
+    mass_kg: float = 0.0
+    com_local_mm: tuple[float, float] = (0.0, 0.0)
+    inertia_com_kg_mm2: float = 0.0
+    point_masses: list[tuple[str, float, tuple[float, float]]] = field(default_factory=list)
+
+    def totals(self) -> tuple[float, np.ndarray, float]:
+        """Mass (kg), centre of mass (local, m) and inertia about it (kg·m²) including particles."""
+        m = self.mass_kg + sum(p[1] for p in self.point_masses)
+        if m == 0.0:
+            return 0.0, np.zeros(2), 0.0
+        c0 = np.asarray(self.com_local_mm, float) / 1000
+        pts = [(pm, np.asarray(pos, float) / 1000) for _, pm, pos in self.point_masses]
+        c = (self.mass_kg * c0 + sum(pm * pos for pm, pos in pts)) / m
+        inertia = self.inertia_com_kg_mm2 * 1e-6 + self.mass_kg * np.sum((c0 - c) ** 2)
+        inertia += sum(pm * np.sum((pos - c) ** 2) for pm, pos in pts)
+        return m, c, float(inertia)
+
+
+@dataclass
+class Revolute:
+    """Pin joint: point ``local_a_mm`` of body_a coincides with ``local_b_mm`` of body_b."""
+
+    name: str
+    body_a: str
+    body_b: str
+    local_a_mm: tuple[float, float]
+    local_b_mm: tuple[float, float]
+
+
+@dataclass
+class Prismatic:
+    """Slider: point ``local_b_mm`` of body_b moves on the line of body_a through
+    ``local_a_mm`` with direction ``axis_a``; the relative angle phi_b - phi_a stays ``rel_angle_rad``."""
+
+    name: str
+    body_a: str
+    body_b: str
+    local_a_mm: tuple[float, float]
+    axis_a: tuple[float, float]
+    local_b_mm: tuple[float, float]
+    rel_angle_rad: float = 0.0
+
+
+@dataclass
+class CrankDriver:
+    """Constant-speed rotation of ``body`` relative to the ground: phi = theta + ``offset_rad``."""
+
+    body: str
+    offset_rad: float = 0.0
+
+
+@dataclass
+class SliderDriver:
+    """Driven slider on prismatic ``joint``: s = mean + amplitude·sin(theta) (mm), theta = cycle phase."""
+
+    joint: str
+    mean_mm: float
+    amplitude_mm: float
+
+
+@dataclass
+class Load:
+    """External force on ``body`` at ``local_mm``: ``force(state) -> (n, 2)`` N, state in mm/rad."""
+
+    body: str
+    local_mm: tuple[float, float]
+    force: Callable[[dict], np.ndarray]
+
+
+@dataclass
+class Linkage:
+    """A one-DOF planar linkage.  ``guess`` gives each body's approximate pose (x mm, y mm,
+    phi rad) at the first crank angle; it selects the assembly branch."""
+
+    bodies: list[Body]
+    joints: list[Revolute | Prismatic]
+    driver: CrankDriver | SliderDriver
+    guess: dict[str, tuple[float, float, float]]
+    loads: list[Load] = field(default_factory=list)
+    gravity_mm_s2: tuple[float, float] = (0.0, 0.0)
+    meta: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------- helpers
+def _rot(phi: np.ndarray, s) -> np.ndarray:
+    """R(phi) s for phi (n,), s (2,) -> (n, 2)."""
+    c, sn = np.cos(phi), np.sin(phi)
+    out = np.empty(phi.shape + (2,))
+    out[..., 0] = c * s[0] - sn * s[1]
+    out[..., 1] = sn * s[0] + c * s[1]
+    return out
+
+
+def _perp(v: np.ndarray) -> np.ndarray:
+    out = np.empty(v.shape)
+    out[..., 0] = -v[..., 1]
+    out[..., 1] = v[..., 0]
+    return out
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+class _Model:
+    """Index bookkeeping and vectorised constraint evaluation for one Linkage (SI units)."""
+
+    def __init__(self, lk: Linkage):
+        self.lk = lk
+        names = [b.name for b in lk.bodies]
+        if GROUND in names or len(set(names)) != len(names):
+            raise InputError("body names must be unique and not 'ground'")
+        self.index = {n: i for i, n in enumerate(names)}
+        self.nb = len(names)
+        self.m = 3 * self.nb
+        rows, r = [], 0
+        for j in lk.joints:
+            for b in (j.body_a, j.body_b):
+                if b != GROUND and b not in self.index:
+                    raise InputError(f"joint {j.name}: unknown body {b!r}")
+            rows.append(r)
+            r += 2
+        self.rows = rows
+        self.drow = r
+        if r + 1 != self.m:
+            raise InputError(f"linkage has {self.nb} bodies and {r} joint constraints + 1 driver: "
+                             f"not a one-degree-of-freedom linkage")
+        self.jidx = {j.name: k for k, j in enumerate(lk.joints)}
+        self.loc = {j.name: (np.asarray(j.local_a_mm, float) / 1000, np.asarray(j.local_b_mm, float) / 1000)
+                    for j in lk.joints}
+        if isinstance(lk.driver, SliderDriver):
+            if lk.driver.joint not in self.jidx or not isinstance(lk.joints[self.jidx[lk.driver.joint]], Prismatic):
+                raise InputError(f"slider driver: {lk.driver.joint!r} is not a prismatic joint")
+        elif lk.driver.body not in self.index:
+            raise InputError(f"crank driver: unknown body {lk.driver.body!r}")
+        pts = [np.asarray(p, float) for j in lk.joints for p in (j.local_a_mm, j.local_b_mm)]
+        self.scale = max(1e-3, max((np.hypot(*p) for p in pts), default=1.0) / 1000, *(
+            np.hypot(g[0], g[1]) / 1000 for g in lk.guess.values()))
+
+    # -- pose access
+    def pose(self, q: np.ndarray, body: str):
+        """(r (n,2), phi (n,)) of a body; ground -> zeros."""
+        if body == GROUND:
+            n = q.shape[0]
+            return np.zeros((n, 2)), np.zeros(n)
+        i = 3 * self.index[body]
+        return q[:, i:i + 2], q[:, i + 2]
+
+    def cols(self, body: str):
+        return None if body == GROUND else 3 * self.index[body]
+
+    # -- driver target
+    def drive(self, theta: np.ndarray, omega: float):
+        """Driver value, rate and second rate at phase theta (rad; SI)."""
+        d = self.lk.driver
+        if isinstance(d, CrankDriver):
+            return theta + d.offset_rad, np.full_like(theta, omega), np.zeros_like(theta)
+        a = d.amplitude_mm / 1000
+        return (d.mean_mm / 1000 + a * np.sin(theta), a * omega * np.cos(theta),
+                -a * omega**2 * np.sin(theta))
+
+    def frame(self, q: np.ndarray) -> dict:
+        """Per-joint rotated local vectors (and prismatic axis, normal, gap) at positions q."""
+        n_s = q.shape[0]
+        C, S = np.cos(q[:, 2::3]), np.sin(q[:, 2::3])
+
+        def rot(body, s):
+            if body == GROUND:
+                return np.broadcast_to(s, (n_s, 2))
+            k = self.index[body]
+            out = np.empty((n_s, 2))
+            out[:, 0] = C[:, k] * s[0] - S[:, k] * s[1]
+            out[:, 1] = S[:, k] * s[0] + C[:, k] * s[1]
+            return out
+
+        fr = {}
+        for j in self.lk.joints:
+            sa, sb = rot(j.body_a, self.loc[j.name][0]), rot(j.body_b, self.loc[j.name][1])
+            if isinstance(j, Revolute):
+                fr[j.name] = (sa, sb)
+            else:
+                ra, _ = self.pose(q, j.body_a)
+                rb, _ = self.pose(q, j.body_b)
+                ax = np.asarray(j.axis_a, float)
+                u = rot(j.body_a, ax / np.hypot(*ax))
+                fr[j.name] = (sa, sb, u, _perp(u), rb + sb - ra - sa)
+        return fr
+
+    def residual(self, q: np.ndarray, theta: np.ndarray, fr: dict | None = None) -> np.ndarray:
+        fr = fr if fr is not None else self.frame(q)
+        n_s = q.shape[0]
+        res = np.empty((n_s, self.m))
+        for j, r in zip(self.lk.joints, self.rows):
+            _, pa = self.pose(q, j.body_a)
+            _, pb = self.pose(q, j.body_b)
+            if isinstance(j, Revolute):
+                ra, _ = self.pose(q, j.body_a)
+                rb, _ = self.pose(q, j.body_b)
+                sa, sb = fr[j.name]
+                res[:, r:r + 2] = ra + sa - rb - sb
+            else:
+                _, _, _, n, d = fr[j.name]
+                res[:, r] = _dot(n, d)
+                res[:, r + 1] = pb - pa - j.rel_angle_rad
+        target = self.drive(theta, 0.0)[0]
+        dv = self.lk.driver
+        if isinstance(dv, CrankDriver):
+            res[:, self.drow] = self.pose(q, dv.body)[1] - target
+        else:
+            _, _, u, _, d = fr[dv.joint]
+            res[:, self.drow] = _dot(u, d) - target
+        return res
+
+    def jacobian(self, q: np.ndarray, fr: dict | None = None) -> np.ndarray:
+        fr = fr if fr is not None else self.frame(q)
+        n_s = q.shape[0]
+        J = np.zeros((n_s, self.m, self.m))
+        for j, r in zip(self.lk.joints, self.rows):
+            ca, cb = self.cols(j.body_a), self.cols(j.body_b)
+            if isinstance(j, Revolute):
+                sa, sb = fr[j.name]
+                if ca is not None:
+                    J[:, r, ca] = J[:, r + 1, ca + 1] = 1.0
+                    J[:, r:r + 2, ca + 2] = _perp(sa)
+                if cb is not None:
+                    J[:, r, cb] = J[:, r + 1, cb + 1] = -1.0
+                    J[:, r:r + 2, cb + 2] = -_perp(sb)
+            else:
+                self._prism_rows(J, r, fr[j.name], ca, cb, normal=True)
+                if ca is not None:
+                    J[:, r + 1, ca + 2] = -1.0
+                if cb is not None:
+                    J[:, r + 1, cb + 2] = 1.0
+        dv = self.lk.driver
+        if isinstance(dv, CrankDriver):
+            J[:, self.drow, self.cols(dv.body) + 2] = 1.0
+        else:
+            j = self.lk.joints[self.jidx[dv.joint]]
+            self._prism_rows(J, self.drow, fr[j.name], self.cols(j.body_a), self.cols(j.body_b), normal=False)
+        return J
+
+    @staticmethod
+    def _prism_rows(J, r, terms, ca, cb, normal: bool):
+        """Row of n·d (normal=True) or u·d (the sliding coordinate)."""
+        sa, sb, u, n, d = terms
+        v, dv = (n, -u) if normal else (u, n)      # d v / d phi_a
+        if ca is not None:
+            J[:, r, ca:ca + 2] = -v
+            J[:, r, ca + 2] = _dot(dv, d) - _dot(v, _perp(sa))
+        if cb is not None:
+            J[:, r, cb:cb + 2] = v
+            J[:, r, cb + 2] = _dot(v, _perp(sb))
+
+    def gamma(self, q: np.ndarray, qd: np.ndarray, sdd: np.ndarray, fr: dict | None = None) -> np.ndarray:
+        """Right-hand side of Phi_q qddot = gamma (quadratic velocity terms)."""
+        fr = fr if fr is not None else self.frame(q)
+        n_s = q.shape[0]
+        g = np.zeros((n_s, self.m))
+        for j, r in zip(self.lk.joints, self.rows):
+            _, wa = self.pose(qd, j.body_a)
+            _, wb = self.pose(qd, j.body_b)
+            if isinstance(j, Revolute):
+                sa, sb = fr[j.name]
+                g[:, r:r + 2] = sa * (wa**2)[:, None] - sb * (wb**2)[:, None]
+            else:
+                g[:, r] = self._prism_gamma(qd, j, fr[j.name], normal=True)
+        dv = self.lk.driver
+        if isinstance(dv, CrankDriver):
+            g[:, self.drow] = sdd
+        else:
+            j = self.lk.joints[self.jidx[dv.joint]]
+            g[:, self.drow] = sdd + self._prism_gamma(qd, j, fr[j.name], normal=False)
+        return g
+
+    def _prism_gamma(self, qd, j, terms, normal: bool) -> np.ndarray:
+        sa, sb, u, n, d = terms
+        va, wa = self.pose(qd, j.body_a)
+        vb, wb = self.pose(qd, j.body_b)
+        dd = vb + _perp(sb) * wb[:, None] - va - _perp(sa) * wa[:, None]
+        v, w = (n, u) if normal else (u, -n)        # v' = -w * wa   (n' = -u wa, u' = n wa)
+        return (wa**2 * _dot(v, d) + 2 * wa * _dot(w, dd)
+                + _dot(v, sb * (wb**2)[:, None] - sa * (wa**2)[:, None]))
+
+
+# ----------------------------------------------------------------------------- solver
+def _newton(model: _Model, q: np.ndarray, theta: np.ndarray, tol: float, maxit: int = 25):
+    """Vectorised Newton; returns (q, converged mask)."""
+    q = q.copy()
+    ok = np.zeros(q.shape[0], bool)
+    for _ in range(maxit):
+        fr = model.frame(q)
+        res = model.residual(q, theta, fr)
+        err = np.max(np.abs(res), axis=1)
+        ok = err < tol
+        if ok.all():
+            break
+        J = model.jacobian(q, fr)
+        try:
+            dq = np.linalg.solve(J, res[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(dq)):
+            break
+        q -= dq
+    return q, ok
+
+
+def _rates(model: _Model, q: np.ndarray, theta: np.ndarray, omega: float):
+    """Velocities, accelerations and the inverse constraint Jacobian at solved positions."""
+    fr = model.frame(q)
+    J = model.jacobian(q, fr)
+    _, sd, sdd = model.drive(theta, omega)
+    with np.errstate(all="ignore"):
+        try:
+            Jinv = np.linalg.inv(J)
+        except np.linalg.LinAlgError:       # an exactly singular sample: solve one by one
+            Jinv = np.stack([np.linalg.pinv(x) for x in J])
+    qd = Jinv[:, :, model.drow] * sd[:, None]
+    qdd = np.einsum("nij,nj->ni", Jinv, model.gamma(q, qd, sdd, fr))
+    return qd, qdd, J, Jinv
+
+
+def _guess_vector(model: _Model) -> np.ndarray:
+    q = np.zeros(model.m)
+    for b in model.lk.bodies:
+        if b.name not in model.lk.guess:
+            raise InputError(f"no initial pose for body {b.name!r}")
+        x, y, p = model.lk.guess[b.name]
+        i = 3 * model.index[b.name]
+        q[i:i + 3] = x / 1000, y / 1000, p
+    return q
+
+
+def _continuation(model: _Model, theta_nodes: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray:
+    """Sequential continuation through ``theta_nodes`` (rad, in order); predictor dq/dtheta.
+
+    Steps are halved when Newton fails or moves far from the prediction (a possible
+    branch jump); a step that cannot be completed raises AssemblyError naming the angle.
+    """
+    qs = np.empty((theta_nodes.size, model.m))
+    q, ok = _newton(model, q0[None], theta_nodes[:1], tol)
+    if not ok[0]:
+        raise AssemblyError(f"linkage cannot be assembled at crank angle {np.degrees(theta_nodes[0]):.2f} deg")
+    q = q[0]
+    qs[0] = q
+    th = theta_nodes[0]
+    for k in range(1, theta_nodes.size):
+        target = theta_nodes[k]
+        while th != target:
+            h = target - th
+            while True:
+                qd, qdd, *_ = _rates(model, q[None], np.array([th]), 1.0)
+                pred = q + qd[0] * h + 0.5 * qdd[0] * h * h
+                qn, okn = _newton(model, pred[None], np.array([th + h]), tol)
+                jump = np.max(np.abs(qn[0] - pred)) if okn[0] else np.inf
+                if okn[0] and jump < 0.02 * model.scale + 0.5 * np.max(np.abs(qd[0] * h)):
+                    break
+                h *= 0.5
+                if abs(h) < 1e-7:
+                    raise AssemblyError(
+                        f"linkage cannot be assembled (or locks at a toggle) beyond crank angle "
+                        f"{np.degrees(th):.2f} deg, before {np.degrees(target):.2f} deg")
+            q, th = qn[0], th + h if abs(target - th - h) > 1e-15 else target
+        qs[k] = q
+    return qs
+
+
+def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
+          check_closure: bool = True) -> ReactionHistory:
+    """Positions, velocities, accelerations and reactions at the driver phases ``crank_deg``.
+
+    ``crank_deg`` must be increasing (an evenly spaced full turn for a crank); the driver
+    turns at ``speed_hz`` (negative = clockwise).  Returns a ReactionHistory whose
+    ``singular_mask`` flags toggle samples and whose ``evaluator`` re-solves at any angle.
+    """
+    model = _Model(lk)
+    deg = np.asarray(crank_deg, float)
+    theta = np.radians(deg)
+    tol = tol_mm / 1000
+    # coarse continuation at <= 20 deg steps, then a vectorised Newton for all samples
+    span = theta[-1] - theta[0]
+    n_c = max(2, int(np.ceil(abs(span) / np.radians(20.0))) + 1)
+    nodes = np.linspace(theta[0], theta[-1], n_c)
+    qc = _continuation(model, nodes, _guess_vector(model), tol)
+    if check_closure and _is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
+        # close the loop over the last step back to theta0 + 2 pi: same branch required
+        qend = _continuation(model, np.array([theta[-1], theta[0] + 2 * np.pi]), qc[-1], tol)[-1]
+        diff = qend - qc[0]
+        diff[2::3] = np.angle(np.exp(1j * diff[2::3]))
+        if np.max(np.abs(diff)) > 1e3 * tol + 1e-6 * model.scale:
+            lk.meta.setdefault("warnings", []).append("the linkage does not return to its starting "
+                                                      "configuration after one turn (branch change at a toggle)")
+    qdc, qddc, *_ = _rates(model, qc, nodes, 1.0)
+    state = (model, nodes, qc, qdc, qddc)
+    return _evaluate(lk, state, deg, speed_hz, tol)
+
+
+def _is_full_turn(deg: np.ndarray) -> bool:
+    if deg.size < 3:
+        return False
+    step = deg[1] - deg[0]
+    return bool(abs(step * deg.size - 360.0) < 1e-6 and np.allclose(np.diff(deg), step))
+
+
+def _evaluate(lk: Linkage, state, deg: np.ndarray, speed_hz: float, tol: float) -> ReactionHistory:
+    model, nodes, qc, qdc, qddc = state
+    theta = np.radians(deg)
+    # predictor from the nearest coarse node (in phase)
+    idx = np.clip(np.searchsorted(nodes, theta), 0, nodes.size - 1)
+    left = np.clip(idx - 1, 0, nodes.size - 1)
+    near = np.where(np.abs(nodes[left] - theta) < np.abs(nodes[idx] - theta), left, idx)
+    h = (theta - nodes[near])[:, None]
+    pred = qc[near] + qdc[near] * h + 0.5 * qddc[near] * h * h
+    q, ok = _newton(model, pred, theta, tol)
+    far = np.max(np.abs(q - pred), axis=1) > 0.02 * model.scale + 0.5 * np.max(np.abs(qdc[near] * h), axis=1)
+    if not ok.all() or far.any():
+        # outside the coarse pass (or ill-conditioned): fall back to strict continuation
+        order = np.argsort(theta)
+        ext = np.concatenate([[nodes[near[order[0]]]], theta[order]])
+        q[order] = _continuation(model, ext, qc[near[order[0]]], tol)[1:]
+    omega = 2 * np.pi * speed_hz
+    qd, qdd, J, Jinv = _rates(model, q, theta, omega)
+    return _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol)
+
+
+def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> ReactionHistory:
+    n = q.shape[0]
+    g = np.asarray(lk.gravity_mm_s2, float) / 1000
+    Q = np.zeros((n, model.m))
+    bodies_out: dict[str, BodyHistory] = {}
+    for b in lk.bodies:
+        i = 3 * model.index[b.name]
+        m, c, inertia = b.totals()
+        r, phi = q[:, i:i + 2], q[:, i + 2]
+        a, w, al = qdd[:, i:i + 2], qd[:, i + 2], qdd[:, i + 2]
+        rc = _rot(phi, c)
+        a_g = a + _perp(rc) * al[:, None] - rc * (w**2)[:, None]
+        f = m * (g - a_g)                                   # external + d'Alembert force at G
+        Q[:, i:i + 2] += f
+        Q[:, i + 2] += _cross(rc, f) - inertia * al
+        bodies_out[b.name] = BodyHistory(
+            b.name, phi, w, al, r * 1000, a * 1000, b.mass_kg, np.asarray(b.com_local_mm, float),
+            b.inertia_com_kg_mm2, [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in b.point_masses], {})
+    for ld in lk.loads:
+        i = 3 * model.index[ld.body]
+        r, phi = q[:, i:i + 2], q[:, i + 2]
+        s = _rot(phi, np.asarray(ld.local_mm, float) / 1000)
+        state_d = {"theta_rad": np.radians(deg), "point_mm": (r + s) * 1000, "q": q, "qd": qd}
+        f = np.asarray(ld.force(state_d), float).reshape(n, 2)
+        Q[:, i:i + 2] += f
+        Q[:, i + 2] += _cross(s, f)
+    lam = np.einsum("nji,nj->ni", Jinv, Q)               # Phi_q^T lambda = Q
+    joints: dict[str, JointHistory] = {}
+    fr = model.frame(q)
+    for j, r in zip(lk.joints, model.rows):
+        # force by a on b = (dPhi/dr_a)^T lambda  (equal and opposite to the force on a)
+        if isinstance(j, Revolute):
+            fab = lam[:, r:r + 2]
+            rb, _ = model.pose(q, j.body_b)
+            pos = rb + fr[j.name][1]
+            mom = None
+        else:
+            rb, _ = model.pose(q, j.body_b)
+            sa, sb, u, nn, d = fr[j.name]
+            fab = -nn * lam[:, r][:, None]
+            pos = rb + sb
+            # moment on b about its sliding point: -(dPhi/dphi_b)^T lambda - sb x F_on_b
+            m_origin = -(lam[:, r] * _dot(nn, _perp(sb)) + lam[:, r + 1])
+            mom = m_origin - _cross(sb, fab)
+        for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
+            if bn != GROUND:
+                bodies_out[bn].joint_local_mm[j.name] = np.asarray(loc, float)
+        joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, fab, pos * 1000, mom,
+                                      "revolute" if isinstance(j, Revolute) else "prismatic")
+    dv = lk.driver
+    if isinstance(dv, CrankDriver):
+        drive = -lam[:, model.drow]                       # motor torque on the crank, N·m
+    else:
+        drive = -lam[:, model.drow]                       # actuator force on body_b along the axis, N
+        jn = lk.joints[model.jidx[dv.joint]]
+        if jn.name in joints:
+            # the actuator force acts along the slide; add it to that joint's reported force
+            u = fr[jn.name][2]
+            joints[jn.name].force_N = joints[jn.name].force_N + u * drive[:, None]
+    # toggle detection: reciprocal condition number of the length-scaled Jacobian
+    S = np.ones(model.m)
+    S[0::3] = S[1::3] = model.scale
+    rowscale = np.ones(model.m)
+    for j, r in zip(lk.joints, model.rows):
+        rowscale[r] = 1 / model.scale
+        if isinstance(j, Revolute):
+            rowscale[r + 1] = 1 / model.scale
+    if isinstance(dv, SliderDriver):
+        rowscale[model.drow] = 1 / model.scale
+    # scaled J = R J S  ->  inverse = S^-1 J^-1 R^-1
+    norm = np.abs(J * S[None, None, :] * rowscale[None, :, None]).sum(1).max(1)
+    inv_norm = np.abs(Jinv / S[None, :, None] / rowscale[None, None, :]).sum(1).max(1)
+    with np.errstate(all="ignore"):
+        rcond = 1.0 / (norm * inv_norm)
+    rcond = np.where(np.isfinite(rcond), rcond, 0.0)
+    bad = ~np.isfinite(lam).all(1) | (rcond < RCOND_SINGULAR)
+    meta = dict(lk.meta)
+    meta.update(speed_hz=speed_hz, driver_unit="N·m" if isinstance(dv, CrankDriver) else "N",
+                rcond_min=float(rcond.min()))
+    extra = lk.meta.get("singular_fn")
+    if extra is not None:
+        meta.pop("singular_fn")
+        bad |= extra(deg, bodies_out)
+    # values inside a flagged range stay (finite) for plotting the approach to the toggle;
+    # non-finite ones (exactly at the toggle) become 0; peaks() refuses both
+    for jh in joints.values():
+        jh.force_N = np.where(np.isfinite(jh.force_N), jh.force_N, 0.0)
+    drive = np.where(np.isfinite(drive), drive, 0.0)
+    meta["singular"] = singular_ranges(deg, bad)
+    h = ReactionHistory(deg, joints, drive, bodies_out, meta, singular_mask=bad if bad.any() else None)
+
+    def evaluator(angles: np.ndarray) -> ReactionHistory:
+        return _evaluate(lk, state, np.atleast_1d(np.asarray(angles, float)), speed_hz, tol)
+
+    h.evaluator = evaluator
+    return h

@@ -1,0 +1,300 @@
+"""Reaction histories over one crank turn: the load source of every stress check.
+
+Units at this interface: crank angle in degrees, forces in N, torque in N·m, positions
+in mm, accelerations in mm/s², inertia in kg·mm².  A history comes from the linkage
+solver (``rigfem.mechanisms.simulate``) or from an external CSV (``read_csv``).
+
+``peaks`` refines around each sampled maximum (Brent on the solver itself, or on a
+periodic cubic spline for an imported CSV) so the peak does not depend on sampling.
+Peaks that fall inside a flagged singular (toggle) range are never reported as a
+plain number: their ``force_N`` is ``None`` and ``singular`` is ``True``.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import minimize_scalar
+
+from rigfem.errors import InputError
+
+
+@dataclass
+class JointHistory:
+    """Reaction of one joint: force exerted BY ``body_a`` ON ``body_b`` (global frame, N)."""
+
+    name: str
+    body_a: str
+    body_b: str
+    force_N: np.ndarray
+    position_mm: np.ndarray | None = None
+    #: prismatic joints only: constraint moment on body_b about its sliding point (N·m)
+    moment_Nm: np.ndarray | None = None
+    kind: str = "revolute"
+
+
+@dataclass
+class BodyHistory:
+    """Motion and mass data of one moving body (frame origin at its first joint)."""
+
+    name: str
+    angle_rad: np.ndarray
+    omega_rad_s: np.ndarray
+    alpha_rad_s2: np.ndarray
+    origin_mm: np.ndarray
+    origin_acc_mm_s2: np.ndarray
+    mass_kg: float
+    com_local_mm: np.ndarray
+    inertia_com_kg_mm2: float
+    point_masses: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
+    joint_local_mm: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass
+class ReactionHistory:
+    """Joint reactions and driver torque (or force) sampled over one crank turn."""
+
+    crank_deg: np.ndarray
+    joints: dict[str, JointHistory]
+    torque_Nm: np.ndarray
+    bodies: dict[str, BodyHistory] | None
+    meta: dict
+    #: per-sample toggle flag (True where the Jacobian is ill-conditioned / mu near 0 or 180)
+    singular_mask: np.ndarray | None = None
+    #: re-evaluates the same linkage at arbitrary crank angles (deg); used by ``peaks``
+    evaluator: Callable[[np.ndarray], "ReactionHistory"] | None = field(default=None, repr=False)
+
+
+def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list[float]] | None:
+    """Contiguous crank-angle ranges [start, end] (deg) where ``mask`` is True; None if none."""
+    if mask is None or not np.any(mask):
+        return None
+    idx = np.flatnonzero(mask)
+    ranges, start, prev = [], idx[0], idx[0]
+    for i in idx[1:]:
+        if i != prev + 1:
+            ranges.append([float(crank_deg[start]), float(crank_deg[prev])])
+            start = i
+        prev = i
+    ranges.append([float(crank_deg[start]), float(crank_deg[prev])])
+    return ranges
+
+
+def _is_full_turn(deg: np.ndarray) -> bool:
+    if deg.size < 4:
+        return False
+    step = np.diff(deg)
+    return bool(np.allclose(step, step[0], rtol=1e-6, atol=1e-9)
+                and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)
+
+
+def _refine_max(fun: Callable[[float], float], lo: float, hi: float) -> tuple[float, float]:
+    """Maximise the scalar ``fun`` on [lo, hi] (deg) by bounded Brent; return (x, f)."""
+    res = minimize_scalar(lambda x: -fun(x), bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-9 * max(1.0, abs(hi))})
+    return float(res.x), float(-res.fun)
+
+
+def _candidates(vals: np.ndarray, periodic: bool) -> list[int]:
+    """Indices of sampled local maxima close enough to the global maximum to win after refinement."""
+    n = vals.size
+    prev = np.roll(vals, 1) if periodic else np.r_[-np.inf, vals[:-1]]
+    nxt = np.roll(vals, -1) if periodic else np.r_[vals[1:], -np.inf]
+    loc = np.flatnonzero((vals >= prev) & (vals >= nxt))
+    top = vals.max()
+    return [int(i) for i in loc if vals[i] >= 0.97 * top] or [int(np.argmax(vals))] if n else []
+
+
+def _series(h: ReactionHistory) -> dict[str, np.ndarray]:
+    out = {name: np.hypot(j.force_N[:, 0], j.force_N[:, 1]) for name, j in h.joints.items()}
+    out["torque"] = np.abs(h.torque_Nm)
+    return out
+
+
+def _spline_evaluator(h: ReactionHistory) -> Callable[[np.ndarray], ReactionHistory]:
+    """Periodic (full turn) or not-a-knot cubic spline through an imported history."""
+    deg = h.crank_deg
+    periodic = _is_full_turn(deg)
+    x = np.r_[deg, deg[-1] + (deg[1] - deg[0])] if periodic else deg
+    bc = "periodic" if periodic else "not-a-knot"
+
+    def close(a):
+        return np.concatenate([a, a[:1]]) if periodic else a
+
+    splines = {n: CubicSpline(x, close(j.force_N), bc_type=bc) for n, j in h.joints.items()}
+    tq = CubicSpline(x, close(h.torque_Nm), bc_type=bc)
+
+    def ev(angles: np.ndarray) -> ReactionHistory:
+        a = np.atleast_1d(np.asarray(angles, float))
+        if periodic:
+            a = x[0] + np.mod(a - x[0], 360.0)
+        joints = {n: JointHistory(n, j.body_a, j.body_b, splines[n](a)) for n, j in h.joints.items()}
+        return ReactionHistory(a, joints, tq(a), None, dict(h.meta))
+
+    return ev
+
+
+def peaks(h: ReactionHistory, refine: bool = True) -> dict:
+    """Peak reaction magnitude of every joint and the peak |torque|.
+
+    Returns ``{joint: {force_N, crank_deg, fx_N, fy_N, singular}, ..., "torque":
+    {peak, value, crank_deg, singular}}`` (N, deg, N·m; ``value`` is the signed torque).
+    With ``refine`` each sampled maximum is refined by Brent's method on the history's
+    evaluator (the solver itself) or on a cubic spline of the samples.  A peak inside a
+    flagged singular range has ``force_N``/``peak`` = None and ``singular`` = True.
+    """
+    deg = np.asarray(h.crank_deg, float)
+    periodic = _is_full_turn(deg)
+    mask = h.singular_mask if h.singular_mask is not None else np.zeros(deg.size, bool)
+    ev = h.evaluator if h.evaluator is not None else (_spline_evaluator(h) if deg.size >= 4 else None)
+    step = (deg[1] - deg[0]) if deg.size > 1 else 0.0
+    out: dict = {}
+    for name, vals in _series(h).items():
+        i_best = int(np.argmax(vals))
+        best_x, best_f = float(deg[i_best]), float(vals[i_best])
+        near = [i_best - 1, i_best, (i_best + 1) % deg.size] if periodic else \
+            [i for i in (i_best - 1, i_best, i_best + 1) if 0 <= i < deg.size]
+        if mask[near].any():
+            entry = {"crank_deg": best_x, "singular": True}
+            if name == "torque":
+                entry.update(peak=None, value=None)
+            else:
+                entry.update(force_N=None, fx_N=None, fy_N=None)
+            out[name] = entry
+            continue
+        if refine and ev is not None and step != 0.0:
+            for i in _candidates(vals, periodic):
+                if mask[[i - 1, i, (i + 1) % deg.size]].any() or (not periodic and (i == 0 or i == deg.size - 1)):
+                    continue
+
+                def f(x, name=name):
+                    r = ev(np.array([x]))
+                    if name == "torque":
+                        return float(abs(r.torque_Nm[0]))
+                    return float(np.hypot(*r.joints[name].force_N[0]))
+
+                x, fx = _refine_max(f, deg[i] - abs(step), deg[i] + abs(step))
+                if fx > best_f:
+                    best_x, best_f = x, fx
+        crank = float(np.mod(best_x, 360.0)) if periodic else best_x
+        if name == "torque":
+            val = float(ev(np.array([best_x])).torque_Nm[0]) if (refine and ev is not None) \
+                else float(h.torque_Nm[i_best])
+            out[name] = {"peak": best_f, "value": val, "crank_deg": crank, "singular": False}
+        else:
+            fvec = ev(np.array([best_x])).joints[name].force_N[0] if (refine and ev is not None) \
+                else h.joints[name].force_N[i_best]
+            out[name] = {"force_N": best_f, "crank_deg": crank, "fx_N": float(fvec[0]),
+                         "fy_N": float(fvec[1]), "singular": False}
+    return out
+
+
+# ----------------------------------------------------------------------------- CSV
+_TORQUE_COLS = ("torque_Nm", "torque_nm", "torque", "M2", "driver")
+
+
+def write_csv(h: ReactionHistory, path: str | Path) -> None:
+    """Write the history: crank_deg, <joint>_fx_N, <joint>_fy_N, <joint>_F_N ..., torque_Nm, singular.
+
+    Rows inside a singular range keep the crank angle but leave the force cells empty,
+    so a toggle's unbounded numbers never reach a file.  Header comments (``#``) carry
+    the body pairs of each joint so ``read_csv`` restores them.
+    """
+    mask = h.singular_mask if h.singular_mask is not None else np.zeros(h.crank_deg.size, bool)
+    names = list(h.joints)
+    unit = h.meta.get("driver_unit", "N·m")
+    tcol = "torque_Nm" if unit == "N·m" else "driver_force_N"
+    with open(path, "w", newline="") as fh:
+        for n in names:
+            j = h.joints[n]
+            fh.write(f"# joint {n}: force by {j.body_a} on {j.body_b}\n")
+        w = csv.writer(fh)
+        head = ["crank_deg"]
+        for n in names:
+            head += [f"{n}_fx_N", f"{n}_fy_N", f"{n}_F_N"]
+        w.writerow(head + [tcol, "singular"])
+        for i, a in enumerate(h.crank_deg):
+            row = [f"{a:.10g}"]
+            for n in names:
+                fx, fy = h.joints[n].force_N[i]
+                row += ["", "", ""] if mask[i] else [f"{fx:.10g}", f"{fy:.10g}", f"{np.hypot(fx, fy):.10g}"]
+            row.append("" if mask[i] else f"{h.torque_Nm[i]:.10g}")
+            row.append("1" if mask[i] else "0")
+            w.writerow(row)
+
+
+def read_csv(path: str | Path) -> ReactionHistory:
+    """Import a reaction history (rigfem's own CSV or an external one, e.g. from MATLAB).
+
+    Needed columns: a crank-angle column (``crank_deg``, ``theta_deg``, ``angle_deg`` or
+    ``theta``/``angle``), and per joint ``<J>_fx_N``/``<J>_fy_N`` (also ``<J>_fx``/``<J>_fy``
+    or ``<J>x``/``<J>y``); optional torque column (``torque_Nm``, ``torque``, ``M2``).
+    Lines starting with ``#`` are comments.  Raises InputError naming the problem.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"reaction CSV {str(p)!r} does not exist")
+    pairs: dict[str, tuple[str, str]] = {}
+    lines = []
+    for line in p.read_text().splitlines():
+        s = line.strip()
+        if s.startswith("#"):
+            parts = s[1:].split()
+            if len(parts) >= 7 and parts[0] == "joint" and parts[2] == "force" and parts[3] == "by":
+                pairs[parts[1].rstrip(":")] = (parts[4], parts[6])
+        elif s:
+            lines.append(line)
+    if len(lines) < 2:
+        raise InputError(f"reaction CSV {str(p)!r} has no data rows")
+    rows = list(csv.reader(lines))
+    head = [c.strip() for c in rows[0]]
+    lower = [c.lower() for c in head]
+    ang = next((lower.index(c) for c in ("crank_deg", "theta_deg", "angle_deg", "theta", "angle")
+                if c in lower), None)
+    if ang is None:
+        raise InputError(f"reaction CSV {str(p)!r}: no crank-angle column (crank_deg, theta_deg or angle_deg)")
+    data = []
+    for k, r in enumerate(rows[1:], start=2):
+        try:
+            data.append([float(c) if c.strip() else np.nan for c in r])
+        except ValueError:
+            raise InputError(f"reaction CSV {str(p)!r} line {k}: non-numeric value") from None
+    arr = np.array(data, float)
+    if arr.ndim != 2 or arr.shape[1] != len(head):
+        raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
+    joints: dict[str, JointHistory] = {}
+    for i, c in enumerate(head):
+        for sx, sy in (("_fx_N", "_fy_N"), ("_fx", "_fy"), ("x", "y")):
+            if c.endswith(sx) and len(c) > len(sx):
+                jn = c[: -len(sx)]
+                cy = jn + sy
+                if cy in head and jn not in joints:
+                    ba, bb = pairs.get(jn, ("?", "?"))
+                    joints[jn] = JointHistory(jn, ba, bb, np.stack([arr[:, i], arr[:, head.index(cy)]], -1))
+                break
+    if not joints:
+        raise InputError(f"reaction CSV {str(p)!r}: no joint force columns (<joint>_fx_N, <joint>_fy_N)")
+    tcol = next((lower.index(c.lower()) for c in _TORQUE_COLS + ("driver_force_N",) if c.lower() in lower), None)
+    torque = arr[:, tcol] if tcol is not None else np.zeros(arr.shape[0])
+    sing = arr[:, lower.index("singular")] > 0.5 if "singular" in lower else np.zeros(arr.shape[0], bool)
+    bad = ~sing & (np.isnan(torque) | np.any([np.isnan(j.force_N).any(1) for j in joints.values()], 0))
+    if np.any(bad):
+        raise InputError(f"reaction CSV {str(p)!r}: empty or non-finite values at crank angle "
+                         f"{arr[np.argmax(bad), ang]:g} deg")
+    deg = arr[:, ang]
+    if np.any(np.diff(deg) <= 0):
+        raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
+    for j in joints.values():
+        j.force_N = np.nan_to_num(j.force_N)
+    meta = {"source": str(p), "model": "imported"}
+    if "driver_force_N" in head:
+        meta["driver_unit"] = "N"
+    h = ReactionHistory(deg, joints, np.nan_to_num(torque), None, meta,
+                        singular_mask=sing if sing.any() else None)
+    h.meta["singular"] = singular_ranges(deg, h.singular_mask)
+    return h
