@@ -1,0 +1,171 @@
+"""Quadratic/linear tetrahedral meshes and a fast vectorised elasticity stiffness.
+
+The P2 mesh adds one node at the midpoint of every (straight) edge.  Element
+node order is CalculiX C3D10 / VTK ``tetra10`` (0-based): corners 0-3, then
+edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.  Global DOF ``3*node + c`` (c = x, y, z).
+
+>>> import numpy as np
+>>> from skfem import MeshTet
+>>> from rigfem.mesh import PartMesh
+>>> m = MeshTet.init_tensor(*(np.linspace(0, 1, 3),) * 3)
+>>> fm = fe_mesh(PartMesh("cube", m.p.T, m.t.T), order=2)
+>>> K = stiffness(fm, 210e3, 0.3)
+>>> K.shape == (3 * len(fm.nodes),) * 2
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from skfem.quadrature import get_quadrature
+from skfem.refdom import RefTet, RefTri
+
+from rigfem.errors import InputError
+from rigfem.mesh import PartMesh
+
+TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+TRI_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+
+
+@dataclass
+class FEMesh:
+    """Nodes and P1/P2 elements of a part; ``surfaces`` hold 3- or 6-node triangles."""
+
+    nodes: np.ndarray  #: (N, 3)
+    elements: np.ndarray  #: (M, 4) or (M, 10), C3D4/C3D10 order
+    surfaces: dict[str, np.ndarray]  #: name -> (K, 3) or (K, 6)
+    order: int
+    n_vertices: int
+
+    @property
+    def ndof(self) -> int:
+        return 3 * len(self.nodes)
+
+
+def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
+    return np.minimum(pairs[..., 0], pairs[..., 1]).astype(np.int64) * n + np.maximum(pairs[..., 0], pairs[..., 1])
+
+
+def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
+    """P1 or P2 mesh of ``mesh`` (mid-edge nodes on straight edges)."""
+    if order not in (1, 2):
+        raise InputError(f"order = {order!r} must be 1 or 2")
+    p = np.asarray(mesh.points, dtype=float)
+    t = np.asarray(mesh.tets, dtype=np.int64)
+    if p.ndim != 2 or p.shape[1] != 3 or t.ndim != 2 or t.shape[1] != 4 or len(t) == 0:
+        raise InputError("mesh must have points (N, 3) and tets (M, 4) with M >= 1")
+    if t.min() < 0 or t.max() >= len(p) or not np.isfinite(p).all():
+        raise InputError(f"mesh tets must index points 0..{len(p) - 1} and points must be finite")
+    d = p[t[:, 1:]] - p[t[:, :1]]
+    vol = np.linalg.det(d) / 6
+    if (np.abs(vol) <= 1e-12 * np.abs(vol).max()).any():
+        raise InputError(f"mesh has {(np.abs(vol) <= 1e-12 * np.abs(vol).max()).sum()} degenerate (zero-volume) tets")
+    t = t.copy()
+    t[vol < 0, 1:3] = t[vol < 0, 2:0:-1]  # orient positively (C3D10 needs it)
+    surfaces = {k: np.asarray(v, dtype=np.int64) for k, v in mesh.surfaces.items()}
+    if order == 1:
+        return FEMesh(p, t, surfaces, 1, len(p))
+    n = len(p)
+    keys = _edge_keys(t[:, TET_EDGES], n)  # (M, 6)
+    ukeys, inv = np.unique(keys, return_inverse=True)
+    mid = 0.5 * (p[ukeys // n] + p[ukeys % n])
+    elements = np.hstack([t, n + inv.reshape(t.shape[0], 6)])
+    surf2 = {}
+    for name, tri in surfaces.items():
+        k = _edge_keys(tri[:, TRI_EDGES], n)
+        pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
+        if not (ukeys[pos] == k).all():
+            raise InputError(f"surface {name!r} has triangles whose edges are not tet edges of the mesh")
+        surf2[name] = np.hstack([tri, n + pos])
+    return FEMesh(np.vstack([p, mid]), elements, surf2, 2, n)
+
+
+def tet_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points (nq, 4) and weights summing to 1/6 on the reference tet."""
+    X, W = get_quadrature(RefTet, degree)
+    return np.vstack([1 - X.sum(0), X]).T, W
+
+
+def tri_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points (nq, 3) and weights summing to 1/2 on the reference triangle."""
+    X, W = get_quadrature(RefTri, degree)
+    return np.vstack([1 - X.sum(0), X]).T, W
+
+
+def shape_values(L: np.ndarray, order: int) -> np.ndarray:
+    """Shape functions (nq, nloc) at barycentric points L (nq, 3|4) of a triangle or tet."""
+    if order == 1:
+        return L.copy()
+    edges = TET_EDGES if L.shape[1] == 4 else TRI_EDGES
+    return np.hstack([L * (2 * L - 1), 4 * L[:, edges[:, 0]] * L[:, edges[:, 1]]])
+
+
+def _shape_dL(L: np.ndarray, order: int) -> np.ndarray:
+    """dN_a/dL_k (nq, nloc, 4) at barycentric points of a tet."""
+    nq = len(L)
+    if order == 1:
+        return np.broadcast_to(np.eye(4), (nq, 4, 4))
+    C = np.zeros((nq, 10, 4))
+    C[:, np.arange(4), np.arange(4)] = 4 * L - 1
+    for a, (i, j) in enumerate(TET_EDGES):
+        C[:, 4 + a, i] = 4 * L[:, j]
+        C[:, 4 + a, j] = 4 * L[:, i]
+    return C
+
+
+def bary_gradients(fm: FEMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Gradients of the barycentric coordinates (M, 4, 3) and det J = 6·volume (M,)."""
+    x = fm.nodes[fm.elements[:, :4]]
+    J = np.swapaxes(x[:, 1:] - x[:, :1], 1, 2)  # columns = edge vectors
+    Ji = np.linalg.inv(J)  # rows = grad L1..L3
+    return np.concatenate([-Ji.sum(1, keepdims=True), Ji], axis=1), np.linalg.det(J)
+
+
+def shape_grads(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """Physical shape-function gradients (m, nq, nloc, 3) at barycentric points L (nq, 4)."""
+    G, _ = bary_gradients(_subset(fm, elems))
+    return np.einsum("qak,ekd->eqad", _shape_dL(L, fm.order), G, optimize=True)
+
+
+def _subset(fm: FEMesh, elems) -> FEMesh:
+    return FEMesh(fm.nodes, fm.elements[elems], {}, fm.order, fm.n_vertices)
+
+
+def element_dofs(elements: np.ndarray) -> np.ndarray:
+    """Global DOFs (M, 3*nloc) in local order a*3 + c."""
+    return (3 * elements[:, :, None] + np.arange(3)).reshape(len(elements), -1)
+
+
+def stiffness(fm: FEMesh, E: float, nu: float, chunk: int = 4096) -> sp.csr_matrix:
+    """Global stiffness matrix of isotropic linear elasticity (exact quadrature)."""
+    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = E / (2 * (1 + nu))
+    L, W = tet_quadrature(2 * (fm.order - 1))
+    nloc = fm.elements.shape[1]
+    n3 = 3 * nloc
+    eye = np.eye(3)
+    data = np.empty((len(fm.elements), n3, n3))
+    for s in range(0, len(fm.elements), chunk):
+        sl = slice(s, s + chunk)
+        _, det = bary_gradients(_subset(fm, sl))
+        dN = shape_grads(fm, L, sl) * np.sqrt(np.abs(det)[:, None, None, None] * W[None, :, None, None])
+        B = dN.reshape(dN.shape[0], len(W), n3)
+        M = (np.swapaxes(B, 1, 2) @ B).reshape(-1, nloc, 3, nloc, 3)  # M[e,a,i,b,j] = ∫ ∂_i N_a ∂_j N_b
+        tr = np.einsum("eakbk->eab", M)
+        Ke = lam * M + mu * M.transpose(0, 1, 4, 3, 2) + mu * tr[:, :, None, :, None] * eye[None, None, :, None, :]
+        data[sl] = Ke.reshape(-1, n3, n3)
+    dofs = element_dofs(fm.elements)
+    return _scatter(dofs, data, fm.ndof)
+
+
+def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
+    """Sum element matrices (M, k, k) into a CSR matrix."""
+    k = dofs.shape[1]
+    rows = np.repeat(dofs, k, axis=1).ravel()
+    cols = np.tile(dofs, (1, k)).ravel()
+    K = sp.csr_matrix((data.ravel(), (rows, cols)), shape=(n, n))
+    K.sum_duplicates()
+    return K

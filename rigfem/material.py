@@ -1,0 +1,77 @@
+"""Isotropic linear-elastic materials.
+
+Values are in the rig's unit system mm–N–MPa–t (density in t/mm³), but a
+:class:`Material` is unit-agnostic: give E in Pa and density in kg/m³ for an
+m–N–Pa–kg model.
+
+>>> from rigfem.material import get_material
+>>> steel = get_material("rig_steel")
+>>> steel.E, steel.nu, steel.allowable
+(210000.0, 0.3, 375.0)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rigfem.errors import InputError, check_range
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic material: E and ultimate strength in MPa, density in t/mm³."""
+
+    name: str
+    E: float  #: Young's modulus
+    nu: float  #: Poisson's ratio
+    sigma_u: float  #: ultimate tensile strength
+    density: float  #: mass density (7.85e-9 t/mm³ for steel)
+
+    def __post_init__(self) -> None:
+        check_range(f"material {self.name!r} E", self.E, 0.0, None, lo_open=True)
+        check_range(f"material {self.name!r} nu", self.nu, -0.99, 0.49)
+        check_range(f"material {self.name!r} sigma_u", self.sigma_u, 0.0, None, lo_open=True)
+        check_range(f"material {self.name!r} density", self.density, 0.0, None)
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """Lamé parameters (λ, μ)."""
+        lam = self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
+        return lam, self.E / (2 * (1 + self.nu))
+
+    @property
+    def allowable(self) -> float:
+        """The rig's fatigue limit σu/2 (RIG.md §5)."""
+        return self.sigma_u / 2
+
+
+MATERIALS: dict[str, Material] = {
+    "rig_steel": Material("rig_steel", 210000.0, 0.3, 750.0, 7.85e-9),
+    "abs": Material("abs", 2200.0, 0.35, 40.0, 1.04e-9),
+    # EN AW-6082-T6 (EN 755-2, t ≤ 5 mm): Rm ≥ 310 MPa, E 70 GPa, ν 0.33, 2700 kg/m³
+    "al_6082_t6": Material("al_6082_t6", 70000.0, 0.33, 310.0, 2.70e-9),
+}
+
+
+def get_material(name: str) -> Material:
+    """Material from the library by name."""
+    try:
+        return MATERIALS[name]
+    except KeyError:
+        raise InputError(f"material = {name!r} is unknown; allowed: {', '.join(MATERIALS)}") from None
+
+
+def material_from_dict(d: dict) -> Material:
+    """User-defined material from ``{"name", "E", "nu", "sigma_u", "density"}``; validated.
+
+    >>> material_from_dict({"name": "s355", "E": 210e3, "nu": 0.3, "sigma_u": 470, "density": 7.85e-9}).E
+    210000.0
+    """
+    keys = ("name", "E", "nu", "sigma_u", "density")
+    missing = [k for k in keys if k not in d]
+    extra = [k for k in d if k not in keys]
+    if missing or extra:
+        raise InputError(f"material fields must be exactly {keys}; missing {missing}, unknown {extra}")
+    return Material(str(d["name"]), float(check_range("material E", d["E"])),
+                    check_range("material nu", d["nu"]), check_range("material sigma_u", d["sigma_u"]),
+                    check_range("material density", d["density"]))

@@ -1,0 +1,124 @@
+"""The result of a linear FE solve: displacements, reactions, stresses per load case.
+
+Stresses are linear in the loads, so a combination of the cases with
+coefficients c (e.g. the load factors of one crank angle) is
+``σ(c) = Σ_k c_k σ_k``: :meth:`Solution.stress` is one tensordot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rigfem.stress import von_mises, zz_error
+
+if TYPE_CHECKING:
+    from rigfem.fe import Model
+
+
+@dataclass(frozen=True)
+class Peak:
+    """Peak von Mises stress with its location and discretisation-error estimate."""
+
+    value: float  #: MPa
+    node: int
+    xyz: tuple[float, float, float]
+    surface: str  #: named surface, "(unnamed boundary)" or "(interior)"
+    error: float  #: relative ZZ error estimate of ``value`` (recovered vs raw stress at the node)
+
+
+@dataclass
+class Solution:
+    """Displacements U (3N, k) and recovered nodal stresses (k, N, 6) of k load cases."""
+
+    model: Model
+    F: np.ndarray  #: (3N, k) applied nodal loads
+    U: np.ndarray  #: (3N, k) displacements
+    reactions: np.ndarray  #: (3N, k) support forces on the part, K u − f
+    nodal_stress: np.ndarray  #: (k, N, 6) Voigt xx, yy, zz, xy, yz, xz
+    support_dofs: dict[str, np.ndarray]  #: support name -> its DOFs
+    residuals: np.ndarray  #: (k,) relative residual of each solve
+    method: str
+    free_body: bool
+    times: dict[str, float] = field(default_factory=dict)
+
+    def _coef(self, c) -> np.ndarray:
+        k = self.U.shape[1]
+        c = np.eye(k)[0] if c is None and k == 1 else np.asarray(c, dtype=float)
+        if c.shape != (k,) or not np.isfinite(c).all():
+            from rigfem.errors import InputError
+            raise InputError(f"combination coefficients must be {k} finite numbers")
+        return c
+
+    def displacement(self, c=None) -> np.ndarray:
+        """Nodal displacement (N, 3) of the combination c (default: the only case)."""
+        return (self.U @ self._coef(c)).reshape(-1, 3)
+
+    def stress(self, c=None) -> np.ndarray:
+        """Recovered nodal stress (N, 6) of the combination c."""
+        return np.tensordot(self._coef(c), self.nodal_stress, 1)
+
+    def von_mises(self, c=None) -> np.ndarray:
+        """Nodal von Mises stress (N,) of the combination c."""
+        return von_mises(self.stress(c))
+
+    def peak(self, c=None) -> Peak:
+        """Peak nodal von Mises of the combination c, where it is and its error estimate."""
+        s = self.stress(c)
+        vm = von_mises(s)
+        n = int(np.argmax(vm))
+        fm, mat = self.model.mesh, self.model.material
+        err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s[n])
+        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), self.surface_of(n), err)
+
+    def surface_of(self, node: int) -> str:
+        """Name of the first named surface containing ``node``."""
+        for name, tri in self.model.mesh.surfaces.items():
+            if (tri == node).any():
+                return name
+        return "(unnamed boundary)" if node in self._boundary_nodes() else "(interior)"
+
+    def _boundary_nodes(self) -> set[int]:
+        t = self.model.mesh.elements[:, :4]
+        faces = np.sort(np.vstack([t[:, [0, 1, 2]], t[:, [0, 1, 3]], t[:, [0, 2, 3]], t[:, [1, 2, 3]]]), 1)
+        u, cnt = np.unique(faces, axis=0, return_counts=True)
+        b = set(u[cnt == 1].ravel().tolist())
+        el = self.model.mesh.elements
+        if el.shape[1] == 10:  # a mid-edge node is on the boundary if both its corners are (sufficient here)
+            from rigfem.assembly import TET_EDGES
+            for a, (i, j) in enumerate(TET_EDGES):
+                m = np.isin(el[:, i], list(b)) & np.isin(el[:, j], list(b))
+                b.update(el[m, 4 + a].tolist())
+        return b
+
+    def resultants(self, dofs: np.ndarray, vec: np.ndarray) -> np.ndarray:
+        """Force and moment about the origin (k, 6) of nodal vectors ``vec`` (3N, k) over ``dofs``."""
+        x = self.model.mesh.nodes
+        mask = np.zeros(len(vec), bool)
+        mask[dofs] = True
+        v = np.where(mask[:, None], vec, 0.0).reshape(len(x), 3, -1)
+        return np.concatenate([v.sum(0).T, np.einsum("ijk,nj,nkc->ci", _levi(), x, v)], axis=1)
+
+    @property
+    def support_reactions(self) -> dict[str, np.ndarray]:
+        """Support name -> reaction force and moment about the origin (k, 6) on the part."""
+        return {name: self.resultants(d, self.reactions) for name, d in self.support_dofs.items()}
+
+    @property
+    def equilibrium_error(self) -> np.ndarray:
+        """(k,) |Σ applied + Σ reactions| (forces and moments) relative to Σ|applied nodal forces|."""
+        alld = np.arange(len(self.F))
+        tot = self.resultants(alld, self.F + self.reactions)
+        L = np.ptp(self.model.mesh.nodes, axis=0).max()
+        scale = np.linalg.norm(self.F.reshape(-1, 3, self.F.shape[1]), axis=1).sum(0)
+        err = np.hypot(np.linalg.norm(tot[:, :3], axis=1), np.linalg.norm(tot[:, 3:], axis=1) / L)
+        return np.where(scale > 0, err / np.where(scale > 0, scale, 1), err)
+
+
+def _levi() -> np.ndarray:
+    e = np.zeros((3, 3, 3))
+    e[0, 1, 2] = e[1, 2, 0] = e[2, 0, 1] = 1
+    e[0, 2, 1] = e[2, 1, 0] = e[1, 0, 2] = -1
+    return e

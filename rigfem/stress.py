@@ -1,0 +1,82 @@
+"""Stresses from displacements: tensors, von Mises, principal stresses, nodal recovery, ZZ error.
+
+Tensor components in Voigt order ``xx, yy, zz, xy, yz, xz`` (ParaView's order for
+6-component symmetric tensors).  Nodal stresses are recovered by averaging the
+element stress fields evaluated at each node over the elements sharing it; the
+error estimate of a nodal value is the Zienkiewicz–Zhu-type discrepancy between
+the recovered and the raw element stresses at that node:
+``max_e vm(σ_e(node) − σ*(node)) / vm(σ*(node))``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigfem.assembly import TET_EDGES, FEMesh, element_dofs, shape_grads, tet_quadrature
+
+NODE_BARY = np.vstack([np.eye(4), 0.5 * (np.eye(4)[TET_EDGES[:, 0]] + np.eye(4)[TET_EDGES[:, 1]])])
+
+
+def _stress_at(fm: FEMesh, E: float, nu: float, U: np.ndarray, L: np.ndarray, elems) -> np.ndarray:
+    """Stress (m, nq, k, 6) at barycentric points L (nq, 4) of elements ``elems`` for U (ndof, k)."""
+    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = E / (2 * (1 + nu))
+    dN = shape_grads(fm, L, elems)
+    el = fm.elements[elems]
+    Ue = U[element_dofs(el)].reshape(len(el), el.shape[1], 3, -1)
+    H = np.einsum("maik,mqaj->mqkij", Ue, dN, optimize=True)
+    e = 0.5 * (H + np.swapaxes(H, -1, -2))
+    tr = np.trace(e, axis1=-2, axis2=-1)
+    s = 2 * mu * e
+    s[..., [0, 1, 2], [0, 1, 2]] += (lam * tr)[..., None]
+    return np.stack([s[..., 0, 0], s[..., 1, 1], s[..., 2, 2], s[..., 0, 1], s[..., 1, 2], s[..., 0, 2]], -1)
+
+
+def quadrature_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Stress (M, nq, k, 6) at the stiffness quadrature points and their coordinates (M, nq, 3)."""
+    U = U.reshape(fm.ndof, -1)
+    L, _ = tet_quadrature(2 * (fm.order - 1))
+    x = np.einsum("qa,mad->mqd", L, fm.nodes[fm.elements[:, :4]])
+    return _stress_at(fm, E, nu, U, L, slice(None)), x
+
+
+def element_node_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, elems=slice(None)) -> np.ndarray:
+    """Raw element stresses (m, nloc, k, 6) evaluated at each element's own nodes."""
+    return _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), NODE_BARY[: fm.elements.shape[1]], elems)
+
+
+def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 2048) -> np.ndarray:
+    """Recovered nodal stresses (k, N, 6): average of element values at each node."""
+    U = U.reshape(fm.ndof, -1)
+    k = U.shape[1]
+    acc = np.zeros((len(fm.nodes), k * 6))
+    for s in range(0, len(fm.elements), chunk):
+        sl = slice(s, s + chunk)
+        Se = element_node_stress(fm, E, nu, U, sl)
+        idx = fm.elements[sl].ravel()
+        for c in range(k * 6):
+            acc[:, c] += np.bincount(idx, Se.reshape(len(idx), k * 6)[:, c], minlength=len(fm.nodes))
+    count = np.bincount(fm.elements.ravel(), minlength=len(fm.nodes))
+    return (acc / count[:, None]).reshape(len(fm.nodes), k, 6).transpose(1, 0, 2)
+
+
+def von_mises(s: np.ndarray) -> np.ndarray:
+    """Von Mises stress of Voigt tensors (..., 6)."""
+    xx, yy, zz, xy, yz, xz = np.moveaxis(s, -1, 0)
+    return np.sqrt(np.maximum(0.5 * ((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2)
+                              + 3 * (xy ** 2 + yz ** 2 + xz ** 2), 0.0))
+
+
+def principal(s: np.ndarray) -> np.ndarray:
+    """Principal stresses (..., 3), descending, of Voigt tensors (..., 6)."""
+    xx, yy, zz, xy, yz, xz = np.moveaxis(s, -1, 0)
+    T = np.stack([np.stack([xx, xy, xz], -1), np.stack([xy, yy, yz], -1), np.stack([xz, yz, zz], -1)], -2)
+    return np.linalg.eigvalsh(T)[..., ::-1]
+
+
+def zz_error(fm: FEMesh, E: float, nu: float, u: np.ndarray, node: int, s_node: np.ndarray) -> float:
+    """Relative discrepancy of raw element stresses at ``node`` from the recovered ``s_node`` (6,)."""
+    elems, local = np.nonzero(fm.elements == node)
+    Se = element_node_stress(fm, E, nu, u, elems)[np.arange(len(elems)), local, 0]
+    ref = von_mises(s_node)
+    return float(von_mises(Se - s_node).max() / ref) if ref > 0 else 0.0

@@ -1,0 +1,106 @@
+"""Test-only PartMesh builders: boxes (skfem) and gmsh OCC parts with holes."""
+
+from __future__ import annotations
+
+import numpy as np
+from skfem import MeshTet
+
+from rigfem.mesh import Hole, PartMesh
+
+FACES = {"xmin": (0, 0), "xmax": (0, 1), "ymin": (1, 0), "ymax": (1, 1), "zmin": (2, 0), "zmax": (2, 1)}
+
+
+def box(lx: float, ly: float, lz: float, nx: int, ny: int, nz: int, jitter: float = 0.0, seed: int = 0) -> PartMesh:
+    """Box [0,lx]×[0,ly]×[0,lz] with faces named xmin..zmax; interior nodes optionally jittered."""
+    m = MeshTet.init_tensor(np.linspace(0, lx, nx + 1), np.linspace(0, ly, ny + 1), np.linspace(0, lz, nz + 1))
+    p = m.p.copy()
+    if jitter:
+        h = np.array([lx / nx, ly / ny, lz / nz])[:, None]
+        inner = np.ones(p.shape[1], bool)
+        inner[m.boundary_nodes()] = False
+        p[:, inner] += jitter * h * np.random.default_rng(seed).uniform(-1, 1, (3, inner.sum()))
+    f = m.boundary_facets()
+    xc = p[:, m.facets[:, f]].mean(1)
+    L = (lx, ly, lz)
+    surfaces = {name: m.facets[:, f[np.isclose(xc[ax], side * L[ax])]].T for name, (ax, side) in FACES.items()}
+    return PartMesh("box", p.T, m.t.T, surfaces=surfaces)
+
+
+def gmsh_part(build, size: float, refine: dict | None = None, name: str = "part") -> PartMesh:
+    """Mesh an OCC model made by ``build(occ) -> dict[name -> (dim, tags)] or hole spec`` with gmsh.
+
+    ``build`` returns {surface_name: [surface tags]} and {hole_name: Hole}; ``refine`` maps
+    surface names to a local mesh size.
+    """
+    import gmsh
+
+    gmsh.initialize(["-v", "0"])
+    try:
+        gmsh.model.add(name)
+        groups, holes = build(gmsh.model.occ)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", min([size] + list((refine or {}).values())))
+        if refine:
+            fields = []
+            for nm, h in refine.items():
+                d = gmsh.model.mesh.field.add("Distance")
+                gmsh.model.mesh.field.setNumbers(d, "SurfacesList", groups[nm])
+                t = gmsh.model.mesh.field.add("Threshold")
+                gmsh.model.mesh.field.setNumber(t, "InField", d)
+                for k, v in (("SizeMin", h), ("SizeMax", size), ("DistMin", 0), ("DistMax", 8 * size)):
+                    gmsh.model.mesh.field.setNumber(t, k, v)
+                fields.append(t)
+            mn = gmsh.model.mesh.field.add("Min")
+            gmsh.model.mesh.field.setNumbers(mn, "FieldsList", fields)
+            gmsh.model.mesh.field.setAsBackgroundMesh(mn)
+            gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+        gmsh.model.mesh.generate(3)
+        tags, xyz, _ = gmsh.model.mesh.getNodes()
+        index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
+        index[tags.astype(np.int64)] = np.arange(len(tags))
+        pts = xyz.reshape(-1, 3)
+        _, ntags = gmsh.model.mesh.getElementsByType(4)
+        tets = index[ntags.astype(np.int64)].reshape(-1, 4)
+        surfaces = {}
+        for nm, stags in groups.items():
+            tri = [gmsh.model.mesh.getElementsByType(2, s)[1] for s in stags]
+            surfaces[nm] = index[np.concatenate(tri).astype(np.int64)].reshape(-1, 3)
+        used = np.unique(tets)
+        remap = -np.ones(len(pts), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        return PartMesh(name, pts[used], remap[tets], {k: remap[v] for k, v in surfaces.items()}, holes)
+    finally:
+        gmsh.finalize()
+
+
+def faces_at(occ, dim_tags, test) -> list[int]:
+    """Tags of the surfaces of a volume whose bounding box satisfies ``test(xmin, ymin, zmin, xmax, ymax, zmax)``."""
+    import gmsh
+
+    occ.synchronize()
+    out = []
+    for d, t in gmsh.model.getBoundary(dim_tags, oriented=False):
+        if test(*gmsh.model.getBoundingBox(d, t)):
+            out.append(t)
+    return out
+
+
+def plate_with_hole(length: float, width: float, thick: float, radius: float, size: float, h_hole: float,
+                    quarter: bool = True) -> PartMesh:
+    """Quarter (x ≥ 0, y ≥ 0) of a plate with a central hole; faces xsym, ysym, zsym, xmax, hole."""
+    eps = 1e-6
+
+    def build(occ):
+        b = occ.addBox(0, 0, 0, length / 2, width / 2, thick)
+        c = occ.addCylinder(0, 0, -1, 0, 0, thick + 2, radius)
+        vol, _ = occ.cut([(3, b)], [(3, c)])
+        g = {"xsym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 < eps),
+             "ysym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: y1 < eps),
+             "zsym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: z1 < eps),
+             "xmax": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x0 > length / 2 - eps),
+             "hole": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 < radius + eps and y1 < radius + eps
+                              and z1 - z0 > thick / 2)}
+        return g, {"hole": Hole(np.array([0, 0, thick / 2]), np.array([0, 0, 1.0]), radius, thick)}
+
+    return gmsh_part(build, size, {"hole": h_hole})
