@@ -8,7 +8,12 @@ loads and supports can attach by name.
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -34,3 +39,344 @@ class PartMesh:
     holes: dict[str, Hole] = field(default_factory=dict)  #: group name -> cylinder geometry
     quality: dict[str, float] = field(default_factory=dict)  #: e.g. {"min": .., "p01": .., "median": ..}
     meta: dict = field(default_factory=dict)  #: part parameters, mesh settings, content hash
+
+
+# ----------------------------------------------------------------------------- meshing
+# (functions below use gmsh through rigfem.parts; imported lazily there to keep this
+#  module importable by the FE code without building any geometry)
+
+#: bump when the meshing recipe changes, so cached meshes are not reused
+MESH_RECIPE = 1
+#: machine memory the estimate is checked against, GiB
+MACHINE_GIB = 24.0
+#: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)
+TETS_PER_H3 = 8.4
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """How to mesh a part: global size, and finer size near the surfaces that carry load."""
+
+    size: float  #: mm, global (largest) element size
+    refine: tuple[str, ...] = ()  #: surface groups carrying load: refined, everything else coarse
+    refine_size: float | None = None  #: mm, size on the refined surfaces (default size/4)
+    refine_dist: float | None = None  #: mm, distance over which the size grows back (default 2*size)
+    min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
+
+    @property
+    def size_near(self) -> float:
+        return self.refine_size if self.refine_size is not None else self.size / 4
+
+    @property
+    def dist(self) -> float:
+        return self.refine_dist if self.refine_dist is not None else 2 * self.size
+
+    def key(self) -> dict:
+        return {"size": self.size, "refine": sorted(self.refine), "refine_size": self.size_near,
+                "refine_dist": self.dist, "min_quality": self.min_quality}
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Predicted size of a mesh and of its P2 solve, before meshing."""
+
+    tets: int
+    gmsh_bytes: float  #: peak memory of gmsh while meshing
+    solve_bytes: float  #: memory of a direct P2 solve on the mesh (3 DOF per node)
+
+    @property
+    def gib(self) -> float:
+        return max(self.gmsh_bytes, self.solve_bytes) / 2**30
+
+
+def estimate_tets(volume: float, refined_area: float, s: MeshSettings) -> int:
+    """Tetrahedra gmsh will make: volume/h^3 plus a graded layer over the refined surfaces.
+
+    The size grows linearly from ``size_near`` at a refined surface to ``size`` at ``dist``;
+    a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3) over 0..dist extra tets.
+    """
+    h, hn, D = s.size, min(s.size_near, s.size), s.dist
+    if h - hn > 1e-12:
+        layer = D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3
+    else:
+        layer = 0.0
+    return int(TETS_PER_H3 * (volume / h**3 + refined_area * layer))
+
+
+def estimate(tets: int) -> Estimate:
+    """Memory of meshing (about 1 kB per tet in gmsh) and of a direct P2 solve.
+
+    P2 on tets: about 1.4 nodes per tet, 3 DOF each; the stiffness has about 80 entries
+    per row; a nested-dissection factor of a 3-D problem holds about 8*n^(4/3) entries
+    (12 bytes each, value plus index).
+    """
+    n = 3 * 1.4 * tets
+    return Estimate(tets, 1000.0 * tets, 12.0 * (80 * n + 8 * n ** (4 / 3)))
+
+
+def quality_summary(q: np.ndarray) -> dict[str, float]:
+    """Minimum, 1st and 5th percentile and median of per-tet quality values."""
+    return {"min": float(q.min()), "p01": float(np.percentile(q, 1)),
+            "p05": float(np.percentile(q, 5)), "median": float(np.median(q))}
+
+
+def cache_dir() -> Path:
+    """Folder of cached meshes: $RIGFEM_CACHE or ~/.cache/rigfem (outside the repository)."""
+    return Path(os.environ.get("RIGFEM_CACHE") or Path.home() / ".cache" / "rigfem")
+
+
+def save_npz(pm: PartMesh, path: Path) -> None:
+    """Store a PartMesh as .npz (atomic: written to a temporary name, then renamed)."""
+    arrays = {"points": pm.points, "tets": pm.tets}
+    arrays |= {f"surf:{k}": v for k, v in pm.surfaces.items()}
+    arrays |= {f"hole:{k}": np.concatenate([h.center, h.axis, [h.radius, h.depth]])
+               for k, h in pm.holes.items()}
+    arrays["json"] = np.array(json.dumps({"name": pm.name, "quality": pm.quality, "meta": pm.meta}))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def load_npz(path: Path) -> PartMesh:
+    """Read a PartMesh written by :func:`save_npz`."""
+    with np.load(path) as z:
+        info = json.loads(str(z["json"]))
+        surfaces = {k[5:]: z[k] for k in z.files if k.startswith("surf:")}
+        holes = {k[5:]: Hole(z[k][:3].copy(), z[k][3:6].copy(), float(z[k][6]), float(z[k][7]))
+                 for k in z.files if k.startswith("hole:")}
+        return PartMesh(info["name"], z["points"], z["tets"], surfaces, holes, info["quality"], info["meta"])
+
+
+def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Hole | None:
+    """The cylinder through the vertices of a triangulated surface, or None if it is not one.
+
+    Start: axis orthogonal to the face normals (smallest eigenvector of sum n n^T), circle by
+    a linear (Kasa) fit in the plane normal to it; then a least-squares fit of the distances
+    to the axis.  Rejected if the surface is flat or a vertex lies off by more than rtol*r.
+    """
+    from scipy.optimize import least_squares
+
+    p = points[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    w, v = np.linalg.eigh(n.T @ n)
+    if w[1] < 0.05 * w.sum() or w[0] > 0.2 * w.sum():  # flat, or normals spread in 3-D
+        return None
+    a0 = v[:, 0]
+    q = points[np.unique(tris)]
+    e1 = np.cross(a0, [1.0, 0, 0] if abs(a0[0]) < 0.9 else [0, 1.0, 0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a0, e1)
+    x, y = q @ e1, q @ e2
+    sol, *_ = np.linalg.lstsq(np.c_[2 * x, 2 * y, np.ones_like(x)], x**2 + y**2, rcond=None)
+    r0 = np.sqrt(sol[2] + sol[0] ** 2 + sol[1] ** 2)
+
+    def axis_point(z):
+        a = a0 + z[0] * e1 + z[1] * e2
+        return a / np.linalg.norm(a), (sol[0] + z[2]) * e1 + (sol[1] + z[3]) * e2
+
+    def residual(z):
+        a, c = axis_point(z)
+        return np.linalg.norm(np.cross(q - c, a), axis=1) - z[4]
+
+    fit = least_squares(residual, [0, 0, 0, 0, r0], x_scale=[1, 1, r0, r0, r0], xtol=1e-14, ftol=1e-14)
+    a, c = axis_point(fit.x)
+    r = float(fit.x[4])
+    if r <= 0 or np.abs(fit.fun).max() > rtol * r:
+        return None
+    a = a * np.sign(a[np.argmax(np.abs(a))])
+    t = (q - c) @ a
+    return Hole(c + a * (t.min() + t.max()) / 2, a, r, float(t.max() - t.min()))
+
+
+def _extract(name: str) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray]:
+    """Points, positively oriented tets, named triangle groups and minSICN from gmsh's model."""
+    import gmsh
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+    order = np.argsort(tags)
+    index[tags[order]] = np.arange(len(tags))
+    points = coords.reshape(-1, 3)[order]
+    etags, enodes = gmsh.model.mesh.getElementsByType(4)
+    tets = index[enodes.astype(np.int64)].reshape(-1, 4)
+    quality = np.asarray(gmsh.model.mesh.getElementQualities(etags, "minSICN"))
+    d = points[tets[:, 1:]] - points[tets[:, :1]]
+    neg = np.linalg.det(d) < 0
+    tets[neg, 1:3] = tets[neg, 2:0:-1]
+    surfaces = {}
+    for dim, ptag in gmsh.model.getPhysicalGroups(2):
+        tris = [gmsh.model.mesh.getElementsByType(2, ent)[1] for ent in
+                gmsh.model.getEntitiesForPhysicalGroup(dim, ptag)]
+        surfaces[gmsh.model.getPhysicalName(dim, ptag)] = index[np.concatenate(tris).astype(np.int64)].reshape(-1, 3)
+    used = np.zeros(len(points), bool)
+    used[tets] = True
+    if not used.all():  # drop nodes no tet uses (e.g. of lower-dimensional leftovers)
+        new = np.cumsum(used) - 1
+        points, tets = points[used], new[tets]
+        surfaces = {k: new[v] for k, v in surfaces.items()}
+    return points, tets, surfaces, quality
+
+
+def _set_fields(refine_tags: list[int], s: MeshSettings) -> None:
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", s.size)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 6)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
+    if not refine_tags:
+        return
+    f = gmsh.model.mesh.field
+    dist = f.add("Distance")
+    f.setNumbers(dist, "SurfacesList", refine_tags)
+    f.setNumber(dist, "Sampling", 30)
+    th = f.add("Threshold")
+    f.setNumber(th, "InField", dist)
+    f.setNumber(th, "SizeMin", min(s.size_near, s.size))
+    f.setNumber(th, "SizeMax", s.size)
+    f.setNumber(th, "DistMin", 0.0)
+    f.setNumber(th, "DistMax", s.dist)
+    f.setAsBackgroundMesh(th)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+
+
+def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
+              machine_gib: float = MACHINE_GIB) -> PartMesh:
+    """Mesh a part (``rigfem.parts.PartDef``) with linear tets; cached by content hash.
+
+    Refuses (InputError) a request whose estimate exceeds ``machine_gib`` and a mesh whose
+    minimum minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.
+    """
+    import gmsh
+
+    from rigfem.errors import InputError, check_range
+    from rigfem.parts import build, gmsh_session
+
+    check_range("size", settings.size, 0.0, None, "mm", lo_open=True)
+    check_range("refine_size", settings.size_near, 0.0, None, "mm", lo_open=True)
+    check_range("refine_dist", settings.dist, 0.0, None, "mm", lo_open=True)
+    check_range("min_quality", settings.min_quality, 0.0, 1.0)
+    key_src = {"part": part.content_hash(), "settings": settings.key(), "recipe": MESH_RECIPE,
+               "gmsh": gmsh.__version__}
+    key = hashlib.sha256(json.dumps(key_src, sort_keys=True).encode()).hexdigest()[:32]
+    path = cache_dir() / "meshes" / f"{part.name}-{key}.npz"
+    if use_cache and path.is_file():
+        pm = load_npz(path)
+        pm.meta["cache"] = "hit"
+        return pm
+    t0 = time.perf_counter()
+    with gmsh_session(part.name):
+        gmsh.option.setNumber("General.NumThreads", 1)
+        holes = build(part)
+        groups = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups(2)}
+        unknown = [g for g in settings.refine if g not in groups]
+        if unknown:
+            raise InputError(f"refine: {', '.join(unknown)} not a surface group of {part.name}; "
+                             f"groups: {', '.join(sorted(groups))}")
+        refine_tags = sorted({t for g in settings.refine
+                              for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
+        est = _estimate_model(refine_tags, settings)
+        if est.gib > machine_gib:
+            raise InputError(f"size = {settings.size:g} mm (refine_size = {settings.size_near:g} mm) "
+                             f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB, more than "
+                             f"the machine's {machine_gib:g} GiB: increase --size")
+        _set_fields(refine_tags, settings)
+        gmsh.model.mesh.generate(3)
+        points, tets, surfaces, q = _extract(part.name)
+    seconds = time.perf_counter() - t0
+    empty = [k for k, v in surfaces.items() if len(v) == 0]
+    if empty or len(tets) == 0:
+        raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size = {settings.size:g} mm")
+    if not holes:  # custom part: cylinders fitted to the meshed surfaces
+        holes = {k: h for k, v in surfaces.items() if (h := fit_cylinder(points, v)) is not None}
+    quality = quality_summary(q)
+    if quality["min"] < settings.min_quality:
+        raise InputError(f"part {part.name}: mesh quality minSICN min = {quality['min']:.3f} is below "
+                         f"min_quality = {settings.min_quality:g}; change size = {settings.size:g} mm "
+                         f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
+    meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
+            "density": part.density, "settings": settings.key(), "hash": key,
+            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
+    pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta)
+    if use_cache:
+        save_npz(pm, path)
+    return pm
+
+
+def _estimate_model(refine_tags: list[int], s: MeshSettings) -> Estimate:
+    """Estimate from the current gmsh model's volume and the area of the refined surfaces."""
+    import gmsh
+
+    occ_vols = gmsh.model.occ.getEntities(3)
+    if occ_vols:
+        volume = sum(gmsh.model.occ.getMass(3, t) for _, t in occ_vols)
+        area = sum(gmsh.model.occ.getMass(2, t) for t in refine_tags)
+    else:  # built-in kernel: bounding box as an upper bound
+        lo, hi = np.array(gmsh.model.getBoundingBox(-1, -1)).reshape(2, 3)
+        volume = float(np.prod(hi - lo))
+        area = sum(float(np.prod(np.sort(np.diff(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3),
+                                                         axis=0)[0])[1:])) for t in refine_tags)
+    return estimate(estimate_tets(volume, area, s))
+
+
+TET10_EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])  #: VTK/meshio tetra10 order
+TRI6_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+
+
+def to_meshio(pm: PartMesh, order: int = 1):
+    """meshio.Mesh of the part: tets plus one triangle block per named surface.
+
+    ``order=2`` adds mid-edge nodes (tetra10/triangle6); those on a cylindrical group of
+    ``pm.holes`` are moved onto the cylinder, others stay on the straight edge.
+    """
+    import meshio
+
+    from rigfem.errors import InputError
+
+    if order not in (1, 2):
+        raise InputError(f"order = {order!r} must be 1 or 2")
+    points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
+    surfaces = {k: np.asarray(v, np.int64) for k, v in pm.surfaces.items()}
+    if order == 2:
+        n = len(points)
+        keys = np.sort(tets[:, TET10_EDGES], axis=2)
+        keys = keys[..., 0] * n + keys[..., 1]
+        ukeys, inv = np.unique(keys, return_inverse=True)
+        mid = 0.5 * (points[ukeys // n] + points[ukeys % n])
+        tets = np.hstack([tets, n + inv.reshape(-1, 6)])
+        for name, tri in surfaces.items():
+            k = np.sort(tri[:, TRI6_EDGES], axis=2)
+            pos = np.searchsorted(ukeys, k[..., 0] * n + k[..., 1])
+            surfaces[name] = np.hstack([tri, n + pos])
+            if name in pm.holes:
+                h = pm.holes[name]
+                m = mid[np.unique(pos)] - h.center
+                axial = np.outer(m @ h.axis, h.axis)
+                radial = m - axial
+                mid[np.unique(pos)] = h.center + axial + h.radius * radial / np.linalg.norm(radial, axis=1)[:, None]
+        points = np.vstack([points, mid])
+    tet_t, tri_t = ("tetra", "triangle") if order == 1 else ("tetra10", "triangle6")
+    names = sorted(surfaces)
+    cells = [(tet_t, tets)] + [(tri_t, surfaces[k]) for k in names]
+    ids = [np.full(len(tets), len(names) + 1)] + [np.full(len(surfaces[k]), i + 1) for i, k in enumerate(names)]
+    field_data = {k: np.array([i + 1, 2]) for i, k in enumerate(names)}
+    field_data[pm.name] = np.array([len(names) + 1, 3])
+    return meshio.Mesh(points, cells, cell_data={"gmsh:physical": ids, "gmsh:geometrical": ids},
+                       field_data=field_data)
+
+
+def write_mesh(pm: PartMesh, path: str | Path, order: int = 1) -> None:
+    """Write .vtu or .msh (gmsh 2.2 format, physical names kept) through meshio."""
+    from rigfem.errors import InputError
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".vtu", ".msh"):
+        raise InputError(f"--out {path}: file type must be .vtu or .msh")
+    mesh = to_meshio(pm, order)
+    if suffix == ".msh":
+        mesh.write(path, file_format="gmsh22", binary=False)
+    else:
+        mesh.write(path)

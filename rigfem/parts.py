@@ -1,0 +1,466 @@
+"""Part definitions (geometry/*.toml) and their OpenCASCADE geometry in gmsh.
+
+Units: mm (dimensions), kg/m^3 (density in the files), kg (masses returned here).
+
+A part file lists every dimension with value, unit and source ("catalogue", "2013 study"
+or "assumed: ...") so an engineer corrects a dimension without touching code.  Known parts:
+
+- ``rail_size25`` (kind ``rail``): x along the rail from x=0 to x=L, y across the width
+  (y=0 mid-width), z up (z=0 bottom mounting face, z=H top).  Vertical mounting holes at
+  x = first_offset + i*pitch (as many as fit with the same end distance on the far end).
+  Surface groups: ``hole_00``, ``hole_01``, ... (through-bore walls, in x order), ``cbore_00``...
+  (counterbore walls), ``cbore_floor_00``... (annulus where the screw head bears), ``ends``,
+  ``bottom``, ``top``, ``sides`` (and ``grooves`` if modelled); volume group ``rail``.
+- ``PF_4b_006``, ``PF_4b_005_v2``, ``PF_4b_004_v2``, ``PF_4b_002_v2``, ``PF_4b_001_v2`` (kind
+  ``plate``, thickness variants of one definition): z along the bore axis, z=0 the face against
+  the rail, origin on the axis, screws on the x axis.  Groups ``bore`` (bearing seat),
+  ``screw_1`` (x<0), ``screw_2`` (x>0), ``bottom``, ``top`` (all faces normal to +z), ``rim``;
+  volume ``plate``.
+- ``PF_4b_003_v2`` (kind ``iprofile``): x along the profile, y across the flanges, z up.
+  Groups ``screw_1``..``screw_4`` (bottom flange y<0, y>0, top flange y<0, y>0), ``base``
+  (z=0), ``top`` (z=height); volume ``iprofile``.
+- Custom parts: a path to a ``.geo`` file (its physical groups are used; it may ``Merge`` a
+  STEP/BREP) or a ``.step``/``.stp``/``.brep`` file whose named entities become groups.
+
+:func:`build` must run inside :func:`gmsh_session`; it returns the analytic :class:`Hole`
+of every cylindrical group so loads and supports attach by name.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator
+
+import gmsh
+import numpy as np
+
+from rigfem.errors import InputError, check_range
+from rigfem.mesh import Hole
+
+#: folder with the part definition files (repository root / geometry)
+GEOMETRY_DIR = Path(__file__).resolve().parents[1] / "geometry"
+#: allowed prefixes of a dimension's source
+SOURCES = ("catalogue", "2013 study", "assumed")
+#: smallest wall left between a hole and an edge or another hole, mm
+MIN_WALL = 1.0
+_CUSTOM_SUFFIXES = (".geo", ".step", ".stp", ".brep")
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """One documented dimension of a part file."""
+
+    value: float
+    unit: str
+    source: str
+
+
+@dataclass(frozen=True)
+class PartDef:
+    """A validated part definition: kind, dimensions (mm) and density (kg/m^3)."""
+
+    name: str
+    kind: str  #: "rail", "plate", "iprofile" or "custom"
+    dims: dict[str, Dimension] = field(default_factory=dict)
+    density: float = 7850.0  #: kg/m^3
+    description: str = ""
+    path: Path | None = None  #: definition file (TOML, or the custom geometry file)
+    reference: dict[str, Dimension] = field(default_factory=dict)  #: figures to compare with
+
+    def __getitem__(self, key: str) -> float:
+        return self.dims[key].value
+
+    def content_hash(self) -> str:
+        """SHA-256 of everything that shapes the geometry (for the mesh cache)."""
+        payload = {"name": self.name, "kind": self.kind,
+                   "dims": {k: d.value for k, d in sorted(self.dims.items())}}
+        h = hashlib.sha256(json.dumps(payload, sort_keys=True).encode())
+        if self.kind == "custom" and self.path is not None:
+            h.update(self.path.read_bytes())
+        return h.hexdigest()
+
+
+# ----------------------------------------------------------------------------- loading
+
+def _read_dims(table: dict, where: str) -> dict[str, Dimension]:
+    dims = {}
+    for key, entry in table.items():
+        if not isinstance(entry, dict) or not {"value", "unit", "source"} <= entry.keys():
+            raise InputError(f"{where}.{key} needs value, unit and source")
+        if not str(entry["source"]).startswith(SOURCES):
+            raise InputError(f"{where}.{key}.source must start with one of {', '.join(SOURCES)}")
+        dims[key] = Dimension(check_range(f"{where}.{key}", entry["value"]), str(entry["unit"]),
+                              str(entry["source"]))
+    return dims
+
+
+def _read_toml(path: Path) -> dict:
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"part file {path}: {exc}") from None
+
+
+def known_parts(geometry_dir: Path = GEOMETRY_DIR) -> dict[str, tuple[Path, str | None]]:
+    """Name -> (definition file, variant or None) for every part under ``geometry_dir``."""
+    parts: dict[str, tuple[Path, str | None]] = {}
+    for path in sorted(geometry_dir.glob("*.toml")):
+        data = _read_toml(path)
+        variants = data.get("variants", {})
+        if variants:
+            for v in variants:
+                parts[v] = (path, v)
+        else:
+            parts[data["part"]["name"]] = (path, None)
+    return parts
+
+
+def load_part(name: str, overrides: dict[str, float] | None = None,
+              geometry_dir: Path = GEOMETRY_DIR) -> PartDef:
+    """Load a known part by name (or a custom geometry file by path) and validate it.
+
+    ``overrides`` replaces dimension values, e.g. ``{"length": 700}`` for a 700 mm rail.
+    """
+    overrides = dict(overrides or {})
+    if Path(name).suffix.lower() in _CUSTOM_SUFFIXES:
+        path = Path(name)
+        if not path.is_file():
+            raise InputError(f"part file {name} does not exist")
+        if overrides:
+            raise InputError(f"dimension overrides ({', '.join(overrides)}) do not apply to a custom part")
+        return PartDef(name=path.stem, kind="custom", path=path.resolve(),
+                       description=f"custom part from {path.name}")
+    parts = known_parts(geometry_dir)
+    if name not in parts:
+        raise InputError(f"part {name!r} is unknown; known parts: {', '.join(parts)} "
+                         f"(or a .geo/.step/.stp/.brep file)")
+    path, variant = parts[name]
+    data = _read_toml(path)
+    dims = _read_dims(data.get("dimensions", {}), "dimensions")
+    if variant is not None:
+        dims.update(_read_dims(data["variants"][variant], f"variants.{variant}"))
+    for key, value in overrides.items():
+        if key not in dims:
+            raise InputError(f"{key} is not a dimension of {name}; dimensions: {', '.join(dims)}")
+        dims[key] = Dimension(check_range(key, value), dims[key].unit, "override")
+    density = _read_dims(data.get("material", {}), "material")["density"].value
+    part = PartDef(name=name, kind=data["part"]["kind"], dims=dims, density=density,
+                   description=data["part"].get("description", ""), path=path,
+                   reference=_read_dims(data.get("reference", {}), "reference"))
+    validate(part)
+    return part
+
+
+# ----------------------------------------------------------------------------- validation
+
+def _positive(part: PartDef, *keys: str) -> None:
+    for k in keys:
+        check_range(k, part[k], 0.0, None, "mm", lo_open=True)
+
+
+def _need(cond: bool, msg: str) -> None:
+    if not cond:
+        raise InputError(msg)
+
+
+def rail_hole_x(part: PartDef) -> np.ndarray:
+    """x of every mounting hole of a rail, mm: first_offset + i*pitch up to L - first_offset."""
+    L, a, p = part["length"], part["first_offset"], part["pitch"]
+    n = int(math.floor((L - 2 * a) / p + 1e-9)) + 1
+    return a + p * np.arange(max(n, 0))
+
+
+def rail_hole_groups(i: int) -> tuple[str, str, str]:
+    """Surface groups of a rail's i-th hole: through-bore, counterbore wall, counterbore floor."""
+    return f"hole_{i:02d}", f"cbore_{i:02d}", f"cbore_floor_{i:02d}"
+
+
+def validate(part: PartDef) -> None:
+    """Raise InputError naming the dimension if the part cannot exist."""
+    if part.kind == "rail":
+        _positive(part, "length", "width", "height", "pitch", "first_offset", "hole_diameter",
+                  "cbore_diameter", "cbore_depth")
+        check_range("groove_radius", part["groove_radius"], 0.0, None, "mm")
+        W, H, L = part["width"], part["height"], part["length"]
+        rc = part["cbore_diameter"] / 2
+        _need(part["hole_diameter"] < part["cbore_diameter"],
+              f"hole_diameter = {part['hole_diameter']:g} mm must be smaller than cbore_diameter "
+              f"= {part['cbore_diameter']:g} mm")
+        _need(part["cbore_diameter"] <= W - 2 * MIN_WALL,
+              f"cbore_diameter = {part['cbore_diameter']:g} mm is wider than the rail allows: "
+              f"must be <= width - {2 * MIN_WALL:g} = {W - 2 * MIN_WALL:g} mm")
+        _need(part["cbore_depth"] <= H - MIN_WALL,
+              f"cbore_depth = {part['cbore_depth']:g} mm must be <= height - {MIN_WALL:g} "
+              f"= {H - MIN_WALL:g} mm")
+        _need(part["pitch"] >= part["cbore_diameter"] + MIN_WALL,
+              f"pitch = {part['pitch']:g} mm must be >= cbore_diameter + {MIN_WALL:g} mm")
+        _need(part["first_offset"] >= rc + MIN_WALL,
+              f"first_offset = {part['first_offset']:g} mm must be >= cbore radius + {MIN_WALL:g} "
+              f"= {rc + MIN_WALL:g} mm")
+        _need(L >= 2 * part["first_offset"],
+              f"length = {L:g} mm must be >= 2*first_offset = {2 * part['first_offset']:g} mm "
+              f"(at least one hole)")
+        rg = part["groove_radius"]
+        if rg > 0:
+            _need(W / 2 - rg - part["hole_diameter"] / 2 >= MIN_WALL,
+                  f"groove_radius = {rg:g} mm cuts into the through-hole: must be <= "
+                  f"{W / 2 - part['hole_diameter'] / 2 - MIN_WALL:g} mm")
+            for k in ("groove_z_lower", "groove_z_upper"):
+                z = check_range(k, part[k], rg + MIN_WALL, H - rg - MIN_WALL, "mm")
+                _need(W / 2 - rg - rc >= MIN_WALL or z + rg < H - part["cbore_depth"] - MIN_WALL,
+                      f"groove_radius = {rg:g} mm cuts into the counterbore at {k} = {z:g} mm")
+            _need(part["groove_z_upper"] - part["groove_z_lower"] >= 2 * rg + MIN_WALL,
+                  "groove_z_upper - groove_z_lower must be >= 2*groove_radius + 1 mm")
+    elif part.kind == "plate":
+        _positive(part, "diameter", "thickness", "bore_diameter", "seat_width", "hub_diameter",
+                  "screw_spacing", "screw_diameter")
+        R, rb, rh = part["diameter"] / 2, part["bore_diameter"] / 2, part["hub_diameter"] / 2
+        s, rs = part["screw_spacing"] / 2, part["screw_diameter"] / 2
+        _need(rb + MIN_WALL <= rh <= R,
+              f"hub_diameter = {2 * rh:g} mm must lie in [bore_diameter + {2 * MIN_WALL:g}, "
+              f"diameter] = [{2 * rb + 2 * MIN_WALL:g}, {2 * R:g}] mm")
+        _need(s - rs >= rb + MIN_WALL,
+              f"screw_spacing = {2 * s:g} mm puts the screw holes into the bearing bore: must be >= "
+              f"{2 * (rb + MIN_WALL + rs):g} mm")
+        _need(s + rs <= R - MIN_WALL,
+              f"screw_spacing = {2 * s:g} mm puts the screw holes outside the disc: must be <= "
+              f"{2 * (R - MIN_WALL - rs):g} mm")
+        _need(part["thickness"] >= part["seat_width"] or s - rs >= rh + MIN_WALL,
+              f"screw_spacing = {2 * s:g} mm puts the screw holes into the hub: hub_diameter = "
+              f"{2 * rh:g} mm must be <= {2 * (s - rs - MIN_WALL):g} mm (or widen screw_spacing)")
+    elif part.kind == "iprofile":
+        _positive(part, "length", "flange_width", "height", "flange_thickness", "web_thickness",
+                  "hole_diameter", "hole_spacing")
+        b, tf, tw = part["flange_width"], part["flange_thickness"], part["web_thickness"]
+        s, r = part["hole_spacing"] / 2, part["hole_diameter"] / 2
+        _need(2 * tf + MIN_WALL <= part["height"],
+              f"height = {part['height']:g} mm must be >= 2*flange_thickness + {MIN_WALL:g} mm")
+        _need(tw <= b, f"web_thickness = {tw:g} mm must be <= flange_width = {b:g} mm")
+        _need(2 * r <= part["length"] - 2 * MIN_WALL,
+              f"hole_diameter = {2 * r:g} mm is wider than the profile length allows: must be <= "
+              f"{part['length'] - 2 * MIN_WALL:g} mm")
+        _need(s - r >= tw / 2 + MIN_WALL,
+              f"hole_spacing = {2 * s:g} mm puts the holes into the web: must be >= "
+              f"{2 * (tw / 2 + MIN_WALL + r):g} mm")
+        _need(s + r <= b / 2 - MIN_WALL,
+              f"hole_spacing = {2 * s:g} mm puts the holes outside the flange: must be <= "
+              f"{2 * (b / 2 - MIN_WALL - r):g} mm")
+    elif part.kind != "custom":
+        raise InputError(f"part kind {part.kind!r} is unknown; allowed: rail, plate, iprofile")
+
+
+# ----------------------------------------------------------------------------- gmsh geometry
+
+@contextmanager
+def gmsh_session(model: str = "rigfem") -> Iterator[None]:
+    """Quiet gmsh session with a fresh model; finalizes gmsh if this call initialized it."""
+    owner = not gmsh.isInitialized()
+    if owner:
+        gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("General.Verbosity", 1)
+        gmsh.model.add(model)
+        yield
+    finally:
+        if owner:
+            gmsh.finalize()
+        else:
+            gmsh.model.remove()
+
+
+def _bbox(tag: int, dim: int = 2) -> np.ndarray:
+    return np.array(gmsh.model.getBoundingBox(dim, tag)).reshape(2, 3)
+
+
+def _close(a: float, b: float, tol: float = 1e-3) -> bool:
+    return abs(a - b) <= tol * max(1.0, abs(b))
+
+
+def _add_groups(groups: dict[str, list[int]], volume: str, vol_tags: list[int]) -> None:
+    for name, tags in groups.items():
+        if not tags:
+            raise RuntimeError(f"geometry of {volume}: surface group {name} came out empty")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, sorted(tags)), name)
+    gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, vol_tags), volume)
+
+
+def _vertical_hole(x: float, y: float, z0: float, z1: float, r: float) -> Hole:
+    return Hole(np.array([x, y, (z0 + z1) / 2]), np.array([0.0, 0.0, 1.0]), r, z1 - z0)
+
+
+def _cylinder_at(bb: np.ndarray, x: float, y: float, r: float, tol: float = 1e-3) -> bool:
+    """Does the bounding box ``bb`` belong to a vertical cylinder of radius r on axis (x, y)?"""
+    c = bb.mean(axis=0)
+    return (_close(c[0], x, tol) and _close(c[1], y, tol)
+            and _close((bb[1, 0] - bb[0, 0]) / 2, r, tol) and _close((bb[1, 1] - bb[0, 1]) / 2, r, tol))
+
+
+def _build_rail(part: PartDef) -> dict[str, Hole]:
+    occ = gmsh.model.occ
+    L, W, H = part["length"], part["width"], part["height"]
+    rh, rc, dc = part["hole_diameter"] / 2, part["cbore_diameter"] / 2, part["cbore_depth"]
+    xs = rail_hole_x(part)
+    body = occ.addBox(0, -W / 2, 0, L, W, H)
+    tools = []
+    for x in xs:
+        tools.append((3, occ.addCylinder(x, 0, -1, 0, 0, H + 2, rh)))
+        tools.append((3, occ.addCylinder(x, 0, H - dc, 0, 0, dc + 1, rc)))
+    rg = part["groove_radius"]
+    if rg > 0:
+        for y in (-W / 2, W / 2):
+            for z in (part["groove_z_lower"], part["groove_z_upper"]):
+                tools.append((3, occ.addCylinder(-1, y, z, L + 2, 0, 0, rg)))
+    out, _ = occ.cut([(3, body)], tools)
+    occ.synchronize()
+    names = {"ends": [], "bottom": [], "top": [], "sides": []}
+    if rg > 0:
+        names["grooves"] = []
+    holes: dict[str, Hole] = {}
+    for i, x in enumerate(xs):
+        names[f"hole_{i:02d}"], names[f"cbore_{i:02d}"], names[f"cbore_floor_{i:02d}"] = [], [], []
+        holes[f"hole_{i:02d}"] = _vertical_hole(x, 0.0, 0.0, H - dc, rh)
+        holes[f"cbore_{i:02d}"] = _vertical_hole(x, 0.0, H - dc, H, rc)
+    for _, s in gmsh.model.getEntities(2):
+        bb = _bbox(s)
+        lo, hi = bb
+        if hi[0] - lo[0] < 1e-6:
+            names["ends"].append(s)
+        elif hi[2] - lo[2] < 1e-6 and _close(lo[2], 0.0):
+            names["bottom"].append(s)
+        elif hi[2] - lo[2] < 1e-6 and _close(lo[2], H):
+            names["top"].append(s)
+        elif hi[1] - lo[1] < 1e-6:
+            names["sides"].append(s)
+        elif gmsh.model.getType(2, s) == "Cylinder" and hi[0] - lo[0] > L - 1e-3:
+            names["grooves"].append(s)
+        else:
+            i = int(np.argmin(np.abs(xs - bb.mean(axis=0)[0])))
+            if _cylinder_at(bb, xs[i], 0.0, rh):
+                names[f"hole_{i:02d}"].append(s)
+            elif _cylinder_at(bb, xs[i], 0.0, rc) and gmsh.model.getType(2, s) != "Plane":
+                names[f"cbore_{i:02d}"].append(s)
+            elif _cylinder_at(bb, xs[i], 0.0, rc) and _close(lo[2], H - dc):
+                names[f"cbore_floor_{i:02d}"].append(s)
+            else:
+                raise RuntimeError(f"rail geometry: surface {s} with bounding box {bb.tolist()} unclassified")
+    _add_groups(names, "rail", [t for _, t in out])
+    return holes
+
+
+def _build_plate(part: PartDef) -> dict[str, Hole]:
+    occ = gmsh.model.occ
+    R, t, rb = part["diameter"] / 2, part["thickness"], part["bore_diameter"] / 2
+    rh, w = part["hub_diameter"] / 2, part["seat_width"]
+    s, rs = part["screw_spacing"] / 2, part["screw_diameter"] / 2
+    zt = max(t, w)
+    body = [(3, occ.addCylinder(0, 0, 0, 0, 0, t, R))]
+    if w > t:
+        hub = occ.addCylinder(0, 0, t, 0, 0, w - t, rh)
+        body, _ = occ.fuse(body, [(3, hub)])
+    tools = [(3, occ.addCylinder(0, 0, -1, 0, 0, zt + 2, rb))]
+    tools += [(3, occ.addCylinder(x, 0, -1, 0, 0, t + 2, rs)) for x in (-s, s)]
+    out, _ = occ.cut(body, tools)
+    occ.synchronize()
+    names = {"bore": [], "screw_1": [], "screw_2": [], "bottom": [], "top": [], "rim": []}
+    for _, tag in gmsh.model.getEntities(2):
+        bb = _bbox(tag)
+        if bb[1, 2] - bb[0, 2] < 1e-6:
+            names["bottom" if _close(bb[0, 2], 0.0) else "top"].append(tag)
+        elif _cylinder_at(bb, 0.0, 0.0, rb):
+            names["bore"].append(tag)
+        elif _cylinder_at(bb, -s, 0.0, rs):
+            names["screw_1"].append(tag)
+        elif _cylinder_at(bb, s, 0.0, rs):
+            names["screw_2"].append(tag)
+        else:
+            names["rim"].append(tag)  # outer disc and hub cylinders
+    _add_groups(names, "plate", [t_ for _, t_ in out])
+    return {"bore": _vertical_hole(0.0, 0.0, 0.0, zt, rb),
+            "screw_1": _vertical_hole(-s, 0.0, 0.0, t, rs),
+            "screw_2": _vertical_hole(s, 0.0, 0.0, t, rs)}
+
+
+def _build_iprofile(part: PartDef) -> dict[str, Hole]:
+    occ = gmsh.model.occ
+    Lx, b, h = part["length"], part["flange_width"], part["height"]
+    tf, tw = part["flange_thickness"], part["web_thickness"]
+    s, r = part["hole_spacing"] / 2, part["hole_diameter"] / 2
+    pieces = [(3, occ.addBox(0, -b / 2, 0, Lx, b, tf)), (3, occ.addBox(0, -b / 2, h - tf, Lx, b, tf)),
+              (3, occ.addBox(0, -tw / 2, tf, Lx, tw, h - 2 * tf))]
+    body, _ = occ.fuse(pieces[:1], pieces[1:])
+    spots = {"screw_1": (-s, 0.0), "screw_2": (s, 0.0), "screw_3": (-s, h - tf), "screw_4": (s, h - tf)}
+    tools = [(3, occ.addCylinder(Lx / 2, y, z0 - 1, 0, 0, tf + 2, r)) for y, z0 in spots.values()]
+    out, _ = occ.cut(body, tools)
+    occ.synchronize()
+    names = {k: [] for k in spots} | {"base": [], "top": []}
+    for _, tag in gmsh.model.getEntities(2):
+        bb = _bbox(tag)
+        if bb[1, 2] - bb[0, 2] < 1e-6 and _close(bb[0, 2], 0.0):
+            names["base"].append(tag)
+        elif bb[1, 2] - bb[0, 2] < 1e-6 and _close(bb[0, 2], h):
+            names["top"].append(tag)
+        else:
+            for k, (y, z0) in spots.items():
+                if _cylinder_at(bb, Lx / 2, y, r) and _close(bb[0, 2], z0):
+                    names[k].append(tag)
+    _add_groups(names, "iprofile", [t_ for _, t_ in out])
+    return {k: _vertical_hole(Lx / 2, y, z0, z0 + tf, r) for k, (y, z0) in spots.items()}
+
+
+def _build_custom(part: PartDef) -> dict[str, Hole]:
+    assert part.path is not None
+    if part.path.suffix.lower() == ".geo":
+        gmsh.open(str(part.path))
+    else:
+        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
+        gmsh.merge(str(part.path))
+        gmsh.model.occ.synchronize()
+        by_name: dict[tuple[int, str], list[int]] = {}
+        for dim, tag in gmsh.model.getEntities(2) + gmsh.model.getEntities(3):
+            label = gmsh.model.getEntityName(dim, tag)
+            if label:
+                by_name.setdefault((dim, label.split("/")[-1]), []).append(tag)
+        for (dim, label), tags in by_name.items():
+            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), label)
+    vols = gmsh.model.getEntities(3)
+    if not vols:
+        raise InputError(f"custom part {part.path}: no volume in the file")
+    if not gmsh.model.getPhysicalGroups(3):
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [t for _, t in vols]), part.name)
+    if not gmsh.model.getPhysicalGroups(2):
+        raise InputError(f"custom part {part.path}: no named surface (physical group) to attach loads to")
+    return {}
+
+
+def build(part: PartDef) -> dict[str, Hole]:
+    """Create the part's geometry and physical groups in the current gmsh model.
+
+    Returns the analytic cylinder of every hole group (empty for custom parts: the mesh
+    step fits cylinders to their surfaces instead).  Call inside :func:`gmsh_session`.
+    """
+    builders = {"rail": _build_rail, "plate": _build_plate, "iprofile": _build_iprofile,
+                "custom": _build_custom}
+    return builders[part.kind](part)
+
+
+def volume_mm3(part: PartDef) -> float:
+    """Volume of the part's solid from the OCC geometry, mm^3."""
+    with gmsh_session("volume"):
+        build(part)
+        vols = gmsh.model.getEntities(3)
+        if part.kind == "custom" and not gmsh.model.occ.getEntities(3):
+            raise InputError(f"custom part {part.path}: volume needs an OpenCASCADE geometry")
+        return float(sum(gmsh.model.occ.getMass(d, t) for d, t in vols))
+
+
+def mass_kg(part: PartDef) -> float:
+    """Mass of the part, kg (volume in mm^3 times density in kg/m^3 * 1e-9)."""
+    return volume_mm3(part) * part.density * 1e-9

@@ -1,0 +1,187 @@
+"""Meshing: groups, hole geometry, refinement, quality, determinism, cache, memory guard, export."""
+
+import math
+
+import meshio
+import numpy as np
+import pytest
+
+from rigfem.errors import InputError
+from rigfem.mesh import MeshSettings, estimate, fit_cylinder, mesh_part, to_meshio, write_mesh
+from rigfem.parts import load_part, rail_hole_x
+
+
+@pytest.fixture(autouse=True)
+def cache_in_tmp(tmp_path, monkeypatch):
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+
+
+@pytest.fixture(scope="module")
+def rail700():
+    """700 mm rail, coarse 8 mm, refined around the last two holes (a far-end coupling)."""
+    part = load_part("rail_size25", {"length": 700})
+    return part, mesh_part(part, MeshSettings(8.0, ("hole_10", "hole_11")), use_cache=False)
+
+
+def tet_volumes(pm):
+    d = pm.points[pm.tets[:, 1:]] - pm.points[pm.tets[:, :1]]
+    return np.linalg.det(d) / 6
+
+
+def tri_areas(pm, name):
+    p = pm.points[pm.surfaces[name]]
+    return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+
+
+def test_rail_every_group_present_and_nonempty(rail700):
+    part, pm = rail700
+    expected = {"ends", "bottom", "top", "sides"}
+    for i in range(12):
+        expected |= {f"hole_{i:02d}", f"cbore_{i:02d}", f"cbore_floor_{i:02d}"}
+    assert set(pm.surfaces) == expected
+    assert all(len(t) > 0 for t in pm.surfaces.values())
+    assert set(pm.holes) == {k for k in expected if k.startswith(("hole_", "cbore_")) and "floor" not in k}
+
+
+def test_rail_holes_in_mesh_where_the_part_says(rail700):
+    """Cylinders fitted to the meshed hole walls (independent of the analytic Hole records)."""
+    part, pm = rail700
+    xs = 20 + 60 * np.arange(12)
+    for i, x in enumerate(xs):
+        fit = fit_cylinder(pm.points, pm.surfaces[f"hole_{i:02d}"])
+        assert fit is not None
+        np.testing.assert_allclose(fit.center, [x, 0, 7.5], atol=1e-6)
+        assert abs(abs(fit.axis[2]) - 1) < 1e-9
+        assert fit.radius == pytest.approx(3.5, abs=1e-6) and fit.depth == pytest.approx(15, abs=1e-6)
+        h = pm.holes[f"hole_{i:02d}"]
+        np.testing.assert_allclose(h.center, fit.center, atol=1e-6)
+        c = fit_cylinder(pm.points, pm.surfaces[f"cbore_{i:02d}"])
+        assert c.radius == pytest.approx(5.5, abs=1e-6) and c.center[2] == pytest.approx(19.5, abs=1e-6)
+    assert fit_cylinder(pm.points, pm.surfaces["top"]) is None  # a plane is no cylinder
+
+
+def test_rail_mesh_volume_and_areas_against_hand_calculation(rail700):
+    """Faceted holes (inscribed polygons) are smaller: mesh within 1 % of the exact hand value."""
+    part, pm = rail700
+    vols = tet_volumes(pm)
+    assert (vols > 0).all()
+    hand = 700 * 23 * 24 - 12 * (math.pi / 4 * 7**2 * 15 + math.pi / 4 * 11**2 * 9)
+    assert vols.sum() == pytest.approx(hand, rel=1e-2) and vols.sum() > hand
+    assert tri_areas(pm, "ends").sum() == pytest.approx(2 * 23 * 24, rel=1e-9)
+    assert tri_areas(pm, "sides").sum() == pytest.approx(2 * 700 * 24, rel=1e-9)
+    assert tri_areas(pm, "bottom").sum() == pytest.approx(700 * 23 - 12 * math.pi * 3.5**2, rel=1e-2)
+
+
+def test_refinement_only_at_the_loaded_holes(rail700):
+    part, pm = rail700
+
+    def mean_edge(name):
+        t = pm.surfaces[name]
+        return np.linalg.norm(pm.points[t] - pm.points[np.roll(t, 1, axis=1)], axis=2).mean()
+
+    assert mean_edge("hole_11") < 0.75 * mean_edge("hole_05")
+    assert mean_edge("hole_10") < 0.75 * mean_edge("hole_00")
+    assert mean_edge("hole_11") == pytest.approx(2.0, rel=0.3)  # refine size = 8/4 mm
+
+
+@pytest.mark.parametrize("name, refine", [("PF_4b_006", ("bore", "screw_1", "screw_2")),
+                                          ("PF_4b_003_v2", ("screw_1", "screw_2", "screw_3", "screw_4"))])
+def test_plate_and_iprofile_groups_quality_and_volume(name, refine):
+    part = load_part(name)
+    pm = mesh_part(part, MeshSettings(8.0, refine), use_cache=False)
+    assert all(len(t) > 0 for t in pm.surfaces.values())
+    assert set(refine) <= set(pm.holes) and set(refine) <= set(pm.surfaces)
+    assert pm.quality["min"] >= 0.1
+    from rigfem.parts import volume_mm3
+    assert tet_volumes(pm).sum() == pytest.approx(volume_mm3(part), rel=1e-2)
+    for g in refine:  # the analytic hole records agree with the meshed walls
+        fit = fit_cylinder(pm.points, pm.surfaces[g])
+        h = pm.holes[g]
+        np.testing.assert_allclose(fit.center, h.center, atol=1e-6)
+        assert fit.radius == pytest.approx(h.radius, abs=1e-6) and fit.depth == pytest.approx(h.depth, abs=1e-6)
+
+
+def test_plate_screws_on_x_axis_at_two_pitches():
+    pm = mesh_part(load_part("PF_4b_006"), MeshSettings(10.0), use_cache=False)
+    assert pm.holes["screw_1"].center[0] == pytest.approx(-60) and pm.holes["screw_2"].center[0] == pytest.approx(60)
+    assert pm.holes["bore"].radius == pytest.approx(26) and pm.holes["bore"].depth == pytest.approx(15)
+
+
+def test_quality_reported_and_above_threshold(rail700):
+    _, pm = rail700
+    q = pm.quality
+    assert 0.1 <= q["min"] <= q["p01"] <= q["p05"] <= q["median"] <= 1
+
+
+def test_quality_below_threshold_names_part_and_parameter():
+    part = load_part("PF_4b_003_v2")
+    with pytest.raises(InputError, match=r"PF_4b_003_v2.*size"):
+        mesh_part(part, MeshSettings(10.0, min_quality=0.99), use_cache=False)
+
+
+def test_identical_input_gives_identical_mesh():
+    part = load_part("PF_4b_003_v2")
+    a = mesh_part(part, MeshSettings(6.0, ("screw_1",)), use_cache=False)
+    b = mesh_part(part, MeshSettings(6.0, ("screw_1",)), use_cache=False)
+    assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+    assert all(np.array_equal(a.surfaces[k], b.surfaces[k]) for k in a.surfaces)
+
+
+def test_cache_hit_on_repeat_and_miss_on_change(tmp_path):
+    part = load_part("PF_4b_003_v2")
+    a = mesh_part(part, MeshSettings(6.0))
+    b = mesh_part(part, MeshSettings(6.0))
+    assert (a.meta["cache"], b.meta["cache"]) == ("miss", "hit")
+    assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+    assert b.holes["screw_3"].radius == a.holes["screw_3"].radius and b.quality == a.quality
+    assert len(list((tmp_path / "cache").rglob("*.npz"))) == 1
+    c = mesh_part(load_part("PF_4b_003_v2", {"height": 70}), MeshSettings(6.0))
+    assert c.meta["cache"] == "miss" and c.meta["hash"] != a.meta["hash"]
+
+
+def test_memory_guard_refuses_before_meshing():
+    part = load_part("rail_size25", {"length": 1000})
+    with pytest.raises(InputError, match="increase --size"):
+        mesh_part(part, MeshSettings(0.1), use_cache=False)
+
+
+def test_estimate_within_factor_two_of_actual(rail700):
+    _, pm = rail700
+    assert 0.5 < pm.meta["estimate_tets"] / len(pm.tets) < 2
+    assert estimate(10**6).gib > estimate(10**5).gib > 0
+
+
+def test_unknown_refine_group_is_input_error():
+    with pytest.raises(InputError, match="hole_99"):
+        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(8.0, ("hole_99",)), use_cache=False)
+
+
+def test_quadratic_export_puts_midnodes_on_hole_walls(rail700, tmp_path):
+    _, pm = rail700
+    m = to_meshio(pm, order=2)
+    tet10 = m.cells_dict["tetra10"]
+    assert len(tet10) == len(pm.tets)
+    tri6 = m.cells[1 + sorted(pm.surfaces).index("hole_11")].data
+    mid = m.points[np.unique(tri6[:, 3:])]
+    assert np.hypot(mid[:, 0] - 680, mid[:, 1]) == pytest.approx(3.5, abs=1e-9)
+    for suffix in (".vtu", ".msh"):
+        write_mesh(pm, tmp_path / f"rail{suffix}", order=1)
+        back = meshio.read(tmp_path / f"rail{suffix}")
+        assert len(back.cells_dict["tetra"]) == len(pm.tets)
+    assert "hole_11" in meshio.read(tmp_path / "rail.msh").field_data
+
+
+def test_custom_geo_part_with_physical_groups(tmp_path):
+    """A box 40 x 20 x 10 with a Ø8 hole at (20, 10), groups from the .geo file."""
+    geo = tmp_path / "block.geo"
+    geo.write_text('SetFactory("OpenCASCADE");\nBox(1) = {0, 0, 0, 40, 20, 10};\n'
+                   'Cylinder(2) = {20, 10, -1, 0, 0, 12, 4};\nBooleanDifference(3) = {Volume{1}; Delete;}{Volume{2}; Delete;};\n'
+                   'Physical Surface("pin") = {7};\nPhysical Surface("base") = {5};\nPhysical Volume("block") = {3};\n')
+    part = load_part(str(geo))
+    assert part.kind == "custom"
+    pm = mesh_part(part, MeshSettings(3.0, ("pin",)), use_cache=False)
+    assert set(pm.surfaces) == {"pin", "base"}
+    assert tet_volumes(pm).sum() == pytest.approx(40 * 20 * 10 - math.pi * 16 * 10, rel=5e-3)
+    h = pm.holes["pin"]  # fitted cylinder
+    np.testing.assert_allclose(h.center, [20, 10, 5], atol=1e-6)
+    assert h.radius == pytest.approx(4, abs=1e-6) and "base" not in pm.holes
