@@ -76,6 +76,10 @@ class MeshSettings:
                 "refine_dist": self.dist, "min_quality": self.min_quality}
 
 
+#: default global element size per part kind, mm (rail: about 4 elements across its 23 x 24 section)
+DEFAULT_SIZE = {"rail": 6.0, "plate": 5.0, "iprofile": 4.0, "custom": 5.0}
+
+
 @dataclass(frozen=True)
 class Estimate:
     """Predicted size of a mesh and of its P2 solve, before meshing."""

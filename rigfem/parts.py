@@ -144,8 +144,11 @@ def load_part(name: str, overrides: dict[str, float] | None = None,
     path, variant = parts[name]
     data = _read_toml(path)
     dims = _read_dims(data.get("dimensions", {}), "dimensions")
+    reference = _read_dims(data.get("reference", {}), "reference")
     if variant is not None:
-        dims.update(_read_dims(data["variants"][variant], f"variants.{variant}"))
+        vt = dict(data["variants"][variant])
+        reference.update(_read_dims(vt.pop("reference", {}), f"variants.{variant}.reference"))
+        dims.update(_read_dims(vt, f"variants.{variant}"))
     for key, value in overrides.items():
         if key not in dims:
             raise InputError(f"{key} is not a dimension of {name}; dimensions: {', '.join(dims)}")
@@ -153,7 +156,7 @@ def load_part(name: str, overrides: dict[str, float] | None = None,
     density = _read_dims(data.get("material", {}), "material")["density"].value
     part = PartDef(name=name, kind=data["part"]["kind"], dims=dims, density=density,
                    description=data["part"].get("description", ""), path=path,
-                   reference=_read_dims(data.get("reference", {}), "reference"))
+                   reference=reference)
     validate(part)
     return part
 

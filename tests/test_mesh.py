@@ -185,3 +185,33 @@ def test_custom_geo_part_with_physical_groups(tmp_path):
     h = pm.holes["pin"]  # fitted cylinder
     np.testing.assert_allclose(h.center, [20, 10, 5], atol=1e-6)
     assert h.radius == pytest.approx(4, abs=1e-6) and "base" not in pm.holes
+
+
+def test_cli_mesh_writes_file_and_reports(tmp_path, capsys):
+    from rigfem.cli import main
+
+    out = tmp_path / "rail.vtu"
+    args = ["mesh", "rail_size25", "--length", "460", "--size", "8", "--refine", "hole_06,hole_07", "--out", str(out)]
+    assert main(args) == 0
+    m = meshio.read(out)
+    assert len(m.cells_dict["tetra"]) > 1000
+    text = capsys.readouterr().out
+    assert "length 460 mm" in text and "cache miss" in text and "hole_07" in text
+    assert main(args[:-1] + [str(tmp_path / "rail2.msh"), "--order", "2"]) == 0
+    assert "cache hit" in capsys.readouterr().out
+    assert "tetra10" in meshio.read(tmp_path / "rail2.msh").cells_dict
+
+
+@pytest.mark.parametrize("part, args, field", [
+    ("PF_4b_006", ["--set", "thickness=-3"], "thickness"),
+    ("PF_4b_006", ["--length", "100"], "length"),  # a plate has no length
+    ("rail_size25", ["--length", "30"], "length"),  # shorter than two end distances
+    ("PF_4b_003_v2", ["--size", "0"], "--size"),
+    ("PF_4b_003_v2", ["--refine", "nothere"], "refine"),
+])
+def test_cli_mesh_bad_input_exit_2_naming_field(tmp_path, capsys, part, args, field):
+    from rigfem.cli import main
+
+    assert main(["mesh", part, *args, "--out", str(tmp_path / "x.vtu")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rigfem: error:") and field in err and err.count("\n") == 1

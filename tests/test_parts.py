@@ -135,3 +135,14 @@ def test_part_file_without_source_is_rejected(tmp_path):
         'source = "2013 study"\n[dimensions.width]\nvalue = 23\nunit = "mm"\nsource = "guess"\n')
     with pytest.raises(InputError, match="dimensions.width.source"):
         load_part("bad", geometry_dir=tmp_path)
+
+
+def test_cli_parts_lists_every_part_with_mass(capsys):
+    from rigfem.cli import main
+
+    assert main(["parts"]) == 0
+    out = capsys.readouterr().out
+    for name in ("rail_size25", "PF_4b_006", "PF_4b_001_v2", "PF_4b_003_v2"):
+        assert name in out
+    assert "4.142 kg/m" in out and "+33.6 %" in out  # rail 1000 mm vs catalogue 3.1 kg/m
+    assert "mass 1.151 (study 1.155: -0.3 %)" in out

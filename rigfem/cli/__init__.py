@@ -14,7 +14,10 @@ import sys
 from rigfem.errors import InputError
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
-COMMANDS: dict[str, str] = {}
+COMMANDS: dict[str, str] = {
+    "mesh": "mesh",
+    "parts": "parts",
+}
 
 
 def _available() -> dict[str, object]:

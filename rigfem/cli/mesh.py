@@ -1,0 +1,62 @@
+"""``rigfem mesh``: mesh one part with gmsh and write it as .vtu or .msh."""
+
+from __future__ import annotations
+
+import argparse
+
+from rigfem.errors import InputError, check_range
+from rigfem.mesh import DEFAULT_SIZE, MeshSettings, mesh_part, write_mesh
+from rigfem.parts import load_part
+
+HELP = "mesh a part (known name or .geo/.step/.brep file) and write .vtu or .msh"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("part", metavar="PART", help="part name (see `rigfem parts`) or geometry file")
+    parser.add_argument("--length", type=float, metavar="MM", help="part length, mm (rails: any length)")
+    parser.add_argument("--size", type=float, metavar="MM",
+                        help=f"global element size, mm (default by kind: {DEFAULT_SIZE})")
+    parser.add_argument("--refine", default="", metavar="G1,G2",
+                        help="surface groups that carry load, refined (e.g. hole_10,hole_11)")
+    parser.add_argument("--refine-size", type=float, metavar="MM", help="size at refined groups (default size/4)")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="1: tetra, 2: tetra10 (default 1)")
+    parser.add_argument("--set", action="append", default=[], metavar="DIM=VALUE",
+                        help="override a dimension of the part file, mm (repeatable)")
+    parser.add_argument("--min-quality", type=float, default=0.1, help="smallest allowed minSICN (default 0.1)")
+    parser.add_argument("--no-cache", action="store_true", help="remesh even if a cached mesh exists")
+    parser.add_argument("--out", required=True, metavar="FILE", help="output .vtu or .msh")
+
+
+def _overrides(args: argparse.Namespace) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise InputError(f"--set {item!r} must look like DIM=VALUE, e.g. thickness=12")
+        out[key.strip()] = check_range(key.strip(), value, unit="mm")
+    if args.length is not None:
+        out["length"] = check_range("--length", args.length, 0.0, None, "mm", lo_open=True)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    part = load_part(args.part, _overrides(args))
+    size = args.size if args.size is not None else DEFAULT_SIZE[part.kind]
+    refine = tuple(g.strip() for g in args.refine.split(",") if g.strip())
+    settings = MeshSettings(check_range("--size", size, 0.0, None, "mm", lo_open=True), refine,
+                            args.refine_size, min_quality=args.min_quality)
+    if not args.out.lower().endswith((".vtu", ".msh")):
+        raise InputError(f"--out {args.out}: file type must be .vtu or .msh")
+    pm = mesh_part(part, settings, use_cache=not args.no_cache)
+    write_mesh(pm, args.out, args.order)
+    q, m = pm.quality, pm.meta
+    dims = ", ".join(f"{k} {d.value:g}" for k, d in part.dims.items() if d.source == "override")
+    print(f"{part.name}{f' ({dims} mm)' if dims else ''}: {len(pm.points)} nodes, {len(pm.tets)} tets "
+          f"(size {settings.size:g} mm, refined {', '.join(refine) or 'nowhere'} at {settings.size_near:g} mm)")
+    print(f"quality minSICN: min {q['min']:.3f}, p01 {q['p01']:.3f}, p05 {q['p05']:.3f}, median {q['median']:.3f}")
+    how = "cache hit (meshed earlier in" if m["cache"] == "hit" else "meshed (cache miss) in"
+    print(f"estimate {m['estimate_tets']} tets, {m['estimate_gib']:.3g} GiB; {how} {m['seconds']:.2f} s"
+          f"{')' if m['cache'] == 'hit' else ''}")
+    print(f"groups: {', '.join(sorted(pm.surfaces))}")
+    print(f"wrote {args.out} (order {args.order})")
+    return 0
