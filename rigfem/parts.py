@@ -78,7 +78,7 @@ class PartDef:
 
     def content_hash(self) -> str:
         """SHA-256 of everything that shapes the geometry (for the mesh cache)."""
-        payload = {"name": self.name, "kind": self.kind,
+        payload = {"name": self.name, "kind": self.kind, "density": self.density,
                    "dims": {k: d.value for k, d in sorted(self.dims.items())}}
         h = hashlib.sha256(json.dumps(payload, sort_keys=True).encode())
         if self.kind == "custom" and self.path is not None:
@@ -426,20 +426,21 @@ def _build_custom(part: PartDef) -> dict[str, Hole]:
         gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
         gmsh.merge(str(part.path))
         gmsh.model.occ.synchronize()
-        by_name: dict[tuple[int, str], list[int]] = {}
-        for dim, tag in gmsh.model.getEntities(2) + gmsh.model.getEntities(3):
-            label = gmsh.model.getEntityName(dim, tag)
+        by_name: dict[str, list[int]] = {}
+        for _, tag in gmsh.model.getEntities(2):  # named faces (CAD labels) become surface groups
+            label = gmsh.model.getEntityName(2, tag)
             if label:
-                by_name.setdefault((dim, label.split("/")[-1]), []).append(tag)
-        for (dim, label), tags in by_name.items():
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), label)
+                by_name.setdefault(label.split("/")[-1], []).append(tag)
+        for label, tags in by_name.items():
+            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags), label)
     vols = gmsh.model.getEntities(3)
     if not vols:
         raise InputError(f"custom part {part.path}: no volume in the file")
     if not gmsh.model.getPhysicalGroups(3):
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [t for _, t in vols]), part.name)
     if not gmsh.model.getPhysicalGroups(2):
-        raise InputError(f"custom part {part.path}: no named surface (physical group) to attach loads to")
+        raise InputError(f"custom part {part.path}: no named surface to attach loads to; name faces in the "
+                         f"CAD file or wrap it in a .geo file (Merge \"{part.path.name}\"; Physical Surface(\"pin\") = {{..}};)")
     return {}
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from rigfem.errors import InputError
 from rigfem.mesh import MeshSettings, estimate, fit_cylinder, mesh_part, to_meshio, write_mesh
-from rigfem.parts import load_part, rail_hole_x
+from rigfem.parts import load_part
 
 
 @pytest.fixture(autouse=True)
@@ -215,3 +215,24 @@ def test_cli_mesh_bad_input_exit_2_naming_field(tmp_path, capsys, part, args, fi
     assert main(["mesh", part, *args, "--out", str(tmp_path / "x.vtu")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("rigfem: error:") and field in err and err.count("\n") == 1
+
+
+def test_custom_brep_wrapped_in_geo_and_unnamed_brep_rejected(tmp_path):
+    """A BREP has no names: used through a .geo wrapper that names its faces; alone it is refused."""
+    import gmsh
+
+    from rigfem.parts import gmsh_session
+
+    with gmsh_session():
+        box = gmsh.model.occ.addBox(0, 0, 0, 30, 30, 8)
+        gmsh.model.occ.cut([(3, box)], [(3, gmsh.model.occ.addCylinder(15, 15, -1, 0, 0, 10, 5))])
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(tmp_path / "washer.brep"))
+    with pytest.raises(InputError, match="no named surface"):
+        mesh_part(load_part(str(tmp_path / "washer.brep")), MeshSettings(4.0), use_cache=False)
+    geo = tmp_path / "washer.geo"
+    geo.write_text('SetFactory("OpenCASCADE");\nMerge "washer.brep";\n'
+                   'Physical Surface("bore") = {7};\nPhysical Volume("washer") = {1};\n')
+    pm = mesh_part(load_part(str(geo)), MeshSettings(4.0, ("bore",)), use_cache=False)
+    assert tet_volumes(pm).sum() == pytest.approx(30 * 30 * 8 - math.pi * 25 * 8, rel=5e-3)
+    assert pm.holes["bore"].radius == pytest.approx(5, abs=1e-6)
