@@ -107,14 +107,15 @@ def estimate_tets(volume: float, refined_area: float, s: MeshSettings) -> int:
     """Tetrahedra gmsh will make: volume/h^3 plus a graded layer over the refined surfaces.
 
     The size grows linearly from ``size_near`` at a refined surface to ``size`` at ``dist``;
-    a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3) over 0..dist extra tets.
+    a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3) over 0..dist extra tets
+    (at most the whole volume at the refined size).
     """
     h, hn, D = s.size, min(s.size_near, s.size), s.dist
     if h - hn > 1e-12:
         layer = D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3
     else:
         layer = 0.0
-    return int(TETS_PER_H3 * (volume / h**3 + refined_area * layer))
+    return int(TETS_PER_H3 * min(volume / h**3 + refined_area * layer, volume / hn**3))
 
 
 def estimate(tets: int) -> Estimate:
@@ -245,7 +246,10 @@ def _set_fields(refine_tags: list[int], s: MeshSettings) -> None:
     f = gmsh.model.mesh.field
     dist = f.add("Distance")
     f.setNumbers(dist, "SurfacesList", refine_tags)
-    f.setNumber(dist, "Sampling", 30)
+    extent = max(float(np.ptp(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3), axis=0).max())
+                 for t in refine_tags)
+    # sample points on each surface about half a refined element apart (within 20..500 per direction)
+    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / s.size_near), 20, 500)))
     th = f.add("Threshold")
     f.setNumber(th, "InField", dist)
     f.setNumber(th, "SizeMin", min(s.size_near, s.size))
@@ -277,9 +281,13 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     key = hashlib.sha256(json.dumps(key_src, sort_keys=True).encode()).hexdigest()[:32]
     path = cache_dir() / "meshes" / f"{part.name}-{key}.npz"
     if use_cache and path.is_file():
-        pm = load_npz(path)
-        pm.meta["cache"] = "hit"
-        return pm
+        try:
+            pm = load_npz(path)
+        except (OSError, KeyError, ValueError):  # unreadable cache entry: mesh again, overwrite it
+            pass
+        else:
+            pm.meta["cache"] = "hit"
+            return pm
     t0 = time.perf_counter()
     with gmsh_session(part.name):
         gmsh.option.setNumber("General.NumThreads", 1)
