@@ -302,8 +302,9 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         est = _estimate_model(refine_tags, settings)
         if est.gib > machine_gib:
             raise InputError(f"size = {settings.size:g} mm (refine_size = {settings.size_near:g} mm) "
-                             f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB, more than "
-                             f"the machine's {machine_gib:g} GiB: increase --size")
+                             f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
+                             f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
+                             f"more than the machine's {machine_gib:g} GiB: increase --size")
         _set_fields(refine_tags, settings)
         gmsh.model.mesh.generate(3)
         points, tets, surfaces, q = _extract()
