@@ -28,8 +28,9 @@ from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, singula
 
 GROUND = "ground"
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
-#: flagged as a toggle (for the rig four-bar this is mu within about 3 deg of 0 or 180)
-RCOND_SINGULAR = 1e-2
+#: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
+#: builder adds its own mu criterion, mechanisms.MU_TOGGLE_DEG)
+RCOND_SINGULAR = 2e-3
 
 
 class AssemblyError(InputError):
