@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.loadcases import coupling_holes, direction_weights, directions, rotate_into, screw_forces
+from rigfem.loadcases import RailLayout, direction_weights, directions, rotate_into, screw_forces
 
 
 @pytest.mark.parametrize("n_dir", [4, 8, 12, 24])
@@ -33,7 +33,60 @@ def test_rotate_into_frame():
     np.testing.assert_allclose(rotate_into(v, np.array([np.pi / 2])), [[1.0, 0.0]], atol=1e-15)
 
 
-def test_coupling_holes_range():
-    assert coupling_holes(540.0, 12, 60.0, "crank") == (9, 10)
-    with pytest.raises(InputError, match="crank: joint at 720 mm"):
-        coupling_holes(720.0, 12, 60.0, "crank")
+def test_rail_layout_couplings():
+    holes = 20.0 + 60.0 * np.arange(12)  # 700 mm rail
+    two_pitch = RailLayout(holes, 60.0, 120.0)  # plate screws two pitches apart
+    assert two_pitch.pivot_x == 80.0
+    assert two_pitch.coupling(540.0, "crank") == (9, 11)
+    with pytest.raises(InputError, match="crank: a joint 600 mm from the pivot does not fit on a 700 mm rail; allowed 0..540 mm"):
+        two_pitch.coupling(600.0, "crank")
+    one_pitch = RailLayout(holes, 60.0, 60.0)
+    assert one_pitch.pivot_x == 50.0 and one_pitch.coupling(540.0, "crank") == (9, 10)
+
+
+def _rig_bars():
+    from rigfem.loadcases import Bar
+
+    def layout(length):
+        return RailLayout(20.0 + 60.0 * np.arange(int((length - 40) // 60) + 1), 60.0, 120.0)
+
+    return [Bar("crank_rail", "O2", "A", "rail_size25", 700.0, layout(700.0), 480.0, driven=True),
+            Bar("coupler_rail", "A", "B", "rail_size25", 1000.0, layout(1000.0), 840.0),
+            Bar("rocker_rail", "O4", "B", "rail_size25", 1000.0, layout(1000.0), 780.0)]
+
+
+@pytest.mark.parametrize("speed_hz", [1.0, 3.0])
+def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
+    """Every free rail's loads (couplings, driver couple, own inertia) are in equilibrium.
+
+    Independent truth: Newton–Euler of the rail alone, whose mass distribution in the
+    dynamics model is a uniform bar from the pivot joint over the rail length.
+    """
+    from rigfem.loadcases import bar_body, cycle_rail
+    from rigfem.mechanisms import four_bar, simulate
+
+    h = simulate(four_bar(480, 840, 780, 1020), samples=72, speed_hz=speed_hz)
+    for bar in _rig_bars():
+        case = cycle_rail(h, bar, n_dir=12)
+        body = h.bodies[bar_body(h, bar)]
+        hole_x = {f"hole_{i:02d}": x for i, x in enumerate(bar.layout.hole_x)}
+        force = np.zeros((len(case.rows), 2))
+        moment = np.zeros(len(case.rows))  # about the pivot joint, N·mm
+        for k, load in enumerate(case.loads):
+            c = case.coef[:, k]
+            if load.kind == "bearing":
+                f = c[:, None] * np.array(load.direction[:2])
+                force += f
+                moment += (hole_x[load.group] - bar.layout.pivot_x) * f[:, 1]
+        a0 = case.coef[:, [case.loads.index(l) for l in case.loads if l.component in ("a0x", "a0y")]]
+        alpha = case.coef[:, [l.component for l in case.loads].index("alpha")]
+        w2 = case.coef[:, [l.component for l in case.loads].index("omega2")]
+        m, rc = case.mass_kg, np.array([bar.length_mm / 2, 0.0])
+        i_pivot = m * bar.length_mm ** 2 / 12 + m * rc @ rc
+        acc_c = a0 + alpha[:, None] * np.array([-rc[1], rc[0]]) - w2[:, None] * rc
+        force -= m * acc_c / 1000.0
+        moment -= (m * (rc[0] * a0[:, 1] - rc[1] * a0[:, 0]) + i_pivot * alpha) / 1000.0
+        scale = np.abs(case.coef[:, :-4]).sum(axis=1).max()
+        assert np.abs(force).max() < 1e-9 * scale, bar.name
+        assert np.abs(moment).max() < 1e-9 * scale * bar.length_mm, bar.name
+        assert body.mass_kg == pytest.approx(2.7 * bar.length_mm / 1000)
