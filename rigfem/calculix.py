@@ -105,6 +105,7 @@ def _lines(rows: np.ndarray, fmt: str) -> str:
 def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, material: Any,
               fixed: Any, nodal_forces: np.ndarray | Sequence[np.ndarray],
               equations: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]] = (),
+              springs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
               heading: str = "rigfem model") -> Path:
     """Write a CalculiX static deck of the model and return its path.
 
@@ -114,7 +115,9 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
     ``fixed`` is a (N, 3) bool mask or (K, 2) (node, dof) pairs held at zero;
     ``nodal_forces`` is one (N, 3) array (N) or a list of them, each one *STEP (load case);
     ``equations`` are homogeneous linear constraints ``sum c_i u[node_i, dof_i] = 0`` given
-    as (nodes, dofs, coeffs), the first term being the dependent one (not also fixed).
+    as (nodes, dofs, coeffs), the first term being the dependent one (not also fixed);
+    ``springs`` = (nodes, dofs, stiffness) are grounded SPRING1 elements (N/mm), one *SPRING
+    card per distinct (dof, stiffness).
     """
     nodes = np.asarray(nodes, dtype=float)
     if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
@@ -160,6 +163,8 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
         out.append(f"*EQUATION\n{len(terms)}\n")
         # at most 4 terms (12 entries) per line
         out.extend(",".join("%d,%d,%.14g" % tuple(t) for t in terms[i:i + 4]) + "\n" for i in range(0, len(terms), 4))
+    if springs is not None:
+        out.append(_springs(springs, n, len(elements)))
     for f in cases:
         idx = np.argwhere(f != 0.0)
         out.append("*STEP\n*STATIC\n*CLOAD, OP=NEW\n")
@@ -168,6 +173,116 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
     path = Path(path)
     path.write_text("".join(out))
     return path
+
+
+def _springs(springs: tuple[np.ndarray, np.ndarray, np.ndarray], n: int, first: int) -> str:
+    """SPRING1 elements numbered after the ``first`` solid elements, one ELSET per (dof, k)."""
+    sn, sd = np.asarray(springs[0], int).ravel(), np.asarray(springs[1], int).ravel()
+    sk = np.asarray(springs[2], float).ravel()
+    if not (len(sn) == len(sd) == len(sk)) or (len(sn) and (sn.min() < 0 or sn.max() >= n or sd.min() < 0
+                                                          or sd.max() > 2 or not np.all(np.isfinite(sk)))):
+        raise InputError(f"springs: equal-length nodes in [0, {n - 1}], dofs in [0, 2], finite stiffness")
+    keys, group = np.unique(np.column_stack([sd, sk]), axis=0, return_inverse=True)
+    ids = first + 1 + np.arange(len(sn))
+    out = []
+    for g, (dof, k) in enumerate(keys):
+        sel = group.ravel() == g
+        out.append(f"*ELEMENT, TYPE=SPRING1, ELSET=SPRING{g + 1}\n")
+        out.append(_lines(np.column_stack([ids[sel], sn[sel] + 1]), "%d,%d\n"))
+        out.append(f"*SPRING, ELSET=SPRING{g + 1}\n{int(dof) + 1}\n{k:.14g}\n")
+    return "".join(out)
+
+
+def _shaft_terms(fm: Any, hole: Any, s: Any, E: float) -> tuple[np.ndarray, ...]:
+    """Rank-one terms c·(g·u)² of rigfem's ShaftInHole foundation, one per quadrature point and direction.
+
+    Mirrors :func:`rigfem.supports.shaft_springs`; :func:`export_model` checks that the terms
+    sum to rigfem's spring matrix.  Returns points (P, 3), c (P, 3) for the radial,
+    tangential and axial directions, g (P, 3, nloc, 3) and the surface nodes (P, nloc).
+    """
+    from rigfem.supports import surface_quadrature
+
+    kr = E / hole.radius if s.k_radial is None else s.k_radial
+    kt = 1e-3 * kr if s.k_tangential is None else s.k_tangential
+    ka = 1e-3 * kr if s.k_axial is None else s.k_axial
+    pts, w, N, tri = surface_quadrature(fm, s.hole, 4)
+    a = np.asarray(hole.axis, float) / np.linalg.norm(hole.axis)
+    d = pts - np.asarray(hole.center, float)
+    rad = d - (d @ a)[..., None] * a
+    n = rad / np.linalg.norm(rad, axis=-1, keepdims=True)
+    t = np.cross(a, n)
+    krq = np.full(w.shape, kr)
+    if s.direction is not None:
+        dirn = np.asarray(s.direction, float)
+        krq = np.where(n @ (dirn - (dirn @ a) * a) > 0, kr, 0.0)
+    c = np.stack([krq * w, kt * w, ka * w], -1)  # (K, nq, 3)
+    dirs = np.stack([n, t, np.broadcast_to(a, n.shape)], -2)  # (K, nq, 3 dirs, 3)
+    g = np.einsum("qa,kqdj->kqdaj", N, dirs)
+    nodes = np.broadcast_to(tri[:, None, :], (*w.shape, tri.shape[1]))
+    return pts.reshape(-1, 3), c.reshape(-1, 3), g.reshape(-1, 3, *g.shape[3:]), nodes.reshape(-1, tri.shape[1])
+
+
+def export_model(model: Any, supports: list, cases: list, path: str | os.PathLike,
+                 heading: str = "rigfem model") -> Path:
+    """Write rigfem's model (:class:`rigfem.fe.Model`, supports, load cases) as a ccx deck.
+
+    Same nodes, C3D10/C3D4 elements, fixed DOFs and consistent nodal loads (one *STEP per
+    case).  A ShaftInHole foundation is exported exactly: one auxiliary node per surface
+    quadrature point whose three DOFs are tied by *EQUATION to √(c/k0)·(g·u) of the hole
+    nodes and grounded by SPRING1 elements of stiffness k0.  FreeBody is exported as its
+    3-2-1 support; rigfem afterwards removes the rigid motion from its displacement, ccx
+    does not.  Auxiliary nodes come after the mesh nodes and have no results.
+    """
+    from rigfem.fe import export_data
+    from rigfem.supports import ShaftInHole
+
+    data = export_data(model, supports, cases)
+    fm, n = model.mesh, len(data.nodes)
+    fixed = np.column_stack([data.fixed_dofs // 3, data.fixed_dofs % 3])
+    nodes, equations, springs = data.nodes, [], None
+    shafts = [s for s in supports if isinstance(s, ShaftInHole)]
+    if shafts:
+        parts = [_shaft_terms(fm, model.part.holes[s.hole], s, model.material.E) for s in shafts]
+        pts = np.vstack([p[0] for p in parts])
+        c = np.vstack([p[1] for p in parts])
+        g = np.concatenate([p[2] for p in parts])
+        tri = np.vstack([p[3] for p in parts])
+        _check_springs(data.springs, c, g, tri, data.nodes.shape[0])
+        keep = c.max(axis=1) > 0
+        pts, c, g, tri = pts[keep], c[keep], g[keep], tri[keep]
+        k0 = float(np.median(c[c > 0]))
+        aux = n + np.arange(len(pts))
+        nodes = np.vstack([data.nodes, pts])
+        coef = np.sqrt(c / k0)[:, :, None, None] * g  # (P, 3 dirs, nloc, 3)
+        sn, sd = [], []
+        for p in range(len(pts)):
+            for d in range(3):
+                if c[p, d] == 0.0:
+                    continue
+                nz = np.argwhere(coef[p, d] != 0.0)
+                equations.append((np.r_[aux[p], tri[p][nz[:, 0]]], np.r_[d, nz[:, 1]],
+                                  np.r_[-1.0, coef[p, d][nz[:, 0], nz[:, 1]]]))
+                sn.append(aux[p])
+                sd.append(d)
+        springs = (np.array(sn), np.array(sd), np.full(len(sn), k0))
+    pad = np.zeros((len(nodes) - n, 3))
+    loads = [np.vstack([data.loads[:, k].reshape(-1, 3), pad]) for k in range(data.loads.shape[1])]
+    return write_inp(path, nodes, data.elements, model.material, fixed, loads, equations, springs, heading)
+
+
+def _check_springs(K: Any, c: np.ndarray, g: np.ndarray, tri: np.ndarray, n: int) -> None:
+    """Raise CalculixError unless Σ c·g gᵀ equals rigfem's spring matrix ``K``."""
+    import scipy.sparse as sp
+
+    dofs = (3 * tri[:, :, None] + np.arange(3)).reshape(len(tri), -1)  # (P, 3 nloc)
+    gv = g.reshape(len(g), 3, -1)  # (P, 3 dirs, 3 nloc)
+    blocks = np.einsum("pd,pdi,pdj->pij", c, gv, gv)
+    k = dofs.shape[1]
+    mine = sp.csr_matrix((blocks.ravel(), (np.repeat(dofs, k, 1).ravel(), np.tile(dofs, (1, k)).ravel())),
+                         shape=(3 * n, 3 * n))
+    diff = abs(mine - K).max() if K is not None else np.inf
+    if not diff <= 1e-9 * abs(K).max():
+        raise CalculixError(f"ShaftInHole export does not reproduce rigfem's spring matrix (max diff {diff:.3g})")
 
 
 def _n_nodes(inp_text: str) -> int:
