@@ -51,33 +51,33 @@ def transmission_angle_range(b2: float, b3: float, b4: float, d: float) -> tuple
     return mu(d - b2), mu(d + b2)
 
 
-def _pitch_error(lengths: dict[str, float]) -> tuple[float, str]:
+def _mountable(lengths: dict[str, float]) -> Rule:
+    """Largest distance (mm) of any length from a whole number of hole pitches; limit 0."""
     errs = {k: abs(v - HOLE_PITCH_MM * round(v / HOLE_PITCH_MM)) for k, v in lengths.items()}
     worst = max(errs, key=errs.get)
-    return errs[worst], worst
+    off = f"; {worst} is off by {errs[worst]:g} mm" if errs[worst] > 1e-9 else ""
+    return _rule(f"mountable (whole 60 mm hole pitches{off})", errs[worst], "==", 0.0)
 
 
 def fourbar_rules(b2: float, b3: float, b4: float, d: float) -> list[Rule]:
     """The rig rules of a four-bar (crank b2, coupler b3, rocker b4, ground d; mm)."""
     mu_min, mu_max = transmission_angle_range(b2, b3, b4, d)
-    err, worst = _pitch_error(dict(b2=b2, b3=b3, b4=b4, d=d))
     return [
         _rule("loop can close (d < b2 + b3 + b4)", d, "<", b2 + b3 + b4),
         _rule("crank turns fully (b2 + d < b3 + b4)", b2 + d, "<", b3 + b4),
         _rule("crank guide clears the rocker pivot (d >= 660 mm)", d, ">=", MIN_GROUND_MM),
         _rule("transmission angle min (mu_min > 35 deg)", mu_min, ">", MU_LIMITS_DEG[0], "deg"),
         _rule("transmission angle max (mu_max < 145 deg)", mu_max, "<", MU_LIMITS_DEG[1], "deg"),
-        _rule(f"mountable (whole 60 mm hole pitches; worst: {worst})", err, "==", 0.0),
+        _mountable(dict(b2=b2, b3=b3, b4=b4, d=d)),
     ]
 
 
 def slider_crank_rules(b2: float, b3: float, offset: float = 0.0) -> list[Rule]:
     """The rig rules of a slider-crank (crank b2, rod b3, slide-line offset; mm)."""
-    err, worst = _pitch_error(dict(b2=b2, b3=b3))
     rules = [_rule("rod and crank cannot align (b2 < b3)", b2, "<", b3)]
     if offset:
         rules.append(_rule("crank turns fully with the offset (b2 + |offset| < b3)", b2 + abs(offset), "<", b3))
-    rules.append(_rule(f"mountable (whole 60 mm hole pitches; worst: {worst})", err, "==", 0.0))
+    rules.append(_mountable(dict(b2=b2, b3=b3)))
     return rules
 
 

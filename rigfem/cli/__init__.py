@@ -17,6 +17,7 @@ from rigfem.errors import InputError
 COMMANDS: dict[str, str] = {
     "mesh": "mesh",
     "parts": "parts",
+    "reactions": "reactions",
 }
 
 

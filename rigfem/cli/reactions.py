@@ -1,0 +1,192 @@
+"""``rigfem reactions``: rig rules, transmission angle, peak pin reactions and torque of a linkage.
+
+With no configuration it runs the reference configuration of the 2013 study
+(four-bar b2=540 b3=840 b4=780 d=1020 mm).  Lengths in mm, forces N, torque N·m.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+from rigfem.errors import InputError, check_range
+from rigfem.mechanisms import MODELS, four_bar, simulate, slider_crank
+from rigfem.reactions import ReactionHistory, peaks, write_csv
+from rigfem.rules import rules_for
+
+HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
+REFERENCE = (540.0, 840.0, 780.0, 1020.0)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
+                   help="four-bar crank, coupler, rocker, ground lengths (mm)")
+    g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
+    p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
+    p.add_argument("--speed-hz", metavar="HZ", help="crank speed (Hz, default 1 or the scene's)")
+    p.add_argument("--model", default="rigid-body", metavar="MODEL",
+                   help="mass model: rigid-body (default) or original (the 2013 program, four-bar only)")
+    p.add_argument("--samples", default="360", metavar="N", help="crank angles per turn (default 360)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    p.add_argument("--csv", metavar="PATH", help="write the full history per crank angle")
+    p.add_argument("--plot", metavar="PATH.png", help="plot reactions and torque against crank angle")
+
+
+def _lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
+    return [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(names, values)]
+
+
+def _build(args) -> tuple[object, float]:
+    speed = None
+    if args.speed_hz is not None:
+        speed = check_range("--speed-hz", args.speed_hz, 0.0, 100.0, "Hz", lo_open=True)
+    if args.offset is not None and not args.slider_crank:
+        raise InputError("--offset applies only with --slider-crank")
+    if args.scene and (args.four_bar or args.slider_crank):
+        raise InputError("give either a scene or --four-bar/--slider-crank, not both")
+    if args.four_bar:
+        lk = four_bar(*_lengths(("B2", "B3", "B4", "D"), args.four_bar))
+    elif args.slider_crank:
+        off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
+        lk = slider_crank(*_lengths(("B2", "B3"), args.slider_crank), off)
+    elif args.scene:
+        from rigfem.scene import load_scene
+
+        sc = load_scene(args.scene)
+        lk, speed = sc.linkage, speed if speed is not None else sc.speed_hz
+    else:
+        lk = four_bar(*REFERENCE)
+    return lk, (1.0 if speed is None else speed)
+
+
+def result_dict(h: ReactionHistory) -> dict:
+    """The JSON result: rules, transmission angle, peaks, torque, singular ranges (finite only)."""
+    p = peaks(h)
+    tq = p.pop("torque")
+    mu = h.meta.get("mu_deg")
+    unit = h.meta.get("driver_unit", "N·m")
+    return {
+        "linkage": h.meta.get("type"), "lengths_mm": h.meta.get("lengths_mm"), "model": h.meta.get("model"),
+        "speed_hz": h.meta.get("speed_hz"), "samples": int(h.crank_deg.size),
+        "rules": [{k: r.as_dict()[k] for k in ("name", "value", "limit", "ok", "relation", "unit")}
+                  for r in rules_for(h.meta)],
+        "transmission_angle_deg": None if mu is None else {"min": mu["min"], "max": mu["max"]},
+        "peaks": p,
+        "torque_Nm" if unit == "N·m" else "driver_force_N": {"peak": tq["peak"], "crank_deg": tq["crank_deg"],
+                                                             "singular": tq["singular"]},
+        "singular": h.meta.get("singular"),
+        "warnings": h.meta.get("warnings", []),
+    }
+
+
+def _fmt(v, spec: str) -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def format_table(res: dict) -> str:
+    """Readable table of a result dict."""
+    out = []
+    L = res["lengths_mm"] or {}
+    out.append(f"{res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
+               f"   model={res['model']}  speed={res['speed_hz']:g} Hz  samples={res['samples']}")
+    if res["rules"]:
+        out.append("")
+        out.append(f"{'rule':58s} {'value':>10s} {'limit':>10s}  ok")
+        for r in res["rules"]:
+            out.append(f"{r['name']:58s} {r['value']:10.3f} {r['relation']:>2s}{r['limit']:8.3f}  "
+                       f"{'yes' if r['ok'] else 'NO'}")
+    mu = res["transmission_angle_deg"]
+    if mu:
+        out.append(f"\ntransmission angle: min {mu['min']:.4f} deg, max {mu['max']:.4f} deg")
+    sing = res["singular"]
+    sing_txt = ", ".join(f"{a:.1f}-{b:.1f} deg" for a, b in sing) if sing else ""
+    out.append("")
+    out.append(f"{'joint':10s} {'peak |F| (N)':>14s} {'at crank (deg)':>15s} {'Fx (N)':>12s} {'Fy (N)':>12s}")
+    for name, pk in res["peaks"].items():
+        if pk["singular"]:
+            out.append(f"{name:10s} {'SINGULAR':>14s}  toggle near crank {sing_txt}: no finite peak")
+        else:
+            out.append(f"{name:10s} {pk['force_N']:14.4f} {pk['crank_deg']:15.4f} {pk['fx_N']:12.4f} "
+                       f"{pk['fy_N']:12.4f}")
+    key = "torque_Nm" if "torque_Nm" in res else "driver_force_N"
+    tq = res[key]
+    label = "peak driver torque (N·m)" if key == "torque_Nm" else "peak driver force (N)"
+    if tq["singular"]:
+        out.append(f"{label}: SINGULAR (toggle near crank {sing_txt})")
+    else:
+        out.append(f"{label}: {tq['peak']:.4f} at crank {tq['crank_deg']:.4f} deg")
+    if sing:
+        out.append(f"\nWARNING: toggle (singular) configuration near crank {sing_txt}; "
+                   "reactions grow without bound there")
+    for w in res["warnings"]:
+        out.append(f"WARNING: {w}")
+    return "\n".join(out)
+
+
+def plot(h: ReactionHistory, path: str) -> None:
+    """Reaction magnitudes and driver torque against crank angle (singular samples masked)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mask = h.singular_mask if h.singular_mask is not None else np.zeros(h.crank_deg.size, bool)
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
+    for name, j in h.joints.items():
+        a1.plot(h.crank_deg, np.ma.masked_where(mask, np.hypot(*j.force_N.T)), label=name)
+    a1.set_ylabel("|reaction| (N)")
+    a1.legend(ncol=4, fontsize="small")
+    a2.plot(h.crank_deg, np.ma.masked_where(mask, h.torque_Nm), color="k")
+    a2.set_ylabel("driver torque (N·m)" if h.meta.get("driver_unit", "N·m") == "N·m" else "driver force (N)")
+    a2.set_xlabel("crank angle (deg)")
+    for a, b in h.meta.get("singular") or []:
+        for ax in (a1, a2):
+            ax.axvspan(a, b, color="r", alpha=0.2)
+    a1.set_title(f"{h.meta.get('type')} {h.meta.get('lengths_mm')} ({h.meta.get('model')})", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run(args) -> int:
+    if args.model not in MODELS:
+        raise InputError(f"--model = {args.model!r} must be one of {', '.join(MODELS)}")
+    samples = check_range("--samples", args.samples, 8, 1_000_000)
+    if samples != int(samples):
+        raise InputError(f"--samples = {args.samples!r} must be a whole number in [8, 1000000]")
+    if args.plot and not str(args.plot).lower().endswith(".png"):
+        raise InputError(f"--plot = {args.plot!r} must be a .png path")
+    lk, speed = _build(args)
+    h = simulate(lk, samples=int(samples), speed_hz=speed, model=args.model)
+    res = result_dict(h)
+    if args.csv:
+        try:
+            write_csv(h, args.csv)
+        except OSError as exc:
+            raise InputError(f"--csv {args.csv!r}: cannot write ({exc.strerror})") from None
+    if args.plot:
+        try:
+            plot(h, args.plot)
+        except OSError as exc:
+            raise InputError(f"--plot {args.plot!r}: cannot write ({exc.strerror})") from None
+    if args.json:
+        print(json.dumps(_finite(res), indent=1))
+    else:
+        print(format_table(res))
+    return 0
+
+
+def _finite(obj):
+    """Guard: no NaN/inf may reach output (JSON null instead)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
