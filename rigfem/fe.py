@@ -34,7 +34,7 @@ from rigfem.loads import load_vector
 from rigfem.material import Material
 from rigfem.mesh import PartMesh
 from rigfem.solution import Solution
-from rigfem.solver import LinearSolver
+from rigfem.solver import LinearSolver, default_method
 from rigfem.stress import nodal_stress
 from rigfem.supports import FreeBody, constraints, rigid_modes
 
@@ -99,11 +99,19 @@ def solve(model: Model, supports: list, cases: list, solver: str = "auto", rtol:
     F = load_matrix(model, cases)
     A = model.K if springs is None else (model.K + springs).tocsr()
     free = np.setdiff1d(np.arange(fm.ndof), fixed)
-    Aff = A[free][:, free]
     R = rigid_modes(fm.nodes)
-    ls = LinearSolver(Aff, solver, near_null=R[free], rtol=rtol)
     U = np.zeros_like(F)
-    U[free] = ls.solve(F[free])
+    if (default_method(len(free)) if solver == "auto" else solver) == "amg":
+        # keep every node's 3 DOFs for aggregation: fixed DOFs become decoupled (scaled) identity rows
+        d = np.ones(fm.ndof)
+        d[fixed] = 0.0
+        D = sp.diags(d)
+        A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
+        ls = LinearSolver(A, "amg", near_null=R, rtol=rtol)
+        U[:] = ls.solve(F * d[:, None])
+    else:
+        ls = LinearSolver(A[free][:, free], solver, rtol=rtol)
+        U[free] = ls.solve(F[free])
     reactions = model.K @ U - F
     free_body = any(isinstance(s, FreeBody) for s in supports)
     if free_body:

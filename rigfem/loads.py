@@ -5,11 +5,15 @@ consistent nodal force vector (length 3·nodes) of a model.  Forces act *on*
 the part.
 
 * :class:`SurfaceForce` — a total force spread as uniform traction.
+* :class:`Pressure` — uniform pressure p on a surface (traction −p·n, n the
+  outward normal; p > 0 pushes into the material).
 * :class:`BearingLoad` — a pin/bolt pushing on a hole with force F: normal
   pressure p0·cos θ over the half of the wall the pin pushes on (θ measured from
-  F), scaled so the discrete resultant equals F exactly.  F must be
+  F).  Tiny cosine corrections cancel the discretisation error, so the discrete
+  resultant is exactly F through the hole centre (no moment).  F must be
   perpendicular to the hole axis.
-* :class:`Torque` — a torque about a bore's axis as uniform shear on the wall.
+* :class:`Torque` — a torque about a bore's axis as uniform shear on the wall
+  (discrete moment exactly T about the axis, no other resultant).
 * :class:`BoltCircleTorque` — a torque carried by bolts in several holes: each
   bolt bears ``F_i = T·(a × r_i)/Σ|r_i|²`` (r_i from the bolt-circle centre).
 * :class:`Gravity` — body force ρ·g.
@@ -45,6 +49,14 @@ class SurfaceForce:
 
     surface: str
     force: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Pressure:
+    """Uniform pressure (positive into the material) on a named surface."""
+
+    surface: str
+    p: float
 
 
 @dataclass(frozen=True)
@@ -88,7 +100,7 @@ class Inertia:
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
-Load = SurfaceForce | BearingLoad | Torque | BoltCircleTorque | Gravity | Inertia
+Load = SurfaceForce | Pressure | BearingLoad | Torque | BoltCircleTorque | Gravity | Inertia
 
 
 def _assemble_surface(fm: FEMesh, name: str, traction, degree: int) -> np.ndarray:
@@ -98,6 +110,26 @@ def _assemble_surface(fm: FEMesh, name: str, traction, degree: int) -> np.ndarra
     f = np.zeros(fm.ndof)
     np.add.at(f, (3 * tri[:, :, None] + np.arange(3)).ravel(), fe.ravel())
     return f
+
+
+def outward_normals(fm: FEMesh, name: str) -> np.ndarray:
+    """Unit outward normals (K, 3) of the triangles of a named surface."""
+    tri = surface_quadrature(fm, name, 1)[3][:, :3]
+    t = fm.elements[:, :4]
+    n = np.int64(len(fm.nodes))
+    faces = np.sort(np.concatenate([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]]), 1)
+    key = (faces[:, 0] * n + faces[:, 1]) * n + faces[:, 2]
+    order = np.argsort(key)
+    st = np.sort(tri, 1)
+    k = (st[:, 0] * n + st[:, 1]) * n + st[:, 2]
+    pos = order[np.searchsorted(key[order], k).clip(0, len(key) - 1)]
+    if not (key[pos] == k).all():
+        raise InputError(f"surface {name!r} has triangles that are not faces of the mesh")
+    opposite = fm.nodes[t[pos % len(t), pos // len(t)]]  # vertex not on the face
+    x = fm.nodes[tri]
+    nv = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    nv *= np.sign(np.einsum("kd,kd->k", nv, x[:, 0] - opposite))[:, None]
+    return nv / np.linalg.norm(nv, axis=1, keepdims=True)
 
 
 def _resultant(fm: FEMesh, f: np.ndarray, about: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,20 +155,51 @@ def bearing_vector(fm: FEMesh, holes: dict[str, Hole], name: str, force) -> np.n
         raise InputError(f"BearingLoad({name!r}).force must be perpendicular to the hole axis {tuple(a)}; "
                          f"axial component {F @ a:g}")
     e = F / mag
+    c = np.asarray(h.center, float)
+    return _exact(fm, name, c, a, _cosine(fm, name, c, a, e, h.depth), e, np.concatenate([F, np.zeros(3)]))
 
+
+def _cosine(fm: FEMesh, name: str, c: np.ndarray, a: np.ndarray, d: np.ndarray, depth: float,
+            axial: bool = False) -> np.ndarray:
+    """Nodal vector of the normal pressure max(cos θ, 0) on a hole wall, θ from direction d.
+
+    With ``axial`` the pressure is weighted by the axial coordinate (x − c)·a / depth.
+    """
     def traction(x):
-        d = x - np.asarray(h.center, float)
-        r = d - (d @ a)[..., None] * a
+        r = x - c
+        z = r @ a
+        r = r - z[..., None] * a
         r = r / np.linalg.norm(r, axis=-1, keepdims=True)
-        return np.maximum(r @ e, 0.0)[..., None] * r
+        w = np.maximum(r @ d, 0.0) * (z / depth if axial else 1.0)
+        return w[..., None] * r
+    return _assemble_surface(fm, name, traction, 6)
 
-    f = _assemble_surface(fm, name, traction, 6)
-    R = _resultant(fm, f, np.asarray(h.center, float))[0]
-    return f * (mag / (R @ e))
+
+def _exact(fm: FEMesh, name: str, c: np.ndarray, a: np.ndarray, f0: np.ndarray, e: np.ndarray,
+           target: np.ndarray) -> np.ndarray:
+    """f0 plus tiny cosine pressures so the discrete force and moment about c equal ``target`` (6,) exactly.
+
+    ``e`` is the in-plane direction of f0's force (bearing) or any in-plane direction
+    (torque, whose f0 has no force).  The corrections only cancel the discretisation
+    error of f0 on an unsymmetric surface mesh.
+    """
+    e2 = np.cross(a, e)
+    depth = max(np.ptp((fm.nodes[np.unique(fm.surfaces[name])] - c) @ a), np.finfo(float).tiny)
+    fs = [f0, _cosine(fm, name, c, a, e2, depth), _cosine(fm, name, c, a, e, depth, True),
+          _cosine(fm, name, c, a, e2, depth, True)]
+    z = np.zeros(3)
+    rows = [np.r_[e, z], np.r_[e2, z], np.r_[z, e], np.r_[z, e2]]
+    if np.linalg.norm(target[:3]) == 0:  # torque: also cancel the force along e
+        fs.append(_cosine(fm, name, c, a, e, depth))
+        rows.append(np.r_[z, a])
+    rows = np.array(rows)
+    R = np.array([np.concatenate(_resultant(fm, f, c)) for f in fs]).T  # (6, n)
+    k = np.linalg.solve(rows @ R, rows @ target)
+    return sum(ki * fi for ki, fi in zip(k, fs))
 
 
 def torque_vector(fm: FEMesh, holes: dict[str, Hole], name: str, torque: float) -> np.ndarray:
-    """Nodal vector of uniform shear on a bore whose moment about the axis is ``torque``."""
+    """Nodal vector of uniform shear on a bore: moment ``torque`` about the axis, no other resultant."""
     h, a = _hole(holes, name)
     c = np.asarray(h.center, float)
 
@@ -145,9 +208,9 @@ def torque_vector(fm: FEMesh, holes: dict[str, Hole], name: str, torque: float) 
         r = d - (d @ a)[..., None] * a
         return np.cross(a, r / np.linalg.norm(r, axis=-1, keepdims=True))
 
-    f = _assemble_surface(fm, name, traction, 4)
-    M = _resultant(fm, f, c)[1] @ a
-    return f * (float(torque) / M)
+    e = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+    return _exact(fm, name, c, a, _assemble_surface(fm, name, traction, 4), e / np.linalg.norm(e),
+                  np.concatenate([np.zeros(3), float(torque) * a]))
 
 
 def body_vector(fm: FEMesh, density: float, accel) -> np.ndarray:
@@ -168,6 +231,12 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
         F = _vec(f"SurfaceForce({load.surface!r}).force", load.force)
         pts, w, _, _ = surface_quadrature(fm, load.surface, 2)
         return _assemble_surface(fm, load.surface, lambda x: np.broadcast_to(F / w.sum(), x.shape), 2)
+    if isinstance(load, Pressure):
+        p = float(load.p)
+        if not np.isfinite(p):
+            raise InputError(f"Pressure({load.surface!r}).p = {load.p!r} must be finite")
+        n = outward_normals(fm, load.surface)
+        return _assemble_surface(fm, load.surface, lambda x: -p * np.broadcast_to(n[:, None, :], x.shape), 2)
     if isinstance(load, BearingLoad):
         return bearing_vector(fm, holes, load.hole, load.force)
     if isinstance(load, Torque):

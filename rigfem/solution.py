@@ -25,8 +25,9 @@ class Peak:
     value: float  #: MPa
     node: int
     xyz: tuple[float, float, float]
-    surface: str  #: named surface, "(unnamed boundary)" or "(interior)"
-    error: float  #: relative ZZ error estimate of ``value`` (recovered vs raw stress at the node)
+    surface: str  #: named surface (a hole first), "(unnamed boundary)" or "(interior)"
+    surfaces: tuple[str, ...]  #: every named surface the node lies on
+    error: float  #: relative ZZ error estimate of ``value`` (recovered vs raw stress on the node's patch)
 
 
 @dataclass
@@ -70,15 +71,15 @@ class Solution:
         vm = von_mises(s)
         n = int(np.argmax(vm))
         fm, mat = self.model.mesh, self.model.material
-        err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s[n])
-        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), self.surface_of(n), err)
+        err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s)
+        names = self.surfaces_of(n)
+        where = names[0] if names else "(unnamed boundary)" if n in self._boundary_nodes() else "(interior)"
+        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), where, names, err)
 
-    def surface_of(self, node: int) -> str:
-        """Name of the first named surface containing ``node``."""
-        for name, tri in self.model.mesh.surfaces.items():
-            if (tri == node).any():
-                return name
-        return "(unnamed boundary)" if node in self._boundary_nodes() else "(interior)"
+    def surfaces_of(self, node: int) -> tuple[str, ...]:
+        """Named surfaces containing ``node``, holes first."""
+        names = [nm for nm, tri in self.model.mesh.surfaces.items() if (tri == node).any()]
+        return tuple(sorted(names, key=lambda nm: nm not in self.model.part.holes))
 
     def _boundary_nodes(self) -> set[int]:
         t = self.model.mesh.elements[:, :4]

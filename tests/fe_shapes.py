@@ -34,8 +34,9 @@ def gmsh_part(build, size: float, refine: dict | None = None, name: str = "part"
     """
     import gmsh
 
-    gmsh.initialize(["-v", "0"])
+    gmsh.initialize()
     try:
+        gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add(name)
         groups, holes = build(gmsh.model.occ)
         gmsh.model.occ.synchronize()
@@ -104,3 +105,44 @@ def plate_with_hole(length: float, width: float, thick: float, radius: float, si
         return g, {"hole": Hole(np.array([0, 0, thick / 2]), np.array([0, 0, 1.0]), radius, thick)}
 
     return gmsh_part(build, size, {"hole": h_hole})
+
+
+def quarter_ring(a: float, b: float, height: float, size: float) -> PartMesh:
+    """Quarter (x, y ≥ 0) of a thick-walled tube a < r < b, 0 < z < height; faces xsym, ysym, zsym, inner, outer."""
+    eps = 1e-6
+
+    def build(occ):
+        o = occ.addCylinder(0, 0, 0, 0, 0, height, b, angle=np.pi / 2)
+        i = occ.addCylinder(0, 0, -1, 0, 0, height + 2, a)
+        vol, _ = occ.cut([(3, o)], [(3, i)])
+        g = {"xsym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 < eps),
+             "ysym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: y1 < eps),
+             "zsym": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: z1 < eps),
+             "inner": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 < a + eps and y1 < a + eps
+                               and z1 - z0 > height / 2),
+             "outer": faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 > b - eps and y1 > b - eps
+                               and z1 - z0 > height / 2)}
+        return g, {"inner": Hole(np.array([0, 0, height / 2]), np.array([0, 0, 1.0]), a, height)}
+
+    return gmsh_part(build, size)
+
+
+def bar_with_holes(length: float, width: float, thick: float, radius: float, xs: list[float], size: float,
+                   h_hole: float | None = None) -> PartMesh:
+    """Bar [0,length]×[-width/2,width/2]×[0,thick] with through holes (axis z) at x in ``xs``: h0, h1, …"""
+    eps = 1e-6
+
+    def build(occ):
+        b = occ.addBox(0, -width / 2, 0, length, width, thick)
+        cyl = [(3, occ.addCylinder(x, 0, -1, 0, 0, thick + 2, radius)) for x in xs]
+        vol, _ = occ.cut([(3, b)], cyl)
+        g, holes = {}, {}
+        for k, x in enumerate(xs):
+            g[f"h{k}"] = faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1, x=x: abs(x0 - (x - radius)) < eps
+                                  and abs(x1 - (x + radius)) < eps and z1 - z0 > thick / 2)
+            holes[f"h{k}"] = Hole(np.array([x, 0, thick / 2]), np.array([0, 0, 1.0]), radius, thick)
+        g["xmax"] = faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x0 > length - eps)
+        g["xmin"] = faces_at(occ, vol, lambda x0, y0, z0, x1, y1, z1: x1 < eps)
+        return g, holes
+
+    return gmsh_part(build, size, {f"h{k}": h_hole for k in range(len(xs))} if h_hole else None)

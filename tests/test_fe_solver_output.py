@@ -1,0 +1,100 @@
+"""Solver methods agree, shaft-in-hole support, export data, VTU output, materials."""
+
+import meshio
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from fe_shapes import bar_with_holes, box
+
+from rigfem.errors import InputError
+from rigfem.fe import build_model, export_data, solve
+from rigfem.loads import BearingLoad, SurfaceForce
+from rigfem.material import get_material, material_from_dict
+from rigfem.supports import Fixed, ShaftInHole
+from rigfem.vtk import write_vtu
+
+
+@pytest.fixture(scope="module")
+def cantilever():
+    return build_model(box(100, 10, 10, 20, 2, 2), get_material("rig_steel"), 2)
+
+
+def test_pardiso_superlu_amg_agree(cantilever):
+    cases = [SurfaceForce("xmax", (0, 0, -100)), SurfaceForce("xmax", (50, 20, 0))]
+    sols = {m: solve(cantilever, [Fixed("xmin")], cases, solver=m) for m in ("pardiso", "superlu", "amg")}
+    ref = sols["superlu"].U
+    for m, s in sols.items():
+        assert s.method == m and s.residuals.max() < 1e-8
+        assert np.abs(s.U - ref).max() < 1e-6 * np.abs(ref).max()
+    with pytest.raises(InputError, match="solver"):
+        solve(cantilever, [Fixed("xmin")], cases, solver="cholesky")
+
+
+def test_export_data_reproduces_solution(cantilever):
+    cases = [SurfaceForce("xmax", (0, 0, -100))]
+    sol = solve(cantilever, [Fixed("xmin")], cases)
+    ex = export_data(cantilever, [Fixed("xmin")], cases)
+    assert ex.element_type == "C3D10" and ex.elements.shape[1] == 10
+    # corner nodes positively oriented, mid-edge nodes at edge midpoints in C3D10 order
+    x = ex.nodes[ex.elements]
+    assert (np.linalg.det(x[:, 1:4] - x[:, :1]) > 0).all()
+    assert np.allclose(x[:, 4], (x[:, 0] + x[:, 1]) / 2) and np.allclose(x[:, 6], (x[:, 2] + x[:, 0]) / 2)
+    free = np.setdiff1d(np.arange(3 * len(ex.nodes)), ex.fixed_dofs)
+    assert np.allclose(cantilever.K[free][:, free] @ sol.U[free, 0], ex.loads[free, 0], atol=1e-8 * 100)
+
+
+def test_shaft_in_hole_reactions_and_bearing_half():
+    part = bar_with_holes(100, 25, 10, 5, [20, 80], size=6, h_hole=2.0)
+    model = build_model(part, get_material("rig_steel"), 2)
+    F = 1000.0
+    sol = solve(model, [ShaftInHole("h0", direction=(-1, 0, 0))], [BearingLoad("h1", (F, 0, 0))])
+    r = sol.support_reactions["ShaftInHole(h0)"][0]
+    assert np.allclose(r[:3], [-F, 0, 0], atol=1e-9 * F)
+    # the shaft bears on the -x half of the hole; the +x half carries only the weak tangential/axial springs
+    x = model.mesh.nodes - part.holes["h0"].center
+    rn = sol.reactions[:, 0].reshape(-1, 3)
+    on = np.isin(np.arange(len(x)), np.unique(model.mesh.surfaces["h0"]))
+    front, back = on & (x[:, 0] < -1.0), on & (x[:, 0] > 1.0)
+    assert np.abs(rn[back]).sum() < 0.01 * np.abs(rn[front]).sum()
+    p = sol.peak()
+    assert np.isfinite(p.value) and p.error >= 0
+    with pytest.raises(InputError, match="hole 'h7'"):
+        solve(model, [ShaftInHole("h7")], [BearingLoad("h1", (F, 0, 0))])
+
+
+@pytest.mark.heavy
+def test_shaft_support_peak_converges_fixed_hole_does_not():
+    """Peak von Mises at the support hole under refinement: bounded for ShaftInHole, growing for Fixed."""
+    peaks = {"shaft": [], "fixed": []}
+    for size, h in ((6.0, 2.0), (4.0, 1.0), (3.0, 0.5)):
+        part = bar_with_holes(100, 25, 10, 5, [20, 80], size=size, h_hole=h)
+        model = build_model(part, get_material("rig_steel"), 2)
+        near = np.linalg.norm(model.mesh.nodes[:, :2] - [20, 0], axis=1) < 10
+        for k, sup in (("shaft", ShaftInHole("h0", direction=(-1, 0, 0))), ("fixed", Fixed("h0"))):
+            sol = solve(model, [sup], [BearingLoad("h1", (1000.0, 0, 0))])
+            peaks[k].append(sol.von_mises()[near].max())
+    assert abs(peaks["shaft"][-1] / peaks["shaft"][-2] - 1) < 0.05
+    assert peaks["fixed"][-1] / peaks["fixed"][-2] > peaks["shaft"][-1] / peaks["shaft"][-2]
+
+
+def test_vtu_roundtrip(cantilever, tmp_path):
+    sol = solve(cantilever, [Fixed("xmin")], [SurfaceForce("xmax", (0, 0, -100))])
+    m = meshio.read(write_vtu(tmp_path / "c.vtu", sol))
+    assert m.cells[0].type == "tetra10" and len(m.points) == len(cantilever.mesh.nodes)
+    assert m.point_data["stress"].shape == (len(m.points), 6)
+    for k in ("displacement", "stress", "von_mises", "safety_factor"):
+        assert np.isfinite(m.point_data[k]).all()
+    vm = m.point_data["von_mises"]
+    i = int(np.argmax(vm))
+    assert m.point_data["safety_factor"][i] == pytest.approx(375.0 / vm[i])
+
+
+def test_materials():
+    assert get_material("abs").E == 2200.0 and get_material("al_6082_t6").sigma_u == 310.0
+    with pytest.raises(InputError, match="unknown"):
+        get_material("unobtainium")
+    with pytest.raises(InputError, match="nu"):
+        material_from_dict({"name": "x", "E": 1e5, "nu": 0.5, "sigma_u": 100, "density": 1e-9})
+    with pytest.raises(InputError, match="missing"):
+        material_from_dict({"name": "x", "E": 1e5})
+    assert sp.issparse(build_model(box(1, 1, 1, 1, 1, 1), get_material("abs"), 1).K)
