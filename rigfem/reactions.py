@@ -6,8 +6,8 @@ solver (``rigfem.mechanisms.simulate``) or from an external CSV (``read_csv``).
 
 ``peaks`` refines around each sampled maximum (Brent on the solver itself, or on a
 periodic cubic spline for an imported CSV) so the peak does not depend on sampling.
-Peaks that fall inside a flagged singular (toggle) range are never reported as a
-plain number: their ``force_N`` is ``None`` and ``singular`` is ``True``.
+When any sample is flagged singular (a toggle: reactions grow without bound there) no
+peak is reported as a plain number: ``force_N`` is ``None`` and ``singular`` is ``True``.
 """
 
 from __future__ import annotations
@@ -145,8 +145,8 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     Returns ``{joint: {force_N, crank_deg, fx_N, fy_N, singular}, ..., "torque":
     {peak, value, crank_deg, singular}}`` (N, deg, N·m; ``value`` is the signed torque).
     With ``refine`` each sampled maximum is refined by Brent's method on the history's
-    evaluator (the solver itself) or on a cubic spline of the samples.  A peak inside a
-    flagged singular range has ``force_N``/``peak`` = None and ``singular`` = True.
+    evaluator (the solver itself) or on a cubic spline of the samples.  If any sample is
+    flagged singular the peaks are unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
     deg = np.asarray(h.crank_deg, float)
     periodic = _is_full_turn(deg)
@@ -155,7 +155,8 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     step = (deg[1] - deg[0]) if deg.size > 1 else 0.0
     out: dict = {}
     for name, vals in _series(h).items():
-        i_best = int(np.argmax(vals))
+        # a flagged (toggle) sample is unbounded: a peak next to or inside one is no number
+        i_best = int(np.argmax(np.where(mask, np.inf, vals)))
         best_x, best_f = float(deg[i_best]), float(vals[i_best])
         near = [i_best - 1, i_best, (i_best + 1) % deg.size] if periodic else \
             [i for i in (i_best - 1, i_best, i_best + 1) if 0 <= i < deg.size]
