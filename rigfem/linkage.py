@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from rigfem.errors import InputError
-from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, singular_ranges
+from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, is_full_turn, singular_ranges
 
 GROUND = "ground"
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
@@ -434,28 +434,22 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     n_c = max(2, int(np.ceil(abs(span) / np.radians(20.0))) + 1)
     nodes = np.linspace(theta[0], theta[-1], n_c)
     qc = _continuation(model, nodes, _guess_vector(model), tol)
-    if check_closure and _is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
+    warnings: list[str] = []
+    if check_closure and is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
         # close the loop over the last step back to theta0 + 2 pi: same branch required
         qend = _continuation(model, np.array([theta[-1], theta[0] + 2 * np.pi]), qc[-1], tol)[-1]
         diff = qend - qc[0]
         diff[2::3] = np.angle(np.exp(1j * diff[2::3]))
         if np.max(np.abs(diff)) > 1e3 * tol + 1e-6 * model.scale:
-            lk.meta.setdefault("warnings", []).append("the linkage does not return to its starting "
-                                                      "configuration after one turn (branch change at a toggle)")
+            warnings.append("the linkage does not return to its starting configuration after one "
+                            "turn (branch change at a toggle)")
     qdc, qddc, *_ = _rates(model, qc, nodes, 1.0)
-    state = (model, nodes, qc, qdc, qddc)
+    state = (model, nodes, qc, qdc, qddc, warnings)
     return _evaluate(lk, state, deg, speed_hz, tol)
 
 
-def _is_full_turn(deg: np.ndarray) -> bool:
-    if deg.size < 3:
-        return False
-    step = deg[1] - deg[0]
-    return bool(abs(step * deg.size - 360.0) < 1e-6 and np.allclose(np.diff(deg), step))
-
-
 def _evaluate(lk: Linkage, state, deg: np.ndarray, speed_hz: float, tol: float) -> ReactionHistory:
-    model, nodes, qc, qdc, qddc = state
+    model, nodes, qc, qdc, qddc, _ = state
     theta = np.radians(deg)
     # predictor from the nearest coarse node (in phase)
     idx = np.clip(np.searchsorted(nodes, theta), 0, nodes.size - 1)
@@ -554,6 +548,8 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
     meta = dict(lk.meta)
     meta.update(speed_hz=speed_hz, driver_unit="N·m" if isinstance(dv, CrankDriver) else "N",
                 rcond_min=float(rcond.min()))
+    if state[5]:
+        meta["warnings"] = list(state[5])
     extra = lk.meta.get("singular_fn")
     if extra is not None:
         meta.pop("singular_fn")

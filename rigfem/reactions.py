@@ -85,7 +85,8 @@ def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list
     return ranges
 
 
-def _is_full_turn(deg: np.ndarray) -> bool:
+def is_full_turn(deg: np.ndarray) -> bool:
+    """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
     if deg.size < 4:
         return False
     step = np.diff(deg)
@@ -119,7 +120,7 @@ def _series(h: ReactionHistory) -> dict[str, np.ndarray]:
 def _spline_evaluator(h: ReactionHistory) -> Callable[[np.ndarray], ReactionHistory]:
     """Periodic (full turn) or not-a-knot cubic spline through an imported history."""
     deg = h.crank_deg
-    periodic = _is_full_turn(deg)
+    periodic = is_full_turn(deg)
     x = np.r_[deg, deg[-1] + (deg[1] - deg[0])] if periodic else deg
     bc = "periodic" if periodic else "not-a-knot"
 
@@ -149,7 +150,7 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     flagged singular the peaks are unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
     deg = np.asarray(h.crank_deg, float)
-    periodic = _is_full_turn(deg)
+    periodic = is_full_turn(deg)
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(deg.size, bool)
     ev = h.evaluator if h.evaluator is not None else (_spline_evaluator(h) if deg.size >= 4 else None)
     step = (deg[1] - deg[0]) if deg.size > 1 else 0.0

@@ -130,3 +130,106 @@ def test_cannot_close_names_crank_range():
     # d + b2 > b3 + b4 and d - b2 < b3 + b4: the loop breaks around 180 deg
     with pytest.raises(AssemblyError, match=r"crank angles \d+\.\d-\d+\.\d deg"):
         four_bar(540, 840, 780, 1200)
+
+
+# ----------------------------------------------------------------------------- any linkage
+def _balance(h, lk):
+    """Max force (N) and moment (N·m) imbalance over all bodies, recomputed from the history:
+    joint forces at joint points, prismatic constraint moments, driver, loads, gravity."""
+    from rigfem.linkage import CrankDriver
+
+    g = np.asarray(lk.gravity_mm_s2) / 1000
+    worst_f = worst_m = 0.0
+    for body in lk.bodies:
+        m, c_loc, inertia = body.totals()
+        bh = h.bodies[body.name]
+        ca, sa = np.cos(bh.angle_rad), np.sin(bh.angle_rad)
+        c = np.stack([ca * c_loc[0] - sa * c_loc[1], sa * c_loc[0] + ca * c_loc[1]], -1)
+        w, al = bh.omega_rad_s[:, None], bh.alpha_rad_s2[:, None]
+        a_g = bh.origin_acc_mm_s2 / 1000 + al * np.c_[-c[:, 1], c[:, 0]] - w**2 * c
+        G = bh.origin_mm / 1000 + c
+        F = m * g + np.zeros_like(a_g)
+        M = np.zeros(len(a_g))
+        for j in h.joints.values():
+            if body.name not in (j.body_a, j.body_b):
+                continue
+            sgn = 1.0 if j.body_b == body.name else -1.0
+            f = sgn * j.force_N
+            rr = j.position_mm / 1000 - G
+            F += f
+            M += rr[:, 0] * f[:, 1] - rr[:, 1] * f[:, 0]
+            if j.moment_Nm is not None:
+                M += sgn * j.moment_Nm
+        for ld in lk.loads:
+            if ld.body == body.name:
+                loc = np.asarray(ld.local_mm) / 1000
+                p = bh.origin_mm / 1000 + np.stack([ca * loc[0] - sa * loc[1], sa * loc[0] + ca * loc[1]], -1)
+                f = ld.force({"point_mm": p * 1000})
+                F += f
+                M += (p - G)[:, 0] * f[:, 1] - (p - G)[:, 1] * f[:, 0]
+        if isinstance(lk.driver, CrankDriver) and lk.driver.body == body.name:
+            M += h.torque_Nm
+        worst_f = max(worst_f, np.max(np.abs(F - m * a_g)))
+        worst_m = max(worst_m, np.max(np.abs(M - inertia * bh.alpha_rad_s2)))
+    return worst_f, worst_m
+
+
+def _driven_slider_crank():
+    """Slider-crank driven at the slider, s = 400 + 80 sin(theta) mm: the crank rocks."""
+    from rigfem.linkage import SliderDriver
+
+    lk = slider_crank(150, 350, masses="rig")
+    lk.driver = SliderDriver("slide", 400.0, 80.0)
+    ax = (400**2 + 150**2 - 350**2) / (2 * 400)
+    ay = np.sqrt(150**2 - ax**2)
+    lk.guess = {"crank": (0, 0, np.arctan2(ay, ax)), "rod": (ax, ay, np.arctan2(-ay, 400 - ax)),
+                "slider": (400, 0, 0)}
+    return lk
+
+
+from rigfem.mechanisms import inverted_slider_crank, quick_return, slider_crank  # noqa: E402
+from rigfem.scene import load_scene  # noqa: E402
+
+
+@pytest.mark.parametrize("make", [
+    lambda: four_bar(*REF, gravity_mm_s2=(0.0, -9810.0)),
+    lambda: slider_crank(300, 900, 60),
+    lambda: inverted_slider_crank(500, 200, 200),
+    lambda: quick_return(150, 350, 800),
+    lambda: load_scene("mech5-compressor").linkage,
+    _driven_slider_crank,
+], ids=["fourbar-gravity", "slider-crank", "inverted", "quick-return", "compressor", "driven-slider"])
+def test_every_body_in_newton_euler_balance(make):
+    lk = make()
+    h = solve(lk, crank_angles(72), speed_hz=1.5)
+    scale = max(np.abs(j.force_N).max() for j in h.joints.values()) + 1.0
+    f, m = _balance(h, lk)
+    assert f < 1e-9 * scale and m < 1e-9 * scale
+
+
+def test_driven_slider_kinematics_and_power():
+    """Crank angle from the triangle O2-A-B (cos th = (x^2 + r^2 - l^2) / 2 r x); the actuator
+    power F·v equals the rate of change of the kinetic energy of all bodies (spectral
+    derivative over the periodic cycle)."""
+    lk = _driven_slider_crank()
+    deg = crank_angles(360)
+    h = solve(lk, deg, speed_hz=1.0)
+    x = 400 + 80 * np.sin(np.radians(deg))
+    th = np.arccos((x**2 + 150**2 - 350**2) / (2 * 150 * x))
+    assert np.allclose(h.bodies["crank"].angle_rad, th, atol=1e-10)
+    assert h.meta["driver_unit"] == "N"
+    # power balance: P_driver = dT/dt with T from the body motion (periodic spectral derivative)
+    w = 2 * np.pi
+    v = 80e-3 * w * np.cos(np.radians(deg))
+    ke = np.zeros(deg.size)
+    for body in lk.bodies:
+        m, c_loc, inertia = body.totals()
+        bh = h.bodies[body.name]
+        ca, sa = np.cos(bh.angle_rad), np.sin(bh.angle_rad)
+        G = bh.origin_mm / 1000 + np.stack([ca * c_loc[0] - sa * c_loc[1], sa * c_loc[0] + ca * c_loc[1]], -1)
+        k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
+        vg = np.fft.irfft(np.fft.rfft(G, axis=0) * k[:, None], n=deg.size, axis=0)
+        ke += 0.5 * m * np.sum(vg**2, 1) + 0.5 * inertia * bh.omega_rad_s**2
+    k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
+    dke = np.fft.irfft(np.fft.rfft(ke) * k, n=deg.size)
+    assert np.allclose(h.torque_Nm * v, dke, atol=1e-7 * np.abs(dke).max())
