@@ -118,7 +118,8 @@ class Load:
 @dataclass
 class Linkage:
     """A one-DOF planar linkage.  ``guess`` gives each body's approximate pose (x mm, y mm,
-    phi rad) at the first crank angle; it selects the assembly branch."""
+    phi rad) at one driver phase (the crank body's guessed angle; phase 0 for a driven
+    slider); it selects the assembly branch, which the solver then follows continuously."""
 
     bodies: list[Body]
     joints: list[Revolute | Prismatic]
@@ -383,6 +384,13 @@ def _guess_vector(model: _Model) -> np.ndarray:
     return q
 
 
+def _guess_phase(lk: Linkage) -> float:
+    """Driver phase (rad) at which ``lk.guess`` is given: the crank body's guessed angle, or 0
+    for a driven slider (its guess is at s = mean)."""
+    d = lk.driver
+    return float(lk.guess[d.body][2] - d.offset_rad) if isinstance(d, CrankDriver) else 0.0
+
+
 def _continuation(model: _Model, theta_nodes: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray:
     """Sequential continuation through ``theta_nodes`` (rad, in order); predictor dq/dtheta.
 
@@ -433,7 +441,12 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     span = theta[-1] - theta[0]
     n_c = max(2, int(np.ceil(abs(span) / np.radians(20.0))) + 1)
     nodes = np.linspace(theta[0], theta[-1], n_c)
-    qc = _continuation(model, nodes, _guess_vector(model), tol)
+    q0 = _guess_vector(model)
+    th_guess = _guess_phase(lk)
+    if abs(th_guess - theta[0]) > 1e-12:
+        # the guess describes the linkage at its own phase: continue from there to theta[0]
+        q0 = _continuation(model, np.array([th_guess, theta[0]]), q0, tol)[-1]
+    qc = _continuation(model, nodes, q0, tol)
     warnings: list[str] = []
     if check_closure and is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
         # close the loop over the last step back to theta0 + 2 pi: same branch required

@@ -1,7 +1,9 @@
 """Rig linkages built on the general solver, with the rig's masses from one catalogue.
 
 Builders (lengths in mm, angles in degrees) return a :class:`rigfem.linkage.Linkage`:
-``four_bar``, ``slider_crank``, ``inverted_slider_crank``, ``quick_return``.
+``four_bar``, ``slider_crank``, ``inverted_slider_crank``, ``quick_return``.  Their
+``start_deg`` is the crank angle at which the initial assembly (hence the branch) is
+computed; lengths below 10 mm are rejected as probable metres.
 ``simulate`` turns a linkage (or a config dict / builder arguments) into a
 :class:`rigfem.reactions.ReactionHistory` over one crank turn; it is what the
 stress checker calls.
@@ -341,8 +343,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
         lk = BUILDERS[typ](**cfg)
     else:
         lk = linkage_or_config
-    deg = crank_angles(int(samples), float(np.degrees(next(iter(lk.guess.values()))[2]))
-                       if lk.meta.get("type") != "four-bar" else 0.0)
+    deg = crank_angles(int(samples))
     if model == "original":
         if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":
             raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "

@@ -103,12 +103,12 @@ def _refine_max(fun: Callable[[float], float], lo: float, hi: float) -> tuple[fl
 
 def _candidates(vals: np.ndarray, periodic: bool) -> list[int]:
     """Indices of sampled local maxima close enough to the global maximum to win after refinement."""
-    n = vals.size
     prev = np.roll(vals, 1) if periodic else np.r_[-np.inf, vals[:-1]]
     nxt = np.roll(vals, -1) if periodic else np.r_[vals[1:], -np.inf]
     loc = np.flatnonzero((vals >= prev) & (vals >= nxt))
     top = vals.max()
-    return [int(i) for i in loc if vals[i] >= 0.97 * top] or [int(np.argmax(vals))] if n else []
+    near_top = [int(i) for i in loc if vals[i] >= 0.97 * top]
+    return near_top or [int(np.argmax(vals))]
 
 
 def _series(h: ReactionHistory) -> dict[str, np.ndarray]:

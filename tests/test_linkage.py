@@ -233,3 +233,13 @@ def test_driven_slider_kinematics_and_power():
     k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
     dke = np.fft.irfft(np.fft.rfft(ke) * k, n=deg.size)
     assert np.allclose(h.torque_Nm * v, dke, atol=1e-7 * np.abs(dke).max())
+
+
+def test_guess_at_another_angle_keeps_the_branch():
+    """A linkage assembled at crank 130 deg and solved from 0 deg stays on its branch."""
+    for branch, sgn in (("open", 1), ("crossed", -1)):
+        lk = four_bar(*REF, branch=branch, start_deg=130.0)
+        deg = crank_angles(36)
+        h = solve(lk, deg)
+        k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians(deg), 2 * np.pi, sgn)
+        assert np.max(np.abs(_wrap(h.bodies["rocker"].angle_rad - k["theta4"]))) < 1e-10
