@@ -270,6 +270,56 @@ def export_model(model: Any, supports: list, cases: list, path: str | os.PathLik
     return write_inp(path, nodes, data.elements, model.material, fixed, loads, equations, springs, heading)
 
 
+@dataclass
+class Comparison:
+    """rigfem against CalculiX for one load case (same model)."""
+
+    peak_von_mises: float  #: MPa, rigfem's peak nodal von Mises
+    peak_von_mises_ccx: float  #: MPa
+    peak_rel_diff: float  #: ccx / rigfem − 1
+    max_displacement: float  #: mm, rigfem's largest nodal displacement magnitude
+    max_displacement_ccx: float  #: mm
+    displacement_rel_diff: float  #: max over nodes |u_ccx − u_rigfem| / max |u_rigfem|
+
+
+def compare(solution: Any, result: CcxResult) -> list[Comparison]:
+    """Per load case differences between a rigfem :class:`~rigfem.solution.Solution` and ccx.
+
+    For a free body the rigid motion is removed from ccx's displacement as rigfem does.
+    """
+    from rigfem.supports import rigid_modes
+
+    x = solution.model.mesh.nodes
+    n, k = len(x), solution.U.shape[1]
+    if result.displacement.shape[0] != k:
+        raise InputError(f"ccx result has {result.displacement.shape[0]} load cases, the solution {k}")
+    out = []
+    for j in range(k):
+        c = np.eye(k)[j]
+        u_fe, u_cx = solution.displacement(c), result.displacement[j, :n]
+        if solution.free_body:
+            R = rigid_modes(x)
+            v = u_cx.ravel()
+            u_cx = (v - R @ np.linalg.lstsq(R, v, rcond=None)[0]).reshape(-1, 3)
+        vm_fe, vm_cx = solution.von_mises(c).max(), von_mises(result.stress[j, :n]).max()
+        d_fe, d_cx = np.linalg.norm(u_fe, axis=1).max(), np.linalg.norm(u_cx, axis=1).max()
+        out.append(Comparison(float(vm_fe), float(vm_cx), float(vm_cx / vm_fe - 1), float(d_fe), float(d_cx),
+                              float(np.linalg.norm(u_cx - u_fe, axis=1).max() / d_fe)))
+    return out
+
+
+def cross_check(model: Any, supports: list, cases: list, solution: Any = None, threads: int = 1,
+                workdir: str | os.PathLike | None = None) -> list[Comparison]:
+    """Solve the model in rigfem (unless ``solution`` is given) and in ccx; compare per case."""
+    if solution is None:
+        from rigfem.fe import solve
+
+        solution = solve(model, supports, cases)
+    with tempfile.TemporaryDirectory(prefix="rigfem-inp-") as tmp:
+        deck = export_model(model, supports, cases, Path(workdir or tmp) / "model.inp")
+        return compare(solution, run_ccx(deck, threads=threads, workdir=workdir))
+
+
 def _check_springs(K: Any, c: np.ndarray, g: np.ndarray, tri: np.ndarray, n: int) -> None:
     """Raise CalculixError unless Σ c·g gᵀ equals rigfem's spring matrix ``K``."""
     import scipy.sparse as sp

@@ -54,7 +54,7 @@ def _nodal_stress(scalar: Basis, u: np.ndarray) -> np.ndarray:
     return acc / cnt[:, None]
 
 
-def _cantilever(L=200.0, h=10.0, nx=40, ny=3):
+def _cantilever(L=200.0, h=10.0, nx=30, ny=2):
     mesh = MeshTet.init_tensor(np.linspace(0, L, nx + 1), np.linspace(0, h, ny + 1), np.linspace(0, h, ny + 1))
     return mesh.with_boundaries({"root": lambda x: x[0] < 1e-9, "tip": lambda x: x[0] > L - 1e-9})
 
@@ -230,7 +230,7 @@ def test_rail_rigfem_vs_calculix(tmp_path):
     from rigfem.calculix import export_model
 
     holes = ("hole_00", "hole_01", "hole_10", "hole_11")
-    pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size=12.0, refine=holes, refine_size=4.0),
+    pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size=16.0, refine=holes, refine_size=5.0),
                    use_cache=False)
     model = build_model(pm, get_material("rig_steel"), order=2)
     supports = [ShaftInHole("hole_00"), ShaftInHole("hole_01")]
@@ -250,3 +250,25 @@ def test_rail_rigfem_vs_calculix(tmp_path):
         # the same model: every node agrees to the .frd's 5 significant digits
         assert np.abs(u_cx - u_fe).max() <= 1e-4 * np.abs(u_fe).max()
         assert np.abs(vm_cx - vm_fe).max() <= 1e-4 * vm_fe.max()
+
+
+@needs_ccx
+def test_cross_check_free_body(tmp_path):
+    """Self-equilibrated loads on a free box: ccx's 3-2-1 rigid motion is removed before comparing."""
+    from fe_shapes import box
+
+    from rigfem.calculix import cross_check
+    from rigfem.fe import build_model
+    from rigfem.loads import SurfaceForce
+    from rigfem.material import get_material
+    from rigfem.supports import FreeBody
+
+    model = build_model(box(60.0, 10.0, 8.0, 12, 2, 2), get_material("rig_steel"), order=2)
+    cases = [[SurfaceForce("xmin", (-500.0, 0.0, 0.0)), SurfaceForce("xmax", (500.0, 0.0, 0.0))],
+             [SurfaceForce("xmin", (0.0, 0.0, 100.0)), SurfaceForce("xmax", (0.0, 0.0, 100.0)),
+              SurfaceForce("zmin", (0.0, 0.0, -200.0))]]
+    result = cross_check(model, [FreeBody()], cases, workdir=tmp_path)
+    for c in result:
+        assert abs(c.peak_rel_diff) < 1e-4 and c.displacement_rel_diff < 1e-4
+    assert (tmp_path / "model.inp").is_file() and (tmp_path / "job.frd").is_file()
+    assert result[0].peak_von_mises == pytest.approx(500.0 / 80.0, rel=1e-9)  # uniform tension, exact in P2
