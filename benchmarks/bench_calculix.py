@@ -143,7 +143,8 @@ def _markdown(info: dict) -> str:
         f"Case: {info['case']}  ",
         f"Mesh: {m['nodes']} nodes, {m['tets']} C3D10, **{m['dof']} DOF** (size {m['size_mm']} mm, "
         f"{m['refine_size_mm']} mm on {', '.join(m['refine'])})  ",
-        f"Threads: {info['threads']} for both (rigfem solver: {info['rigfem_solver']}, relative residual {info['rigfem_residual']:.2g}; ccx: {info['ccx']})  ",
+        f"Threads: {info['threads']} for both (rigfem solver: {info['rigfem_solver']}, relative residual "
+        f"{info['rigfem_residual']:.2g}; ccx: {info['ccx']})  ",
         f"Machine: {info['machine']['cpu']}, {info['machine']['cores']} cores shared with other jobs, load average "
         f"{info['machine']['loadavg_start'][0]:.2f} at start, {info['machine']['loadavg_end'][0]:.2f} at end  ",
         f"Median of {info['repeats']} repeats, each repeat runs rigfem then ccx on the same exported deck.", "",

@@ -7,7 +7,11 @@ then the midside nodes of edges (0,1), (1,2), (0,2), (0,3), (1,3), (2,3) — exa
 what ``Basis(MeshTet, ElementTetP2()).element_dofs`` gives (scalar P2, one dof per
 node).  Negatively oriented tetrahedra are renumbered, never rejected.
 
-Stress arrays hold six components in the order xx, yy, zz, xy, yz, zx.
+Stress arrays hold six components in the order xx, yy, zz, xy, yz, zx (as rigfem's).
+The .frd holds 5 significant digits, so ccx and rigfem agree to about 1e-5 on the same model.
+
+:func:`export_model` writes a rigfem model (supports, load cases) as a deck and
+:func:`cross_check` solves it in both codes and compares them case by case.
 """
 
 from __future__ import annotations
@@ -26,7 +30,6 @@ import numpy as np
 
 from rigfem.errors import InputError, check_range
 
-#: ccx reads at most 20 characters per field: 14 significant digits fit
 #: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
 _FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}
 
@@ -99,6 +102,7 @@ def _orient(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
 
 
 def _lines(rows: np.ndarray, fmt: str) -> str:
+    """Rows formatted line by line (floats as %.14g: ccx reads at most 20 characters a field)."""
     return "".join(fmt % tuple(r) for r in rows.tolist())
 
 
@@ -386,7 +390,8 @@ def run_ccx(inp_path: str | os.PathLike, threads: int = 1, workdir: str | os.Pat
     """Run ccx on a deck in a temporary directory (or ``workdir``, kept) and read its results.
 
     ``threads`` sets OMP_NUM_THREADS and CCX_NPROC_* for the run.  Raises
-    :class:`CalculixError` with the tail of ccx's output when ccx fails.
+    :class:`CalculixError` with the tail of ccx's output when ccx fails.  Note that ccx
+    solves an unsupported (singular) model without complaint: rigfem's support check is the guard.
     """
     exe = shutil.which("ccx")
     if exe is None:
