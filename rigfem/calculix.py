@@ -259,6 +259,8 @@ def export_model(model: Any, supports: list, cases: list, path: str | os.PathLik
         nodes = np.vstack([data.nodes, pts])
         coef = np.sqrt(c / k0)[:, :, None, None] * g  # (P, 3 dirs, nloc, 3)
         sn, sd = [], []
+        unused = np.argwhere(c == 0.0)  # aux DOFs without a spring (unloaded half of a bearing side)
+        fixed = np.vstack([fixed, np.column_stack([aux[unused[:, 0]], unused[:, 1]])])
         for p in range(len(pts)):
             for d in range(3):
                 if c[p, d] == 0.0:

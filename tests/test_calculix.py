@@ -235,7 +235,8 @@ def test_rail_rigfem_vs_calculix(tmp_path):
     pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size=16.0, refine=holes, refine_size=5.0),
                    use_cache=False)
     model = build_model(pm, get_material("rig_steel"), order=2)
-    supports = [ShaftInHole("hole_00"), ShaftInHole("hole_01")]
+    # pins in the pivot holes; on hole_00 only the side the pin bears on (springs on half the wall)
+    supports = [ShaftInHole("hole_00", direction=(-1.0, 0.0, 0.0)), ShaftInHole("hole_01")]
     cases = [[BearingLoad("hole_10", (300.0, 200.0, 0.0)), BearingLoad("hole_11", (300.0, 200.0, 0.0))],
              [BearingLoad("hole_10", (-250.0, 0.0, 0.0)), BearingLoad("hole_11", (0.0, -250.0, 0.0))]]
     sol = fe_solve(model, supports, cases)
