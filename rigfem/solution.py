@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rigfem.stress import von_mises, zz_error
+from rigfem.stress import principal, von_mises, zz_error
 
 if TYPE_CHECKING:
     from rigfem.fe import Model
@@ -40,7 +40,8 @@ class Solution:
     reactions: np.ndarray  #: (3N, k) support forces on the part, K u − f
     nodal_stress: np.ndarray  #: (k, N, 6) Voigt xx, yy, zz, xy, yz, xz
     support_dofs: dict[str, np.ndarray]  #: support name -> its DOFs
-    residuals: np.ndarray  #: (k,) relative residual of each solve
+    residuals: np.ndarray  #: (k,) relative residual ‖Ku − f‖/‖f‖ of each solve (free DOFs)
+    backward_errors: np.ndarray  #: (k,) normwise backward error of each solve (checked ≤ rtol)
     method: str
     free_body: bool
     times: dict[str, float] = field(default_factory=dict)
@@ -64,6 +65,10 @@ class Solution:
     def von_mises(self, c=None) -> np.ndarray:
         """Nodal von Mises stress (N,) of the combination c."""
         return von_mises(self.stress(c))
+
+    def principal(self, c=None) -> np.ndarray:
+        """Nodal principal stresses (N, 3), descending, of the combination c."""
+        return principal(self.stress(c))
 
     def peak(self, c=None) -> Peak:
         """Peak nodal von Mises of the combination c, where it is and its error estimate."""
