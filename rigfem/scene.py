@@ -118,7 +118,6 @@ def linkage_from_table(t: dict) -> tuple[Linkage, float]:
         lk = builder(**kwargs)
     except TypeError as exc:
         raise InputError(f"[linkage] bad keys for type {typ!r}: {exc}") from None
-    lk.meta["scene_table"] = {k: v for k, v in t.items() if k in ("title", "notes", "instant_deg")}
     return lk, _speed(t)
 
 

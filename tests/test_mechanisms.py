@@ -186,3 +186,11 @@ def test_mech7_elliptical_trainer_transmission_and_advantage():
     k = fourbar_kinematics(b2, b3, b4, d, np.radians(h.crank_deg), 1.0, 1)
     ratio = b2 * np.sin(k["theta2"] - k["theta3"]) / (b4 * np.sin(k["theta4"] - k["theta3"]))
     assert np.allclose(h.bodies["rocker"].omega_rad_s / h.bodies["crank"].omega_rad_s, ratio, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", sorted(builtin_scenes()))
+def test_every_shipped_scene_solves_without_toggle(name):
+    s, h = _run(name, 72)
+    assert h.meta["singular"] is None and "warnings" not in h.meta
+    assert all(np.isfinite(j.force_N).all() for j in h.joints.values())
+    assert s.linkage.meta["type"] in ("four-bar", "slider-crank", "inverted-slider-crank", "quick-return")

@@ -84,10 +84,6 @@ def result_dict(h: ReactionHistory) -> dict:
     }
 
 
-def _fmt(v, spec: str) -> str:
-    return "-" if v is None else format(v, spec)
-
-
 def format_table(res: dict) -> str:
     """Readable table of a result dict."""
     out = []
@@ -111,8 +107,8 @@ def format_table(res: dict) -> str:
         if pk["singular"]:
             out.append(f"{name:10s} {'SINGULAR':>14s}  toggle near crank {sing_txt}: no finite peak")
         else:
-            out.append(f"{name:10s} {pk['force_N']:14.4f} {pk['crank_deg']:15.4f} {pk['fx_N']:12.4f} "
-                       f"{pk['fy_N']:12.4f}")
+            fx, fy = (round(v, 4) + 0.0 for v in (pk["fx_N"], pk["fy_N"]))     # no "-0.0000"
+            out.append(f"{name:10s} {pk['force_N']:14.4f} {pk['crank_deg']:15.4f} {fx:12.4f} {fy:12.4f}")
     key = "torque_Nm" if "torque_Nm" in res else "driver_force_N"
     tq = res[key]
     label = "peak driver torque (N·m)" if key == "torque_Nm" else "peak driver force (N)"
