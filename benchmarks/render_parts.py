@@ -20,15 +20,9 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from rigfem.mesh import DEFAULT_SIZE, MeshSettings, PartMesh, mesh_part  # noqa: E402
 from rigfem.parts import load_part, rail_hole_groups, rail_hole_x  # noqa: E402
+from rigfem.render import boundary_faces  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "parts"
-
-
-def boundary_faces(tets: np.ndarray) -> np.ndarray:
-    """Triangles that belong to exactly one tet."""
-    f = np.vstack([tets[:, [0, 2, 1]], tets[:, [0, 1, 3]], tets[:, [1, 2, 3]], tets[:, [0, 3, 2]]])
-    _, idx, cnt = np.unique(np.sort(f, axis=1), axis=0, return_index=True, return_counts=True)
-    return f[idx[cnt == 1]]
 
 
 def colour_of(name: str, loaded: set[str]) -> str:

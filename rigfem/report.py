@@ -76,6 +76,9 @@ def render_markdown(r: dict) -> str:
                   "verdict | Goodman n |", "|---|---|---|---|---|---|---|---|"]
         for p in rows:
             fat = p.get("fatigue")
+            if p.get("peak_mpa") is None:
+                lines.append(f"| {p['name']} ({p['part']}) | – | – | – | – | – | **{p['verdict']}** | – |")
+                continue
             lines.append(
                 f"| {p['name']} ({p['part']}) | {p['peak_mpa']:.1f} | {_fmt(p.get('crank_deg'), 1)} | "
                 f"{p['surface']} ({', '.join(f'{c:.1f}' for c in p['location_mm'])}) | "

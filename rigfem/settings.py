@@ -15,10 +15,9 @@ Every field is optional::
     bearing_directions = 12         # directions of the unit bearing loads (cycle mode)
     [check.fatigue]                 # Goodman check beside the σu/2 verdict
     surface = "machined"; reliability = 0.9; size_mm = 19.0
-    [check.rails]                   # rail length per bar, mm (default: RIG.md §3)
-    crank_rail = 700
 
-The parts of each linkage type, and the joints that load them, are :data:`PARTS`.
+The parts of each linkage type, and the joints that load them, are :data:`PARTS`.  Rail
+lengths come from the linkage (``[linkage] rails_mm``), so dynamics and FE use the same rails.
 """
 
 from __future__ import annotations
@@ -79,11 +78,14 @@ class CheckSettings:
 
 
 _KEYS = {"modes", "parts", "fidelity", "order", "size_mm", "local_size_mm", "material", "load_factor",
-         "limit_factor", "bearing_directions", "fatigue", "rails"}
+         "limit_factor", "bearing_directions", "fatigue"}
 
 
-def check_settings(table: dict, linkage_type: str) -> CheckSettings:
-    """Validate a scene's ``[check]`` table (may be empty) for a linkage of ``linkage_type``."""
+def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None = None) -> CheckSettings:
+    """Validate a scene's ``[check]`` table (may be empty) for a linkage of ``linkage_type``.
+
+    ``rails_mm``: the linkage's rail lengths in the order of its rails in :data:`PARTS`.
+    """
     unknown = sorted(set(table) - _KEYS)
     if unknown:
         raise InputError(f"[check] has unknown field(s) {', '.join(unknown)}; allowed: {', '.join(sorted(_KEYS))}")
@@ -91,12 +93,8 @@ def check_settings(table: dict, linkage_type: str) -> CheckSettings:
         raise InputError(f"linkage type {linkage_type!r} has no stress check yet; checkable types: "
                          f"{', '.join(PARTS)}")
     catalogue = {k: dict(v) for k, v in PARTS[linkage_type].items()}
-    rails = table.get("rails", {})
-    for name, length in rails.items():
-        if name not in catalogue or "length" not in catalogue[name]:
-            raise InputError(f"[check.rails] {name!r} is not a rail of a {linkage_type}; rails: "
-                             f"{', '.join(k for k, v in catalogue.items() if 'length' in v)}")
-        catalogue[name]["length"] = check_range(f"[check.rails] {name}", length, 100.0, 3000.0, "mm")
+    for name, length in zip([k for k, v in catalogue.items() if "length" in v], rails_mm or []):
+        catalogue[name]["length"] = check_range(f"[linkage] rails_mm ({name})", length, 100.0, 3000.0, "mm")
     chosen = table.get("parts", list(catalogue))
     bad = [p for p in chosen if p not in catalogue]
     if bad or not chosen:

@@ -15,6 +15,7 @@ from rigfem.errors import InputError
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
 COMMANDS: dict[str, str] = {
+    "check": "check",
     "mesh": "mesh",
     "parts": "parts",
     "reactions": "reactions",

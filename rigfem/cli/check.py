@@ -1,0 +1,70 @@
+"""``rigfem check``: pass/fail stress verdict per part for a rig configuration (a scene).
+
+Exit code 0 when every part passes, 1 when a part fails or cannot be decided, 2 on bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tomllib
+
+from rigfem.check import REFERENCE_SCENE, run_check
+from rigfem.report import EXIT
+from rigfem.scene import builtin_scenes
+
+HELP = "stress verdict (σu/2) per part of a rig configuration, with report, VTK files and plots"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", nargs="?", default=REFERENCE_SCENE,
+                   help=f"scene file (TOML) or built-in scene name (default {REFERENCE_SCENE})")
+    p.add_argument("--list", action="store_true", help="list the built-in scenes and exit")
+    p.add_argument("--out", metavar="DIR", help="result folder (default results/<scene>)")
+    p.add_argument("--force", action="store_true", help="replace an existing result folder")
+    p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene)")
+    p.add_argument("--order", type=int, help="element order 1 | 2")
+    p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
+    p.add_argument("--local-size", type=float, metavar="MM", help="mesh size at loaded interfaces (mm)")
+    p.add_argument("--modes", help="comma list: original,cycle")
+    p.add_argument("--parts", help="comma list of parts to check (default: all of the linkage)")
+    p.add_argument("--samples", type=int, help="crank angles per turn (default 360)")
+    p.add_argument("--model", help="mass model: rigid-body (default) or original")
+    p.add_argument("--frames", type=int, help="VTU frames of the cycle animation (default 12, 0 = none)")
+    p.add_argument("--solver", default="auto", help="auto | pardiso | superlu | amg")
+    p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _overrides(a: argparse.Namespace) -> dict:
+    o = {"fidelity": a.fidelity, "order": a.order, "size_mm": a.size, "local_size_mm": a.local_size,
+         "samples": a.samples, "mass_model": a.model, "frames": a.frames,
+         "modes": a.modes.split(",") if a.modes else None, "parts": a.parts.split(",") if a.parts else None}
+    return {k: v for k, v in o.items() if v is not None}
+
+
+def _summary(r: dict) -> str:
+    lines = [f"{r['scene']}: {r['description']}",
+             f"{'part':14s} {'mode':9s} {'peak σvm':>9s} {'crank°':>7s} {'error':>7s} {'util.':>7s}  verdict  where"]
+    for p in r["parts"]:
+        if p.get("peak_mpa") is None:
+            lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>9s} {'-':>7s} {'-':>7s} {'-':>7s}  "
+                         f"{p['verdict'].upper():7s}  {p['notes'][0]}")
+            continue
+        lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:9.1f} {p['crank_deg']:7.1f} "
+                     f"{p['error_pct']:6.1f}% {p['utilisation_pct']:6.1f}%  {p['verdict'].upper():7s}  "
+                     f"{p['surface']}")
+    lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa)")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list:
+        for name, path in sorted(builtin_scenes().items()):
+            data = tomllib.loads(path.read_text())
+            print(f"{name:32s} {data.get('description', data['linkage'].get('title', ''))}")
+        return 0
+    report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
+                       quiet=args.quiet, solver=args.solver)
+    print(json.dumps(report, indent=2) if args.json else _summary(report))
+    return EXIT[report["verdict"]]

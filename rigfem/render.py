@@ -1,0 +1,57 @@
+"""Pictures of a part's mesh and fields (matplotlib 3-D of the boundary triangles, headless)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+
+
+def boundary_faces(tets: np.ndarray) -> np.ndarray:
+    """Triangles (K, 3) that belong to exactly one tetrahedron, outward oriented."""
+    f = np.vstack([tets[:, [0, 2, 1]], tets[:, [0, 1, 3]], tets[:, [1, 2, 3]], tets[:, [0, 3, 2]]])
+    _, idx, cnt = np.unique(np.sort(f, axis=1), axis=0, return_index=True, return_counts=True)
+    return f[idx[cnt == 1]]
+
+
+def _panel(ax, verts: np.ndarray, vals: np.ndarray, norm, cmap, mark: np.ndarray) -> None:
+    colours = cmap(norm(vals))
+    ax.add_collection3d(Poly3DCollection(verts, facecolors=colours, edgecolors=colours, linewidths=0.1,
+                                         shade=True))
+    lo, hi = verts.reshape(-1, 3).min(0), verts.reshape(-1, 3).max(0)
+    ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(np.maximum(hi - lo, 0.12 * (hi - lo).max()))  # thin parts stay visible
+    ax.scatter(*mark, color="k", marker="x", s=60, depthshade=False)
+    ax.set_xlabel("x mm"), ax.set_ylabel("y mm"), ax.set_zlabel("z mm")
+
+
+def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path: str | Path,
+                  title: str, label: str = "von Mises (MPa)", zoom_mm: float = 40.0,
+                  view: tuple[float, float] = (30, -60)) -> Path:
+    """PNG of a nodal field on the part's surface: the whole part and a close-up of its peak."""
+    faces = boundary_faces(tets[:, :4])
+    verts = points[faces]
+    vals = values[faces].mean(axis=1)
+    peak = int(np.argmax(values))
+    norm = plt.Normalize(0.0, float(values.max()) or 1.0)
+    cmap = plt.get_cmap("turbo")
+    fig = plt.figure(figsize=(12, 5.5))
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    _panel(ax, verts, vals, norm, cmap, points[peak])
+    ax.view_init(*view)
+    ax.set_title(title, fontsize=9)
+    box = np.abs(verts - points[peak]).max(axis=(1, 2)) <= zoom_mm
+    ax = fig.add_subplot(1, 2, 2, projection="3d")
+    _panel(ax, verts[box], vals[box], norm, cmap, points[peak])
+    ax.view_init(*view)
+    ax.set_title(f"close-up ±{zoom_mm:g} mm around the peak {values[peak]:.1f} MPa (×)", fontsize=9)
+    fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, label=label)
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,84 @@
+"""``rigfem check`` end to end on small parts: report, VTU files, exit codes, refusals."""
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+
+from rigfem.check import read_report, run_check
+from rigfem.cli import main
+from rigfem.errors import InputError
+
+FAST = {"parts": ["plate_A"], "fidelity": "draft", "samples": 72, "frames": 3}
+
+
+@pytest.fixture(scope="module")
+def plate_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("check") / "final-cm"
+    return out, run_check("final-cm", out=out, overrides=FAST, quiet=True)
+
+
+def test_report_and_files(plate_report):
+    out, r = plate_report
+    assert r == read_report(out)
+    assert [(p["name"], p["mode"]) for p in r["parts"]] == [("plate_A", "original"), ("plate_A", "cycle")]
+    for p in r["parts"]:
+        assert p["verdict"] == "pass" and 0 < p["peak_mpa"] < p["limit_mpa"]
+        assert p["solve"]["residual_max"] < 1e-6 and p["solve"]["equilibrium_error"] < 1e-6
+    orig, cyc = r["parts"]
+    # original mode: the plate carries load factor x the peak pin force at A; cycle mode 1 x the force
+    assert orig["peak_mpa"] > cyc["peak_mpa"]
+    assert cyc["fatigue"]["safety_factor"] > 1
+    assert r["differences"] and r["differences"][0].startswith("plate_A: original")
+    for name in ("report.md", "reactions.png", "peak_von_mises.png", "plate_A_original.vtu",
+                 "plate_A_original.png", "plate_A_cycle.pvd", "plate_A_cycle_002.vtu"):
+        assert (out / name).is_file(), name
+    m = meshio.read(out / "plate_A_original.vtu")
+    assert {"displacement", "stress", "von_mises", "safety_factor"} <= set(m.point_data)
+    assert np.isclose(m.point_data["von_mises"].max(), orig["peak_mpa"], rtol=1e-6)
+    assert "plate_A_cycle_000.vtu" in (out / "plate_A_cycle.pvd").read_text()
+
+
+def test_existing_folder_is_not_overwritten(plate_report, capsys):
+    out, _ = plate_report
+    before = (out / "report.json").read_text()
+    with pytest.raises(InputError, match="--force"):
+        run_check("final-cm", out=out, overrides=FAST, quiet=True)
+    assert main(["check", "--out", str(out), "--parts", "plate_A"]) == 2
+    assert "already exists; pass --force" in capsys.readouterr().err
+    assert (out / "report.json").read_text() == before
+
+
+def test_failing_part_exits_1(tmp_path, capsys):
+    scene = tmp_path / "strict.toml"
+    scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\n'
+                     '[check]\nlimit_factor = 0.002\n')  # limit 1.5 MPa: the plate must fail
+    code = main(["check", str(scene), "--out", str(tmp_path / "o"), "--parts", "plate_A", "--modes",
+                 "original", "--fidelity", "draft", "--frames", "0", "--quiet"])
+    assert code == 1
+    assert "overall: FAIL" in capsys.readouterr().out
+    assert json.loads((tmp_path / "o" / "report.json").read_text())["verdict"] == "fail"
+
+
+def test_toggle_configuration_is_never_given_a_number(tmp_path):
+    scene = tmp_path / "toggle.toml"  # d + b2 = 1199 ≈ b3 + b4: μ reaches 175°
+    scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 300.0\nb3 = 600.0\nb4 = 600.0\nd = 899.0\n')
+    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True)
+    assert r["verdict"] == "fail" and r["singular"]
+    assert all(p["peak_mpa"] is None and "toggle" in p["notes"][0] for p in r["parts"])
+    assert "toggle" in (tmp_path / "o" / "report.md").read_text()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--parts", "wing"], "parts ['wing'] not allowed"),
+    (["--fidelity", "ultra"], "fidelity = 'ultra' must be one of draft, standard, fine"),
+    (["--size", "-1"], "size_mm = -1.0 mm is outside the allowed range"),
+    (["--model", "newtonian"], "mass_model = 'newtonian' must be one of"),
+    (["no-such-scene"], "neither a file nor a built-in scene"),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, args, message):
+    assert main(["check", *args, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
