@@ -396,38 +396,77 @@ def _guess_phase(lk: Linkage) -> float:
     return float(lk.guess[d.body][2] - d.offset_rad) if isinstance(d, CrankDriver) else 0.0
 
 
-def _continuation(model: _Model, theta_nodes: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray:
-    """Sequential continuation through ``theta_nodes`` (rad, in order); predictor dq/dtheta.
+#: continuation step acceptance: the corrector may move a body by at most this fraction of the
+#: linkage size (or this many radians) away from the prediction, so it cannot reach the other
+#: assembly branch unless the two are closer than that (i.e. at a flagged toggle)
+STEP_CORRECTION = 0.05
+#: steps below this (rad) are accepted as they come: the linkage passes (through) a toggle
+MIN_STEP = 1e-6
 
-    Steps are halved when Newton fails or moves far from the prediction (a possible
-    branch jump); a step that cannot be completed raises AssemblyError naming the angle.
+
+def _scaled(model: _Model) -> np.ndarray:
+    """Weights making q dimensionless: positions / linkage size, angles as they are."""
+    sc = np.ones(model.m)
+    sc[0::3] = sc[1::3] = 1.0 / model.scale
+    return sc
+
+
+def _continuation(model: _Model, theta_nodes: np.ndarray, q0: np.ndarray, tol: float,
+                  warnings: list[str] | None = None):
+    """Sequential continuation through ``theta_nodes`` (rad, in order).
+
+    Third-order predictor (q, q', q'' and q''' estimated from the previous step), Newton
+    corrector.  A step is accepted only if the corrector stays within ``STEP_CORRECTION``
+    of the prediction (position, and velocity times step) and the sign of det(Phi_q) is
+    unchanged — two assembly branches meet only where det(Phi_q) = 0, so a sign change
+    means a jump.  Otherwise the step is halved; steps below ``MIN_STEP`` mean the linkage
+    passes an exact toggle: the step is taken and a warning recorded.
+
+    Returns every accepted point (theta, q, q', q'') — derivatives per unit theta — and the
+    indices of ``theta_nodes`` among them.  AssemblyError where the loop cannot close.
     """
-    qs = np.empty((theta_nodes.size, model.m))
+    sc = _scaled(model)
     q, ok = _newton(model, q0[None], theta_nodes[:1], tol)
     if not ok[0]:
         raise AssemblyError(f"linkage cannot be assembled at crank angle {np.degrees(theta_nodes[0]):.2f} deg")
     q = q[0]
-    qs[0] = q
+    qd, qdd, J, _ = (x[0] for x in _rates(model, q[None], theta_nodes[:1], 1.0))
+    sign = np.sign(np.linalg.det(J))
+    q3 = np.zeros(model.m)
     th = theta_nodes[0]
+    out_th, out_q, out_qd, out_qdd, node_idx = [th], [q], [qd], [qdd], [0]
     for k in range(1, theta_nodes.size):
         target = theta_nodes[k]
         while th != target:
             h = target - th
             while True:
-                qd, qdd, *_ = _rates(model, q[None], np.array([th]), 1.0)
-                pred = q + qd[0] * h + 0.5 * qdd[0] * h * h
+                pred = q + h * (qd + h * (qdd / 2 + h * q3 / 6))
                 qn, okn = _newton(model, pred[None], np.array([th + h]), tol)
-                jump = np.max(np.abs(qn[0] - pred)) if okn[0] else np.inf
-                if okn[0] and jump < 0.02 * model.scale + 0.5 * np.max(np.abs(qd[0] * h)):
-                    break
-                h *= 0.5
-                if abs(h) < 1e-7:
+                if okn[0]:
+                    qdn, qddn, Jn, _ = (x[0] for x in _rates(model, qn, np.array([th + h]), 1.0))
+                    sgn = np.sign(np.linalg.det(Jn))
+                    dv = np.max(np.abs((qdn - qd - h * (qdd + h * q3 / 2)) * sc)) * abs(h)
+                    dp = np.max(np.abs((qn[0] - pred) * sc))
+                    if abs(h) < MIN_STEP or (dp <= STEP_CORRECTION and dv <= STEP_CORRECTION and sgn == sign):
+                        break
+                elif abs(h) < MIN_STEP:
                     raise AssemblyError(
-                        f"linkage cannot be assembled (or locks at a toggle) beyond crank angle "
-                        f"{np.degrees(th):.2f} deg, before {np.degrees(target):.2f} deg")
-            q, th = qn[0], th + h if abs(target - th - h) > 1e-15 else target
-        qs[k] = q
-    return qs
+                        f"linkage cannot be assembled beyond crank angle {np.degrees(th):.2f} deg "
+                        f"(before {np.degrees(target):.2f} deg)")
+                h *= 0.5
+            if abs(h) < MIN_STEP:
+                sign = sgn
+                if warnings is not None:
+                    warnings.append(f"the linkage passes a toggle near crank angle {np.degrees(th):.2f} deg")
+            q3 = (qddn - qdd) / h
+            q, qd, qdd = qn[0], qdn, qddn
+            th = th + h if abs(target - th - h) > 1e-15 else target
+            out_th.append(th)
+            out_q.append(q)
+            out_qd.append(qd)
+            out_qdd.append(qdd)
+        node_idx.append(len(out_th) - 1)
+    return (np.array(out_th), np.array(out_q), np.array(out_qd), np.array(out_qdd), np.array(node_idx))
 
 
 def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
@@ -450,19 +489,20 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     th_guess = _guess_phase(lk)
     if abs(th_guess - theta[0]) > 1e-12:
         # the guess describes the linkage at its own phase: continue from there to theta[0]
-        q0 = _continuation(model, np.array([th_guess, theta[0]]), q0, tol)[-1]
-    qc = _continuation(model, nodes, q0, tol)
+        q0 = _continuation(model, np.array([th_guess, theta[0]]), q0, tol)[1][-1]
     warnings: list[str] = []
+    th_c, qc, qdc, qddc, at = _continuation(model, nodes, q0, tol, warnings)
     if check_closure and is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
         # close the loop over the last step back to theta0 + 2 pi: same branch required
-        qend = _continuation(model, np.array([theta[-1], theta[0] + 2 * np.pi]), qc[-1], tol)[-1]
+        qend = _continuation(model, np.array([theta[-1], theta[0] + 2 * np.pi]), qc[-1], tol)[1][-1]
         diff = qend - qc[0]
         diff[2::3] = np.angle(np.exp(1j * diff[2::3]))
         if np.max(np.abs(diff)) > 1e3 * tol + 1e-6 * model.scale:
             warnings.append("the linkage does not return to its starting configuration after one "
                             "turn (branch change at a toggle)")
-    qdc, qddc, *_ = _rates(model, qc, nodes, 1.0)
-    state = (model, nodes, qc, qdc, qddc, warnings)
+    # every accepted continuation point serves the predictor (dense where the motion is fast)
+    sign_c = np.sign(np.linalg.det(model.jacobian(qc)))
+    state = (model, th_c, qc, qdc, qddc, warnings, sign_c)
     return _evaluate(lk, state, deg, speed_hz, tol)
 
 
@@ -487,18 +527,22 @@ def _predict(nodes, qc, qdc, qddc, theta):
 
 
 def _evaluate(lk: Linkage, state, deg: np.ndarray, speed_hz: float, tol: float) -> ReactionHistory:
-    model, nodes, qc, qdc, qddc, _ = state
+    model, nodes, qc, qdc, qddc, _, sign_c = state
     theta = np.radians(deg)
     pred, near, h = _predict(nodes, qc, qdc, qddc, theta)
     q, ok = _newton(model, pred, theta, tol)
-    far = np.max(np.abs(q - pred), axis=1) > 0.02 * model.scale + 0.5 * np.max(np.abs(qdc[near] * h), axis=1)
-    if not ok.all() or far.any():
-        # outside the coarse pass (or ill-conditioned): fall back to strict continuation
-        order = np.argsort(theta)
-        ext = np.concatenate([[nodes[near[order[0]]]], theta[order]])
-        q[order] = _continuation(model, ext, qc[near[order[0]]], tol)[1:]
     omega = 2 * np.pi * speed_hz
     qd, qdd, J, Jinv = _rates(model, q, theta, omega)
+    # same branch as the nearest continuation point: small correction, same sign of det
+    far = np.max(np.abs((q - pred) * _scaled(model)), axis=1) > STEP_CORRECTION
+    far |= np.sign(np.linalg.det(J)) != sign_c[near]
+    if not ok.all() or far.any():
+        # fall back to strict continuation through the samples (in order of angle)
+        order = np.argsort(theta)
+        ext = np.concatenate([[nodes[near[order[0]]]], theta[order]])
+        res = _continuation(model, ext, qc[near[order[0]]], tol)
+        q[order] = res[1][res[4][1:]]
+        qd, qdd, J, Jinv = _rates(model, q, theta, omega)
     return _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol)
 
 

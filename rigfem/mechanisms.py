@@ -42,6 +42,7 @@ RIG_MASSES = RigMasses()
 #: guide rail lengths of the final design (mm): crank, coupler, rocker
 RIG_RAILS_MM = (700.0, 1000.0, 1000.0)
 #: a four-bar sample is flagged as a toggle when mu is within this angle of 0 or 180 deg
+#: (a slider-crank when its rod is within this angle of perpendicular to the slide)
 MU_TOGGLE_DEG = 5.0
 MODELS = ("rigid-body", "original")
 
@@ -192,8 +193,13 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
     guess = {"crank": (0.0, 0.0, th), "rod": (ax, ay, np.arctan2(offset - ay, bx - ax)),
              "slider": (bx, offset, 0.0)}
     loads = [Load("slider", (0.0, 0.0), slider_force)] if slider_force is not None else []
+
+    def toggle(deg, bodies_h):
+        # rod within MU_TOGGLE_DEG of perpendicular to the slide: the crank cannot drive the slider
+        return np.abs(np.cos(bodies_h["rod"].angle_rad)) < np.sin(np.radians(MU_TOGGLE_DEG))
+
     meta = dict(type="slider-crank", lengths_mm=dict(b2=b2, b3=b3, offset=offset),
-                masses=masses or "custom")
+                masses=masses or "custom", singular_fn=toggle)
     return Linkage(bodies, joints, CrankDriver("crank"), guess, loads, gravity_mm_s2, meta)
 
 

@@ -243,3 +243,16 @@ def test_guess_at_another_angle_keeps_the_branch():
         h = solve(lk, deg)
         k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians(deg), 2 * np.pi, sgn)
         assert np.max(np.abs(_wrap(h.bodies["rocker"].angle_rad - k["theta4"]))) < 1e-10
+
+
+@pytest.mark.parametrize("offset", [590.0, 599.9])
+def test_near_toggle_slider_crank_keeps_its_branch(offset):
+    """b2 + offset just below b3: the two assembly branches nearly touch at crank 270 deg.
+    The slider must stay on the +x branch, x = Ax + sqrt(b3^2 - (e - Ay)^2), all the way round."""
+    h = simulate(slider_crank(300, 900, offset), samples=360)
+    th = np.radians(h.crank_deg)
+    x = 300 * np.cos(th) + np.sqrt(900**2 - (offset - 300 * np.sin(th)) ** 2)
+    assert np.allclose(h.bodies["slider"].origin_mm[:, 0], x, atol=1e-8)
+    assert "warnings" not in h.meta
+    # rod within 5 deg of perpendicular to the slide only for the tighter case
+    assert (h.meta["singular"] is not None) == (offset > 595.0)
