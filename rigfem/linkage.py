@@ -5,14 +5,17 @@ of its x axis, q = (x, y, phi) (SI inside: m, rad).  The ground is fixed at the
 origin with zero angle and has no coordinates.  With one driver constraint the
 constraint Jacobian Phi_q is square:
 
-* positions: Newton on Phi(q, theta) = 0, continuation in crank angle theta with a
-  second-order Taylor predictor and step halving, so the assembly branch never jumps;
+* positions: Newton on Phi(q, theta) = 0.  A sequential continuation in crank angle
+  theta (third-order predictor, step halving, sign of det(Phi_q) kept) follows one
+  assembly branch through the turn; all samples are then solved at once by Newton
+  from a quintic Hermite predictor through the continuation points, and checked to be
+  on the same branch;
 * velocities: Phi_q qdot = -Phi_t;  accelerations: Phi_q qddot = gamma;
 * inverse dynamics: Phi_q^T lambda = Q_ext - Q_inertia (Newton–Euler about the centre
   of mass of every body, point masses as particles), giving every joint reaction and
   the driver torque (or force).
 
-Every stage after the coarse continuation pass is vectorised over crank angles.
+Every stage after the continuation pass is vectorised over crank angles.
 The public interface is in mm, N, N·m, degrees (see ``rigfem.reactions``).
 """
 
@@ -491,7 +494,7 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
         # the guess describes the linkage at its own phase: continue from there to theta[0]
         q0 = _continuation(model, np.array([th_guess, theta[0]]), q0, tol)[1][-1]
     warnings: list[str] = []
-    th_c, qc, qdc, qddc, at = _continuation(model, nodes, q0, tol, warnings)
+    th_c, qc, qdc, qddc, _ = _continuation(model, nodes, q0, tol, warnings)
     if check_closure and is_full_turn(deg) and isinstance(lk.driver, CrankDriver):
         # close the loop over the last step back to theta0 + 2 pi: same branch required
         qend = _continuation(model, np.array([theta[-1], theta[0] + 2 * np.pi]), qc[-1], tol)[1][-1]
@@ -596,15 +599,11 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
         joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, fab, pos * 1000, mom,
                                       "revolute" if isinstance(j, Revolute) else "prismatic")
     dv = lk.driver
-    if isinstance(dv, CrankDriver):
-        drive = -lam[:, model.drow]                       # motor torque on the crank, N·m
-    else:
-        drive = -lam[:, model.drow]                       # actuator force on body_b along the axis, N
-        jn = lk.joints[model.jidx[dv.joint]]
-        if jn.name in joints:
-            # the actuator force acts along the slide; add it to that joint's reported force
-            u = fr[jn.name][2]
-            joints[jn.name].force_N = joints[jn.name].force_N + u * drive[:, None]
+    # motor torque on the crank (N·m), or actuator force on the slider along its axis (N)
+    drive = -lam[:, model.drow]
+    if isinstance(dv, SliderDriver):
+        # the actuator pushes along the slide: part of that joint's force by body_a on body_b
+        joints[dv.joint].force_N = joints[dv.joint].force_N + fr[dv.joint][2] * drive[:, None]
     # toggle detection: reciprocal condition number of the length-scaled Jacobian
     S = np.ones(model.m)
     S[0::3] = S[1::3] = model.scale
