@@ -403,6 +403,9 @@ def _guess_phase(lk: Linkage) -> float:
 #: linkage size (or this many radians) away from the prediction, so it cannot reach the other
 #: assembly branch unless the two are closer than that (i.e. at a flagged toggle)
 STEP_CORRECTION = 0.05
+#: largest corrector move (fraction of the linkage size, or rad) from the Hermite prediction
+#: accepted for a sample before falling back to sequential continuation through the samples
+SAMPLE_CORRECTION = 1e-3
 #: steps below this (rad) are accepted as they come: the linkage passes (through) a toggle
 MIN_STEP = 1e-6
 
@@ -504,8 +507,7 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
             warnings.append("the linkage does not return to its starting configuration after one "
                             "turn (branch change at a toggle)")
     # every accepted continuation point serves the predictor (dense where the motion is fast)
-    sign_c = np.sign(np.linalg.det(model.jacobian(qc)))
-    state = (model, th_c, qc, qdc, qddc, warnings, sign_c)
+    state = (model, th_c, qc, qdc, qddc, warnings)
     return _evaluate(lk, state, deg, speed_hz, tol)
 
 
@@ -530,15 +532,15 @@ def _predict(nodes, qc, qdc, qddc, theta):
 
 
 def _evaluate(lk: Linkage, state, deg: np.ndarray, speed_hz: float, tol: float) -> ReactionHistory:
-    model, nodes, qc, qdc, qddc, _, sign_c = state
+    model, nodes, qc, qdc, qddc, _ = state
     theta = np.radians(deg)
     pred, near, h = _predict(nodes, qc, qdc, qddc, theta)
     q, ok = _newton(model, pred, theta, tol)
     omega = 2 * np.pi * speed_hz
     qd, qdd, J, Jinv = _rates(model, q, theta, omega)
-    # same branch as the nearest continuation point: small correction, same sign of det
-    far = np.max(np.abs((q - pred) * _scaled(model)), axis=1) > STEP_CORRECTION
-    far |= np.sign(np.linalg.det(J)) != sign_c[near]
+    # same branch as the continuation points: the Hermite predictor is accurate to ~1e-5 of
+    # the linkage size, so a corrector moving further than SAMPLE_CORRECTION is suspect
+    far = np.max(np.abs((q - pred) * _scaled(model)), axis=1) > SAMPLE_CORRECTION
     if not ok.all() or far.any():
         # fall back to strict continuation through the samples (in order of angle)
         order = np.argsort(theta)

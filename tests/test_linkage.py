@@ -256,3 +256,14 @@ def test_near_toggle_slider_crank_keeps_its_branch(offset):
     assert "warnings" not in h.meta
     # rod within 5 deg of perpendicular to the slide only for the tighter case
     assert (h.meta["singular"] is not None) == (offset > 595.0)
+
+
+def test_evaluator_far_from_the_solved_range_falls_back_to_continuation():
+    """Solved on 0-90 deg only, then evaluated at 250 deg: the Taylor prediction is far off,
+    so the solver continues through to the sample and must land on the same branch."""
+    lk = four_bar(*REF)
+    h = solve(lk, np.linspace(0.0, 90.0, 10))
+    far = h.evaluator(np.array([250.0, 300.0]))
+    k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians([250.0, 300.0]), 2 * np.pi, 1)
+    assert np.allclose(_wrap(far.bodies["rocker"].angle_rad - k["theta4"]), 0.0, atol=1e-10)
+    assert np.allclose(far.bodies["coupler"].alpha_rad_s2, k["alpha3"], atol=1e-8)
