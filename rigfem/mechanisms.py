@@ -16,7 +16,7 @@ their joints; ``"original"`` — the 2013 program (four-bar only, ``rigfem.origi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -133,7 +133,8 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
         return np.sin(np.radians(mu)) < np.sin(np.radians(MU_TOGGLE_DEG))
 
     meta = dict(type="four-bar", lengths_mm=dict(b2=b2, b3=b3, b4=b4, d=d), branch=branch,
-                rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle, catalogue=catalogue)
+                rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle,
+                catalogue=asdict(catalogue))
     if coupler_point is not None:
         meta["coupler_point"] = dict(distance_mm=coupler_point[0], angle_deg=coupler_point[1])
     return Linkage(bodies, joints, CrankDriver("crank"), guess, gravity_mm_s2=gravity_mm_s2, meta=meta)
@@ -375,7 +376,7 @@ def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> Reaction
 
     def build(angles: np.ndarray) -> ReactionHistory:
         a = np.atleast_1d(np.asarray(angles, float))
-        r = original_reactions(b2, b3, b4, d, np.radians(a), speed_hz, lk.meta["catalogue"],
+        r = original_reactions(b2, b3, b4, d, np.radians(a), speed_hz, RigMasses(**lk.meta["catalogue"]),
                                tuple(lk.meta["rails_mm"]), branch=sgn)
         k = r["kin"]
         w2 = 2 * np.pi * speed_hz
