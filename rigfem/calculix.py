@@ -226,24 +226,32 @@ def _shaft_terms(fm: Any, hole: Any, s: Any, E: float) -> tuple[np.ndarray, ...]
     return pts.reshape(-1, 3), c.reshape(-1, 3), g.reshape(-1, 3, *g.shape[3:]), nodes.reshape(-1, tri.shape[1])
 
 
-def export_model(model: Any, supports: list, cases: list, path: str | os.PathLike,
+def export_model(model: Any, supports: list, cases: list | np.ndarray, path: str | os.PathLike,
                  heading: str = "rigfem model") -> Path:
     """Write rigfem's model (:class:`rigfem.fe.Model`, supports, load cases) as a ccx deck.
 
-    Same nodes, C3D10/C3D4 elements, fixed DOFs and consistent nodal loads (one *STEP per
-    case).  A ShaftInHole foundation is exported exactly: one auxiliary node per surface
-    quadrature point whose three DOFs are tied by *EQUATION to √(c/k0)·(g·u) of the hole
-    nodes and grounded by SPRING1 elements of stiffness k0.  FreeBody is exported as its
-    3-2-1 support; rigfem afterwards removes the rigid motion from its displacement, ccx
-    does not.  Auxiliary nodes come after the mesh nodes and have no results.
+    ``cases`` are rigfem load cases (as for :func:`rigfem.fe.solve`) or nodal loads
+    (3N, k), e.g. ``solution.F @ coef.T``.  Same nodes, C3D10/C3D4 elements, fixed DOFs and
+    consistent nodal loads (one *STEP per case).  A ShaftInHole foundation is exported
+    exactly: one auxiliary node per surface quadrature point whose three DOFs are tied by
+    *EQUATION to √(c/k0)·(g·u) of the hole nodes and grounded by SPRING1 elements of
+    stiffness k0.  FreeBody is exported as its 3-2-1 support; rigfem afterwards removes the
+    rigid motion from its displacement, ccx does not.  Auxiliary nodes come after the mesh
+    nodes and have no results.
     """
-    from rigfem.fe import export_data
-    from rigfem.supports import ShaftInHole
+    from rigfem.fe import load_matrix
+    from rigfem.supports import ShaftInHole, constraints
 
-    data = export_data(model, supports, cases)
-    fm, n = model.mesh, len(data.nodes)
-    fixed = np.column_stack([data.fixed_dofs // 3, data.fixed_dofs % 3])
-    nodes, equations, springs = data.nodes, [], None
+    fm, n = model.mesh, len(model.mesh.nodes)
+    fixed_dofs, spring_matrix, _ = constraints(fm, model.part.holes, supports, model.material.E)
+    if isinstance(cases, np.ndarray):
+        F = cases.reshape(len(cases), -1)
+        if F.shape[0] != fm.ndof:
+            raise InputError(f"cases: nodal loads must have {fm.ndof} rows (3 per node), got {cases.shape}")
+    else:
+        F = load_matrix(model, cases)
+    fixed = np.column_stack([fixed_dofs // 3, fixed_dofs % 3])
+    nodes, equations, springs = fm.nodes, [], None
     shafts = [s for s in supports if isinstance(s, ShaftInHole)]
     if shafts:
         parts = [_shaft_terms(fm, model.part.holes[s.hole], s, model.material.E) for s in shafts]
@@ -251,12 +259,12 @@ def export_model(model: Any, supports: list, cases: list, path: str | os.PathLik
         c = np.vstack([p[1] for p in parts])
         g = np.concatenate([p[2] for p in parts])
         tri = np.vstack([p[3] for p in parts])
-        _check_springs(data.springs, c, g, tri, data.nodes.shape[0])
+        _check_springs(spring_matrix, c, g, tri, n)
         keep = c.max(axis=1) > 0
         pts, c, g, tri = pts[keep], c[keep], g[keep], tri[keep]
         k0 = float(np.median(c[c > 0]))
         aux = n + np.arange(len(pts))
-        nodes = np.vstack([data.nodes, pts])
+        nodes = np.vstack([fm.nodes, pts])
         coef = np.sqrt(c / k0)[:, :, None, None] * g  # (P, 3 dirs, nloc, 3)
         sn, sd = [], []
         unused = np.argwhere(c == 0.0)  # aux DOFs without a spring (unloaded half of a bearing side)
@@ -272,8 +280,8 @@ def export_model(model: Any, supports: list, cases: list, path: str | os.PathLik
                 sd.append(d)
         springs = (np.array(sn), np.array(sd), np.full(len(sn), k0))
     pad = np.zeros((len(nodes) - n, 3))
-    loads = [np.vstack([data.loads[:, k].reshape(-1, 3), pad]) for k in range(data.loads.shape[1])]
-    return write_inp(path, nodes, data.elements, model.material, fixed, loads, equations, springs, heading)
+    loads = [np.vstack([F[:, k].reshape(-1, 3), pad]) for k in range(F.shape[1])]
+    return write_inp(path, nodes, fm.elements, model.material, fixed, loads, equations, springs, heading)
 
 
 @dataclass
@@ -288,20 +296,22 @@ class Comparison:
     displacement_rel_diff: float  #: max over nodes |u_ccx − u_rigfem| / max |u_rigfem|
 
 
-def compare(solution: Any, result: CcxResult) -> list[Comparison]:
+def compare(solution: Any, result: CcxResult, coef: np.ndarray | None = None) -> list[Comparison]:
     """Per load case differences between a rigfem :class:`~rigfem.solution.Solution` and ccx.
 
-    For a free body the rigid motion is removed from ccx's displacement as rigfem does.
+    ccx's case j is compared with the combination ``coef[j]`` of the solution's cases
+    (default: case j itself).  For a free body the rigid motion is removed from ccx's
+    displacement as rigfem does.
     """
     from rigfem.supports import rigid_modes
 
     x = solution.model.mesh.nodes
     n, k = len(x), solution.U.shape[1]
-    if result.displacement.shape[0] != k:
-        raise InputError(f"ccx result has {result.displacement.shape[0]} load cases, the solution {k}")
+    coef = np.eye(k) if coef is None else np.atleast_2d(np.asarray(coef, dtype=float))
+    if result.displacement.shape[0] != len(coef):
+        raise InputError(f"ccx result has {result.displacement.shape[0]} load cases, expected {len(coef)}")
     out = []
-    for j in range(k):
-        c = np.eye(k)[j]
+    for j, c in enumerate(coef):
         u_fe, u_cx = solution.displacement(c), result.displacement[j, :n]
         if solution.free_body:
             R = rigid_modes(x)
@@ -314,16 +324,23 @@ def compare(solution: Any, result: CcxResult) -> list[Comparison]:
     return out
 
 
-def cross_check(model: Any, supports: list, cases: list, solution: Any = None, threads: int = 1,
+def cross_check(model: Any, supports: list, cases: list | None = None, solution: Any = None,
+                coef: np.ndarray | None = None, threads: int = 1,
                 workdir: str | os.PathLike | None = None) -> list[Comparison]:
-    """Solve the model in rigfem (unless ``solution`` is given) and in ccx; compare per case."""
+    """Solve in rigfem (unless ``solution`` is given) and in ccx; compare case by case.
+
+    With ``solution`` and ``coef`` (m, k) — e.g. the critical crank angle of ``rigfem check``,
+    ``coef = case_result.coef[[row]]`` — ccx solves the m load combinations
+    ``solution.F @ coef.T`` instead of ``cases``.
+    """
     if solution is None:
         from rigfem.fe import solve
 
         solution = solve(model, supports, cases)
+    loads = cases if coef is None else solution.F @ np.atleast_2d(np.asarray(coef, dtype=float)).T
     with tempfile.TemporaryDirectory(prefix="rigfem-inp-") as tmp:
-        deck = export_model(model, supports, cases, Path(workdir or tmp) / "model.inp")
-        return compare(solution, run_ccx(deck, threads=threads, workdir=workdir))
+        deck = export_model(model, supports, loads, Path(workdir or tmp) / "model.inp")
+        return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
 
 
 def _check_springs(K: Any, c: np.ndarray, g: np.ndarray, tri: np.ndarray, n: int) -> None:

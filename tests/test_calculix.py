@@ -275,3 +275,10 @@ def test_cross_check_free_body(tmp_path):
         assert abs(c.peak_rel_diff) < 1e-4 and c.displacement_rel_diff < 1e-4
     assert (tmp_path / "model.inp").is_file() and (tmp_path / "job.frd").is_file()
     assert result[0].peak_von_mises == pytest.approx(500.0 / 80.0, rel=1e-9)  # uniform tension, exact in P2
+    # a load combination of an existing solution (how `rigfem check` superposes unit cases)
+    from rigfem.fe import solve as fe_solve
+
+    sol = fe_solve(model, [FreeBody()], cases)
+    (combo,) = cross_check(model, [FreeBody()], solution=sol, coef=np.array([[1.0, -0.5]]))
+    assert combo.peak_von_mises == pytest.approx(sol.von_mises(np.array([1.0, -0.5])).max())
+    assert abs(combo.peak_rel_diff) < 1e-4 and combo.displacement_rel_diff < 1e-4
