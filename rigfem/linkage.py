@@ -27,7 +27,8 @@ from typing import Callable
 import numpy as np
 
 from rigfem.errors import InputError
-from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, is_full_turn, singular_ranges
+from rigfem.reactions import (BodyHistory, JointHistory, ReactionHistory, is_full_turn, merge_ranges,
+                              singular_ranges)
 
 GROUND = "ground"
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
@@ -508,7 +509,12 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
                             "turn (branch change at a toggle)")
     # every accepted continuation point serves the predictor (dense where the motion is fast)
     state = (model, th_c, qc, qdc, qddc, warnings)
-    return _evaluate(lk, state, deg, speed_hz, tol)
+    h = _evaluate(lk, state, deg, speed_hz, tol)
+    # a toggle narrower than the sampling still shows at the (locally dense) continuation points
+    qd_c, qdd_c, J_c, Jinv_c = _rates(model, qc, th_c, 2 * np.pi * speed_hz)
+    probe = _dynamics(lk, model, state, np.degrees(th_c), qc, qd_c, qdd_c, J_c, Jinv_c, speed_hz, tol)
+    h.meta["singular"] = merge_ranges(h.meta["singular"], probe.meta["singular"])
+    return h
 
 
 def _predict(nodes, qc, qdc, qddc, theta):

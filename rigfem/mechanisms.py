@@ -24,7 +24,7 @@ import numpy as np
 from rigfem.errors import InputError
 from rigfem.linkage import (GROUND, AssemblyError, Body, CrankDriver, Linkage, Load, Prismatic,
                             Revolute, solve)
-from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, singular_ranges
+from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, merge_ranges, singular_ranges
 
 
 @dataclass(frozen=True)
@@ -410,5 +410,7 @@ def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> Reaction
                                singular_mask=bad if bad.any() else None)
 
     h = build(deg)
+    # toggles between the samples: the closed-form model is cheap on a 0.1 deg grid
+    h.meta["singular"] = merge_ranges(h.meta["singular"], build(crank_angles(3600)).meta["singular"])
     h.evaluator = build
     return h

@@ -85,6 +85,18 @@ def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list
     return ranges
 
 
+def merge_ranges(*lists: list[list[float]] | None) -> list[list[float]] | None:
+    """Union of crank-angle range lists (deg), overlapping ranges merged; None if empty."""
+    rs = sorted([list(r) for lst in lists if lst for r in lst])
+    out: list[list[float]] = []
+    for a, b in rs:
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return out or None
+
+
 def is_full_turn(deg: np.ndarray) -> bool:
     """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
     if deg.size < 4:
@@ -146,12 +158,14 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     Returns ``{joint: {force_N, crank_deg, fx_N, fy_N, singular}, ..., "torque":
     {peak, value, crank_deg, singular}}`` (N, deg, N·m; ``value`` is the signed torque).
     With ``refine`` each sampled maximum is refined by Brent's method on the history's
-    evaluator (the solver itself) or on a cubic spline of the samples.  If any sample is
-    flagged singular the peaks are unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
+    evaluator (the solver itself) or on a cubic spline of the samples.  If the history has a
+    toggle (``meta["singular"]``, a flagged sample, or one met while refining) the peaks are
+    unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
     deg = np.asarray(h.crank_deg, float)
     periodic = is_full_turn(deg)
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(deg.size, bool)
+    toggles = h.meta.get("singular")          # may also cover toggles between the samples
     ev = h.evaluator if h.evaluator is not None else (_spline_evaluator(h) if deg.size >= 4 else None)
     step = (deg[1] - deg[0]) if deg.size > 1 else 0.0
     out: dict = {}
@@ -161,21 +175,16 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
         best_x, best_f = float(deg[i_best]), float(vals[i_best])
         near = [i_best - 1, i_best, (i_best + 1) % deg.size] if periodic else \
             [i for i in (i_best - 1, i_best, i_best + 1) if 0 <= i < deg.size]
-        if mask[near].any():
-            entry = {"crank_deg": best_x, "singular": True}
-            if name == "torque":
-                entry.update(peak=None, value=None)
-            else:
-                entry.update(force_N=None, fx_N=None, fy_N=None)
-            out[name] = entry
-            continue
-        if refine and ev is not None and step != 0.0:
+        hit_toggle: list[float] = []
+        if refine and ev is not None and step != 0.0 and not mask[near].any() and not toggles:
             for i in _candidates(vals, periodic):
                 if mask[[i - 1, i, (i + 1) % deg.size]].any() or (not periodic and (i == 0 or i == deg.size - 1)):
                     continue
 
                 def f(x, name=name):
                     r = ev(np.array([x]))
+                    if r.singular_mask is not None and r.singular_mask[0]:
+                        hit_toggle.append(x)          # a toggle between samples
                     if name == "torque":
                         return float(abs(r.torque_Nm[0]))
                     return float(np.hypot(*r.joints[name].force_N[0]))
@@ -183,6 +192,16 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
                 x, fx = _refine_max(f, deg[i] - abs(step), deg[i] + abs(step))
                 if fx > best_f:
                     best_x, best_f = x, fx
+        if mask[near].any() or hit_toggle or toggles:
+            at = best_x if mask[i_best] else (hit_toggle[0] if hit_toggle else
+                                              (toggles[0][0] if toggles else best_x))
+            entry = {"crank_deg": at, "singular": True}
+            if name == "torque":
+                entry.update(peak=None, value=None)
+            else:
+                entry.update(force_N=None, fx_N=None, fy_N=None)
+            out[name] = entry
+            continue
         crank = float(np.mod(best_x, 360.0)) if periodic else best_x
         if name == "torque":
             val = float(ev(np.array([best_x])).torque_Nm[0]) if (refine and ev is not None) \

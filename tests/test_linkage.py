@@ -267,3 +267,15 @@ def test_evaluator_far_from_the_solved_range_falls_back_to_continuation():
     k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians([250.0, 300.0]), 2 * np.pi, 1)
     assert np.allclose(_wrap(far.bodies["rocker"].angle_rad - k["theta4"]), 0.0, atol=1e-10)
     assert np.allclose(far.bodies["coupler"].alpha_rad_s2, k["alpha3"], atol=1e-8)
+
+
+@pytest.mark.parametrize("model", ["rigid-body", "original"])
+def test_toggle_between_samples_is_still_flagged(model):
+    """9 samples (40 deg apart) straddle the near-toggle at crank 180 deg (mu -> 179.9 deg)."""
+    from rigfem.reactions import peaks
+
+    h = simulate(four_bar(540, 840, 780, 1079.99), samples=9, model=model)
+    assert h.singular_mask is None                       # no sample is near the toggle ...
+    lo, hi = h.meta["singular"][0]                       # ... but the range is reported
+    assert lo < 180.0 < hi
+    assert peaks(h)["B"]["force_N"] is None and peaks(h)["torque"]["peak"] is None
