@@ -121,14 +121,20 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path) -> None:
 
 def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int) -> list[str]:
     files = []
+    worst = {}
+    for r in results:  # one picture per part: its mode with the highest peak
+        if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
+            worst[r.case.name] = r
     for r in results:
         stem = f"{r.case.name}_{r.mode}"
         c = r.coef[r.row]
         write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
-        fm = r.solution.model.mesh
-        field_picture(fm.nodes, fm.elements, r.solution.von_mises(c), d / f"{stem}.png",
-                      f"{r.case.name} ({r.mode}): von Mises at crank {r.case.rows[r.row]:.1f}°")
-        files += [f"{stem}.vtu", f"{stem}.png"]
+        files.append(f"{stem}.vtu")
+        if worst[r.case.name] is r:
+            fm = r.solution.model.mesh
+            field_picture(fm.nodes, fm.elements, r.solution.von_mises(c), d / f"{r.case.name}.png",
+                          f"{r.case.name} ({r.mode} mode): von Mises at crank {r.case.rows[r.row]:.1f}°")
+            files.append(f"{r.case.name}.png")
         if r.mode == "cycle" and frames:
             rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
             series = []

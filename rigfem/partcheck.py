@@ -84,20 +84,28 @@ def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndar
     """Each load plus the rigid-acceleration inertia field that cancels its resultant.
 
     Returns the FE load cases, the resultants (6, k) that were relieved (force, moment about
-    the centroid) and each load's total absolute nodal force (k,), to judge a combination.
+    the centroid) and each load's force magnitude scale (k,), to judge a combination.  A
+    bearing load's resultant is exact by construction (its force through the hole centre), so
+    only body forces are integrated here.
     """
     x = model.mesh.nodes
     c = x.mean(0)
-    F = load_matrix(model, loads)
+    R = np.zeros((6, len(loads)))
+    body = [k for k, ld in enumerate(loads) if isinstance(ld, Inertia)]
+    if body:
+        R[:, body] = _resultants(x, load_matrix(model, [loads[k] for k in body]), c)
+    for k, ld in enumerate(loads):
+        if isinstance(ld, BearingLoad):
+            f = np.asarray(ld.force, float)
+            R[:3, k] = f
+            R[3:, k] = np.cross(np.asarray(model.part.holes[ld.hole].center, float) - c, f)
     unit = [Inertia(a0=tuple(e), origin=tuple(c)) for e in np.eye(3)]
     unit += [Inertia(alpha=tuple(e), origin=tuple(c)) for e in np.eye(3)]
     G = _resultants(x, load_matrix(model, unit), c)  # (6, 6): resultant per unit rigid acceleration
-    R = _resultants(x, F, c)
     acc = -np.linalg.solve(G, R)  # (6, k)
     cases = [[ld, Inertia(a0=tuple(a[:3]), alpha=tuple(a[3:]), origin=tuple(c))]
              for ld, a in zip(loads, acc.T)]
-    scale = np.linalg.norm(F.reshape(len(x), 3, -1), axis=1).sum(0)
-    return cases, R, scale
+    return cases, R, np.linalg.norm(R[:3], axis=0)
 
 
 @dataclasses.dataclass

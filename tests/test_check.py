@@ -32,7 +32,7 @@ def test_report_and_files(plate_report):
     assert cyc["fatigue"]["safety_factor"] > 1
     assert r["differences"] and r["differences"][0].startswith("plate_A: original")
     for name in ("report.md", "reactions.png", "peak_von_mises.png", "plate_A_original.vtu",
-                 "plate_A_original.png", "plate_A_cycle.pvd", "plate_A_cycle_002.vtu"):
+                 "plate_A.png", "plate_A_cycle.pvd", "plate_A_cycle_002.vtu"):
         assert (out / name).is_file(), name
     m = meshio.read(out / "plate_A_original.vtu")
     assert {"displacement", "stress", "von_mises", "safety_factor"} <= set(m.point_data)
