@@ -16,6 +16,7 @@ from rigfem.errors import InputError
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
 COMMANDS: dict[str, str] = {
     "check": "check",
+    "convergence": "convergence",
     "mesh": "mesh",
     "parts": "parts",
     "reactions": "reactions",

@@ -1,0 +1,189 @@
+"""``rigfem convergence``: h and p refinement of a check's peak von Mises, with Richardson extrapolation.
+
+``rigfem convergence final-cm`` studies every part of the scene; ``rigfem convergence plate_A``
+one part of the reference scene (final-cm).  Writes ``<part>.md``, ``<part>.json`` and an
+error-vs-time plot ``<part>.png`` per part under ``--out`` and rebuilds ``summary.md`` there from
+every study JSON in the folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from rigfem.check import REFERENCE_SCENE
+from rigfem.convergence import RATIO, TARGETS, scene_cases, study, to_json
+from rigfem.errors import InputError, check_range
+from rigfem.settings import FIDELITY, MODES, PARTS
+
+HELP = "mesh convergence (h and p) of each part's peak von Mises: Richardson limit, order, error vs time"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("target", nargs="?", default=REFERENCE_SCENE,
+                   help=f"scene (file or built-in name) or a part of {REFERENCE_SCENE} (e.g. plate_A)")
+    p.add_argument("--mode", help="original | cycle (default both)")
+    p.add_argument("--levels", default="4", help="h levels, 3..8 (default 4)")
+    p.add_argument("--ratio", default=str(RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
+    p.add_argument("--max-gib", default="12", help="refuse an h level predicted above this memory (GiB)")
+    p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
+    p.add_argument("--out", default="results/convergence", help="folder (default results/convergence)")
+
+
+def _fmt(v, spec: str = ".1f", none: str = "-") -> str:
+    return none if v is None else format(v, spec)
+
+
+def _pct(v) -> str:
+    return "-" if v is None else f"{100 * v:+.2f} %"
+
+
+def table(res: dict) -> str:
+    """Markdown table of a part's study: steps, then the extrapolation per mode and quantity."""
+    modes = list(res["modes"])
+    head = "| step | order | size mm | local mm | dirs | DOFs | time s | peak RSS MiB |"
+    head += "".join(f" {m} peak MPa | {m} error |" for m in modes)
+    lines = [f"## {res['part']} ({res['part_def']} {res['params'] or ''})", "", head,
+             "|" + "---|" * (8 + 2 * len(modes))]
+    for s in res["steps"]:
+        row = (f"| {s['label']} | P{s['order']} | {s['size_mm']:.3g} | {s['local_size_mm']:.3g} | "
+               f"{s['bearing_directions']} | {s['dofs']} | {s['seconds']:.1f} | {_fmt(s['peak_rss_mib'], '.0f')} |")
+        for m in modes:
+            row += f" {s['modes'][m]['peak_mpa']:.2f} | {_pct(res['modes'][m].get('peak_mpa', {}).get('errors', {}).get(s['label']))} |"
+        lines.append(row)
+    lines.append("")
+    for m in modes:
+        for qty, a in res["modes"][m].items():
+            ex = a.get("extrapolation")
+            what = "peak" if qty == "peak_mpa" else "peak away from the web-flange corners and clamped base"
+            if ex is None:
+                lines.append(f"- **{m}**, {what}: {a['note']}")
+                continue
+            where = res["steps"][-1]["modes"][m] if qty == "away_mpa" else \
+                [s for s in res["steps"] if s["kind"] == "h"][-1]["modes"][m]
+            orders = ", ".join(_fmt(o, ".2f") for o in ex["orders"])
+            if ex["converging"]:
+                lines.append(f"- **{m}**, {what}: extrapolated **{ex['limit']:.2f} MPa**, observed order "
+                             f"{_fmt(ex['order'], '.2f')} (triples coarse→fine: {orders}), GCI(finest) "
+                             f"{_pct(ex['gci'])}, asymptotic: {'yes' if ex['asymptotic'] else 'no'}"
+                             f"{'; ' + ex['note'] if ex['note'] else ''}; finest peak at {where['surface']} "
+                             f"{where['xyz']}")
+            else:
+                lines.append(f"- **{m}**, {what}: **NOT CONVERGING** — {ex['note']} (orders {orders}); "
+                             f"no extrapolated value, no preset can meet a target on it; finest peak at "
+                             f"{where['surface']} {where['xyz']}")
+    if res["refused"]:
+        lines.append(f"- memory guard refused: {'; '.join(res['refused'])}")
+    return "\n".join(lines) + "\n"
+
+
+def plot(res: dict, path: Path) -> None:
+    """Log-log |error| vs wall time per mode (peak values vs time when not converging)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    notes = []
+    for i, (m, qs) in enumerate(res["modes"].items()):
+        for qty, a in qs.items():
+            ex = a.get("extrapolation")
+            ls = "-" if qty == "peak_mpa" else "--"
+            tag = m if qty == "peak_mpa" else f"{m}, away from corners"
+            if not ex or not ex["converging"]:
+                notes.append(f"{tag}: NOT CONVERGING")
+                continue
+            hs = [s for s in res["steps"] if s["kind"] == "h"]
+            err = [max(abs(a["errors"][s["label"]]), 1e-6) * 100 for s in hs]
+            ax.loglog([s["seconds"] for s in hs], err, ls, marker="o", color=f"C{i}", label=f"{tag}: h, P2")
+            for s in res["steps"]:
+                if s["kind"] != "h":
+                    e = max(abs(a["errors"][s["label"]]), 1e-6) * 100
+                    ax.loglog(s["seconds"], e, "s" if s["kind"] == "preset" else "^", color=f"C{i}")
+                    ax.annotate(s["label"], (s["seconds"], e), fontsize=7)
+    for p, t in TARGETS.items():
+        ax.axhline(100 * t, color="grey", lw=0.6, ls=":")
+        ax.text(ax.get_xlim()[0] if ax.lines else 1, 100 * t, f" {p} target", fontsize=7, va="bottom")
+    ax.set_xlabel("wall time per step (s): mesh + assembly + solves + cycle sweep")
+    ax.set_ylabel("|error| vs extrapolated peak (%)")
+    ax.set_title(f"{res['part']}: peak von Mises error vs time" + (f"\n{'; '.join(notes)}" if notes else ""),
+                 fontsize="small")
+    if ax.lines:
+        ax.legend(fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def summary(results: list[dict]) -> str:
+    """summary.md: per part, mode and preset the cost and the error against the extrapolated peak."""
+    lines = ["# Convergence summary: what each preset costs and how accurate it is", "",
+             "Error = preset peak vs the Richardson-extrapolated peak of the h sequence (P2, three finest "
+             "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in TARGETS.items()) + ". "
+             "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
+             "Presets: " + "; ".join(f"{n}: P{f['order']}, {f['size_mm']:g}/{f['local_size_mm']:g} mm, "
+                                     f"{f['bearing_directions']} dirs" for n, f in FIDELITY.items()) + ".",
+             "", "| part | mode | extrapolated MPa | order | preset | time s | peak RSS MiB | DOFs | peak MPa | error | target met |",
+             "|---|---|---:|---:|---|---:|---:|---:|---:|---:|---|"]
+    for res in results:
+        for m, qs in res["modes"].items():
+            a = qs.get("peak_mpa", {})
+            ex = a.get("extrapolation")
+            lim = f"{ex['limit']:.2f}" if ex and ex["converging"] else "**not converging**"
+            order = _fmt(ex["order"], ".2f") if ex and ex["converging"] else "≤0/-"
+            for p, v in a.get("presets", {}).items():
+                met = "-" if v["meets"] is None else ("yes" if v["meets"] else "**no**")
+                if v["meets"] is None:
+                    met = "n/a (singular)"
+                lines.append(f"| {res['part']} | {m} | {lim} | {order} | {p} | {v['seconds']:.1f} | "
+                             f"{_fmt(v['peak_rss_mib'], '.0f')} | {v['dofs']} | {v['value']:.2f} | "
+                             f"{_pct(v['error'])} | {met} |")
+    return "\n".join(lines) + "\n"
+
+
+def _targets(target: str) -> tuple[str, list[str] | None]:
+    """(scene, parts) of a CLI target: a part of the reference scene, or a scene."""
+    ref = {p for parts in PARTS.values() for p in parts}
+    if target in ref:
+        return REFERENCE_SCENE, [target]
+    return target, None
+
+
+def _command(a: argparse.Namespace) -> str:
+    opts = [f"--mode {a.mode}" if a.mode else "", f"--levels {a.levels}" if a.levels != "4" else "",
+            f"--ratio {a.ratio}" if a.ratio != str(RATIO) else "", "--no-presets" if a.no_presets else "",
+            f"--max-gib {a.max_gib}" if a.max_gib != "12" else ""]
+    return " ".join(["rigfem convergence", a.target, *[o for o in opts if o]])
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.mode is not None and args.mode not in MODES:
+        raise InputError(f"--mode {args.mode!r} must be one of {', '.join(MODES)}")
+    levels = check_range("--levels", args.levels, 3, 8)
+    if levels != int(levels):
+        raise InputError(f"--levels = {args.levels!r} must be a whole number in [3, 8]")
+    ratio = check_range("--ratio", args.ratio, 1.1, 2.0)
+    max_gib = check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+    scene, parts = _targets(args.target)
+    settings, by_part = scene_cases(scene, parts, {"modes": [args.mode]} if args.mode else None)
+    out.mkdir(parents=True, exist_ok=True)
+    for name, cases in by_part.items():
+        res = study(cases, settings, int(levels), ratio, max_gib=max_gib, presets=not args.no_presets,
+                    progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
+        res["scene"] = scene
+        res["command"] = _command(args)
+        stem = name if args.mode is None else f"{name}_{args.mode}"
+        (out / f"{stem}.json").write_text(to_json(res))
+        md = table(res)
+        (out / f"{stem}.md").write_text(f"# Convergence: {scene} {name}\n\nCommand: `{res['command']}`\n\n{md}")
+        plot(res, out / f"{stem}.png")
+        print(md)
+    studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+    (out / "summary.md").write_text(summary([s for s in studies if "steps" in s]))
+    return 0
