@@ -118,7 +118,7 @@ def main() -> None:
     md = ["# Sample count vs peak error (rig four-bar, rigid-body model)", "",
           "Reference: 100 000 samples with refinement.  Error = worst over the four pin reactions "
           "and the torque.  'raw' is the plain sampled maximum; 'refined' is rigfem's peak "
-          "(Brent refinement of each sampled maximum on the solver itself).", "",
+          "(each sampled maximum refined on the solver itself, vectorised bracket zoom to 1e-7 deg).", "",
           "| samples | raw max rel. error | refined max rel. error | refined crank-angle error (deg) |",
           "|---:|---:|---:|---:|"]
     md += [f"| {r['samples']} | {r['raw_rel_err']:.2e} | {r['refined_rel_err']:.2e} | "

@@ -4,8 +4,8 @@ Units at this interface: crank angle in degrees, forces in N, torque in N·m, po
 in mm, accelerations in mm/s², inertia in kg·mm².  A history comes from the linkage
 solver (``rigfem.mechanisms.simulate``) or from an external CSV (``read_csv``).
 
-``peaks`` refines around each sampled maximum (Brent on the solver itself, or on a
-periodic cubic spline for an imported CSV) so the peak does not depend on sampling.
+``peaks`` refines around each sampled maximum (on the solver itself, or on a periodic
+cubic spline for an imported CSV) so the peak does not depend on sampling.
 When any sample is flagged singular (a toggle: reactions grow without bound there) no
 peak is reported as a plain number: ``force_N`` is ``None`` and ``singular`` is ``True``.
 """
@@ -19,7 +19,6 @@ from typing import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.optimize import minimize_scalar
 
 from rigfem.errors import InputError
 
@@ -106,11 +105,28 @@ def is_full_turn(deg: np.ndarray) -> bool:
                 and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)
 
 
-def _refine_max(fun: Callable[[float], float], lo: float, hi: float) -> tuple[float, float]:
-    """Maximise the scalar ``fun`` on [lo, hi] (deg) by bounded Brent; return (x, f)."""
-    res = minimize_scalar(lambda x: -fun(x), bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-9 * max(1.0, abs(hi))})
-    return float(res.x), float(-res.fun)
+def _zoom_max(ev: Callable[[np.ndarray], "ReactionHistory"], names: list[str], lo: np.ndarray,
+              hi: np.ndarray, xatol: float = 1e-7, k: int = 17):
+    """Maximise |F| of joint ``names[c]`` (or |torque|) on each bracket [lo[c], hi[c]] (deg).
+
+    All brackets are searched together: each round evaluates ``k`` evenly spaced angles per
+    bracket in one vectorised solver call and keeps the two spacings around the best, so
+    the bracket shrinks by (k - 1) / 2 per round down to ``xatol``.  Returns (x, f, toggle),
+    toggle = the first angle met where the solver flags a toggle, or None.
+    """
+    t = np.linspace(0.0, 1.0, k)
+    rows = np.arange(lo.size)
+    while True:
+        xs = lo[:, None] + (hi - lo)[:, None] * t
+        r = ev(xs.ravel())
+        if r.singular_mask is not None and r.singular_mask.any():
+            return None, None, float(xs.ravel()[np.argmax(r.singular_mask)])
+        ser = _series(r)
+        vals = np.stack([ser[n].reshape(xs.shape)[c] for c, n in enumerate(names)])
+        j = np.argmax(vals, axis=1)
+        if np.max(hi - lo) < xatol:
+            return xs[rows, j], vals[rows, j], None
+        lo, hi = xs[rows, np.maximum(j - 1, 0)], xs[rows, np.minimum(j + 1, k - 1)]
 
 
 def _candidates(vals: np.ndarray, periodic: bool) -> list[int]:
@@ -157,61 +173,55 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
 
     Returns ``{joint: {force_N, crank_deg, fx_N, fy_N, singular}, ..., "torque":
     {peak, value, crank_deg, singular}}`` (N, deg, N·m; ``value`` is the signed torque).
-    With ``refine`` each sampled maximum is refined by Brent's method on the history's
-    evaluator (the solver itself) or on a cubic spline of the samples.  If the history has a
-    toggle (``meta["singular"]``, a flagged sample, or one met while refining) the peaks are
+    With ``refine`` every sampled local maximum near the top is refined on the history's
+    evaluator (the solver itself, or a cubic spline of imported samples) down to 1e-7 deg,
+    so the result does not depend on the sampling.  If the history has a toggle
+    (``meta["singular"]``, a flagged sample, or one met while refining) the peaks are
     unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
     deg = np.asarray(h.crank_deg, float)
     periodic = is_full_turn(deg)
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(deg.size, bool)
-    toggles = h.meta.get("singular")          # may also cover toggles between the samples
+    toggle = h.meta.get("singular")[0][0] if h.meta.get("singular") else None
+    if toggle is None and mask.any():
+        toggle = float(deg[np.argmax(mask)])
     ev = h.evaluator if h.evaluator is not None else (_spline_evaluator(h) if deg.size >= 4 else None)
-    step = (deg[1] - deg[0]) if deg.size > 1 else 0.0
+    step = abs(deg[1] - deg[0]) if deg.size > 1 else 0.0
+    series = _series(h)
+    best = {n: (float(deg[int(np.argmax(v))]), float(np.max(v))) for n, v in series.items()}
+    if toggle is None and refine and ev is not None and step > 0.0:
+        cand = [(n, i) for n, v in series.items() for i in _candidates(v, periodic)
+                if periodic or 0 < i < deg.size - 1]
+        if cand:
+            names = [n for n, _ in cand]
+            centre = np.array([deg[i] for _, i in cand])
+            xs, fs, toggle = _zoom_max(ev, names, centre - step, centre + step)
+            if toggle is None:
+                for n, x, f in zip(names, xs, fs):
+                    if f > best[n][1]:
+                        best[n] = (float(x), float(f))
     out: dict = {}
-    for name, vals in _series(h).items():
-        # a flagged (toggle) sample is unbounded: a peak next to or inside one is no number
-        i_best = int(np.argmax(np.where(mask, np.inf, vals)))
-        best_x, best_f = float(deg[i_best]), float(vals[i_best])
-        near = [i_best - 1, i_best, (i_best + 1) % deg.size] if periodic else \
-            [i for i in (i_best - 1, i_best, i_best + 1) if 0 <= i < deg.size]
-        hit_toggle: list[float] = []
-        if refine and ev is not None and step != 0.0 and not mask[near].any() and not toggles:
-            for i in _candidates(vals, periodic):
-                if mask[[i - 1, i, (i + 1) % deg.size]].any() or (not periodic and (i == 0 or i == deg.size - 1)):
-                    continue
-
-                def f(x, name=name):
-                    r = ev(np.array([x]))
-                    if r.singular_mask is not None and r.singular_mask[0]:
-                        hit_toggle.append(x)          # a toggle between samples
-                    if name == "torque":
-                        return float(abs(r.torque_Nm[0]))
-                    return float(np.hypot(*r.joints[name].force_N[0]))
-
-                x, fx = _refine_max(f, deg[i] - abs(step), deg[i] + abs(step))
-                if fx > best_f:
-                    best_x, best_f = x, fx
-        if mask[near].any() or hit_toggle or toggles:
-            at = best_x if mask[i_best] else (hit_toggle[0] if hit_toggle else
-                                              (toggles[0][0] if toggles else best_x))
-            entry = {"crank_deg": at, "singular": True}
-            if name == "torque":
-                entry.update(peak=None, value=None)
-            else:
-                entry.update(force_N=None, fx_N=None, fy_N=None)
-            out[name] = entry
-            continue
-        crank = float(np.mod(best_x, 360.0)) if periodic else best_x
-        if name == "torque":
-            val = float(ev(np.array([best_x])).torque_Nm[0]) if (refine and ev is not None) \
-                else float(h.torque_Nm[i_best])
-            out[name] = {"peak": best_f, "value": val, "crank_deg": crank, "singular": False}
+    if toggle is not None:
+        for n in series:
+            none = dict(peak=None, value=None) if n == "torque" else dict(force_N=None, fx_N=None, fy_N=None)
+            out[n] = {"crank_deg": toggle, "singular": True, **none}
+        return out
+    at = np.array([best[n][0] for n in series])
+    if refine and ev is not None:
+        r = ev(at)
+        vecs = {n: r.joints[n].force_N[k] for k, n in enumerate(series) if n != "torque"}
+        tq = float(r.torque_Nm[list(series).index("torque")])
+    else:
+        idx = {n: int(np.argmax(v)) for n, v in series.items()}
+        vecs = {n: h.joints[n].force_N[idx[n]] for n in series if n != "torque"}
+        tq = float(h.torque_Nm[idx["torque"]])
+    for n, (x, f) in best.items():
+        crank = float(np.mod(x, 360.0)) if periodic else x
+        if n == "torque":
+            out[n] = {"peak": f, "value": tq, "crank_deg": crank, "singular": False}
         else:
-            fvec = ev(np.array([best_x])).joints[name].force_N[0] if (refine and ev is not None) \
-                else h.joints[name].force_N[i_best]
-            out[name] = {"force_N": best_f, "crank_deg": crank, "fx_N": float(fvec[0]),
-                         "fy_N": float(fvec[1]), "singular": False}
+            out[n] = {"force_N": f, "crank_deg": crank, "fx_N": float(vecs[n][0]), "fy_N": float(vecs[n][1]),
+                      "singular": False}
     return out
 
 
