@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -341,6 +342,32 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
     with tempfile.TemporaryDirectory(prefix="rigfem-inp-") as tmp:
         deck = export_model(model, supports, loads, Path(workdir or tmp) / "model.inp")
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
+
+
+def verify_scene(name: str | os.PathLike, overrides: dict | None = None, threads: int = 1,
+                 solver: str = "auto") -> list[dict]:
+    """``rigfem check``'s part cases of a scene, each critical load combination re-solved by ccx.
+
+    One entry per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
+    :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.
+    """
+    from rigfem.check import load_check_scene
+    from rigfem.loadcases import part_cases
+    from rigfem.mechanisms import simulate
+    from rigfem.partcheck import solve_cases, supports_of
+    from rigfem.reactions import peaks
+
+    cs = load_check_scene(name, overrides)
+    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
+    if h.meta.get("singular"):
+        return []
+    out = []
+    for r in solve_cases(part_cases(h, peaks(h), cs.settings), cs.settings, solver=solver):
+        (c,) = cross_check(r.solution.model, supports_of(r.case), solution=r.solution, coef=r.coef[[r.row]],
+                           threads=threads)
+        out.append({"part": r.case.name, "mode": r.mode, "dof": int(r.solution.model.mesh.ndof),
+                    **dataclasses.asdict(c)})
+    return out
 
 
 def _check_springs(K: Any, c: np.ndarray, g: np.ndarray, tri: np.ndarray, n: int) -> None:

@@ -282,3 +282,15 @@ def test_cross_check_free_body(tmp_path):
     (combo,) = cross_check(model, [FreeBody()], solution=sol, coef=np.array([[1.0, -0.5]]))
     assert combo.peak_von_mises == pytest.approx(sol.von_mises(np.array([1.0, -0.5])).max())
     assert abs(combo.peak_rel_diff) < 1e-4 and combo.displacement_rel_diff < 1e-4
+
+
+@needs_ccx
+@pytest.mark.heavy
+def test_reference_scene_against_calculix():
+    """Every part case of `rigfem check final-cm` (draft): peak von Mises 1 %, displacement 0.5 %."""
+    from rigfem.calculix import verify_scene
+
+    rows = verify_scene("final-cm", {"fidelity": "draft"})
+    assert len(rows) >= 6
+    for r in rows:
+        assert abs(r["peak_rel_diff"]) < 1e-2 and r["displacement_rel_diff"] < 5e-3, r
