@@ -31,6 +31,7 @@ from rigfem.reactions import (BodyHistory, JointHistory, ReactionHistory, is_ful
                               singular_ranges)
 
 GROUND = "ground"
+_ZERO2, _ZERO1 = np.zeros((1, 2)), np.zeros(1)        # the ground's pose, broadcast over samples
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
 #: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
 #: builder adds its own mu criterion, mechanisms.MU_TOGGLE_DEG)
@@ -196,10 +197,9 @@ class _Model:
 
     # -- pose access
     def pose(self, q: np.ndarray, body: str):
-        """(r (n,2), phi (n,)) of a body; ground -> zeros."""
+        """(r (n,2), phi (n,)) of a body; ground -> zeros of shape (1, 2), (1,) (broadcasting)."""
         if body == GROUND:
-            n = q.shape[0]
-            return np.zeros((n, 2)), np.zeros(n)
+            return _ZERO2, _ZERO1
         i = 3 * self.index[body]
         return q[:, i:i + 2], q[:, i + 2]
 
@@ -223,7 +223,7 @@ class _Model:
 
         def rot(body, s):
             if body == GROUND:
-                return np.broadcast_to(s, (n_s, 2))
+                return s[None, :]
             k = self.index[body]
             out = np.empty((n_s, 2))
             out[:, 0] = C[:, k] * s[0] - S[:, k] * s[1]
@@ -604,7 +604,8 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
         for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
             if bn != GROUND:
                 bodies_out[bn].joint_local_mm[j.name] = np.asarray(loc, float)
-        joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, fab, pos * 1000, mom,
+        pos = np.broadcast_to(pos, (n, 2)) * 1000
+        joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, fab, pos, mom,
                                       "revolute" if isinstance(j, Revolute) else "prismatic")
     dv = lk.driver
     # motor torque on the crank (N·m), or actuator force on the slider along its axis (N)

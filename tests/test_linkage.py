@@ -279,3 +279,17 @@ def test_toggle_between_samples_is_still_flagged(model):
     lo, hi = h.meta["singular"][0]                       # ... but the range is reported
     assert lo < 180.0 < hi
     assert peaks(h)["B"]["force_N"] is None and peaks(h)["torque"]["peak"] is None
+
+
+def test_joint_direction_convention():
+    """Naming the ground as body_b flips the reported force (force BY body_a ON body_b)."""
+    from rigfem.linkage import Revolute
+
+    lk = four_bar(*REF)
+    h = solve(lk, crank_angles(24))
+    lk2 = four_bar(*REF)
+    lk2.joints[3] = Revolute("O4", "rocker", "ground", (0.0, 0.0), (REF[3], 0.0))
+    h2 = solve(lk2, crank_angles(24))
+    assert np.allclose(h2.joints["O4"].force_N, -h.joints["O4"].force_N, atol=1e-9)
+    assert np.allclose(h2.joints["O4"].position_mm, [REF[3], 0.0])
+    assert np.allclose(h2.torque_Nm, h.torque_Nm, atol=1e-9)
