@@ -6,8 +6,10 @@ solver (``rigfem.mechanisms.simulate``) or from an external CSV (``read_csv``).
 
 ``peaks`` refines around each sampled maximum (on the solver itself, or on a periodic
 cubic spline for an imported CSV) so the peak does not depend on sampling.
-When any sample is flagged singular (a toggle: reactions grow without bound there) no
-peak is reported as a plain number: ``force_N`` is ``None`` and ``singular`` is ``True``.
+When the history has a toggle (``meta["singular"]``: reactions grow without bound there)
+no peak is reported as a plain number: ``force_N`` is ``None`` and ``singular`` is ``True``.
+A driven slider's history carries the driver force (N) in ``torque_Nm``; ``meta["driver_unit"]``
+says which.
 """
 
 from __future__ import annotations
@@ -39,7 +41,9 @@ class JointHistory:
 
 @dataclass
 class BodyHistory:
-    """Motion and mass data of one moving body (frame origin at its first joint)."""
+    """Motion and mass data of one moving body (frame origin at its first joint, a bar's x
+    axis towards its second joint).  ``mass_kg``/``com_local_mm``/``inertia_com_kg_mm2`` are the
+    body's own (e.g. the guide rail); ``point_masses`` the particles it carries."""
 
     name: str
     angle_rad: np.ndarray
