@@ -121,8 +121,8 @@ def richardson(h: Sequence[float], q: Sequence[float]) -> Extrapolation:
     limit = q[-1] + (q[-1] - q[-2]) / (r32 ** p - 1.0)
     gci = 1.25 * abs((q[-1] - q[-2]) / q[-1]) / (r32 ** p - 1.0) if q[-1] else None
     asym = len(q) >= 4 and clean[-2] is not None and clean[-2] > 0 and abs(clean[-2] - p) <= 0.3 * p
-    note = "" if asym else ("order of the previous triple differs: not yet in the asymptotic range, "
-                            "extrapolation uncertain" if len(q) >= 4 else "3 levels: asymptotic range unchecked")
+    note = "" if asym else "3 levels: asymptotic range unchecked" if len(q) < 4 else \
+        "order of the previous triple differs: not yet in the asymptotic range, extrapolation uncertain"
     return Extrapolation(True, limit, p, clean, asym, gci, note)
 
 
@@ -255,17 +255,23 @@ def study(cases: list, settings, levels: int = 4, ratio: float = RATIO, modes: S
         if progress:
             progress(name, spec.label)
         steps.append(run_step(cases, settings, spec, isolate))
-    hs = [s for s in steps if s["kind"] == "h"]
     if presets:
         for spec in preset_steps():
             if progress:
                 progress(name, spec.label)
             steps.append(run_step(cases, settings, spec, isolate))
     out = {"part": name, "part_def": cases[0][1].part, "params": cases[0][1].params, "ratio": ratio,
-           "h_directions": H_DIRECTIONS, "steps": steps, "refused": refused, "modes": {}}
-    for mode in [m for m, _ in cases]:
-        out["modes"][mode] = _analyse(hs, steps, mode, finest is None and order == 2)
-    return out
+           "h_directions": H_DIRECTIONS, "fine_is_finest": finest is None and order == 2, "steps": steps,
+           "refused": refused}
+    return analyse(out)
+
+
+def analyse(res: dict) -> dict:
+    """(Re)compute a study's extrapolation and errors per mode from its steps (in place)."""
+    hs = [s for s in res["steps"] if s["kind"] == "h"]
+    fine = res.get("fine_is_finest", True)
+    res["modes"] = {m: _analyse(hs, res["steps"], m, fine) for m in res["steps"][0]["modes"]}
+    return res
 
 
 def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool) -> dict:
@@ -279,19 +285,24 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool)
             continue
         ex = richardson([s["local_size_mm"] for s in hs], [s["modes"][mode][qty] for s in hs])
         errors, presets = {}, {}
+        # oscillating: the reference *is* the finest level, whose own error is only known as ± gci
+        own = ex.converging and ex.order is None and (ex.gci or 0.0) > 0.0
         for s in steps:
             q = s["modes"][mode][qty]
-            errors[s["label"]] = (q - ex.limit) / ex.limit if ex.converging and ex.limit else None
+            ok = ex.converging and ex.limit and not (own and s is hs[-1])
+            errors[s["label"]] = (q - ex.limit) / ex.limit if ok else None
         named = {s["label"]: s for s in steps if s["kind"] == "preset"}
         if fine_is_finest:
             named["fine"] = hs[-1]
         for p, tol in TARGETS.items():
             if p in named:
                 e = errors[named[p]["label"]]
+                bound = ex.gci if (e is None and own and named[p] is hs[-1]) else None
                 presets[p] = {"step": named[p]["label"], "seconds": named[p]["seconds"],
                               "peak_rss_mib": named[p]["peak_rss_mib"], "dofs": named[p]["dofs"],
-                              "value": named[p]["modes"][mode][qty], "error": e, "target": tol,
-                              "meets": None if e is None else abs(e) <= tol}
+                              "value": named[p]["modes"][mode][qty], "error": e, "error_bound": bound,
+                              "target": tol, "meets": (abs(e) <= tol if e is not None else
+                                                       bound <= tol if bound is not None else None)}
         res[qty] = {"extrapolation": ex.as_dict(), "errors": errors, "presets": presets}
     return res
 

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE
-from rigfem.convergence import RATIO, TARGETS, scene_cases, study, to_json
+from rigfem.convergence import AWAY_MM, RATIO, TARGETS, analyse, scene_cases, study, to_json
 from rigfem.errors import InputError, check_range
 from rigfem.settings import FIDELITY, MODES, PARTS
 
@@ -30,6 +30,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-gib", default="12", help="refuse an h level predicted above this memory (GiB)")
     p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
     p.add_argument("--out", default="results/convergence", help="folder (default results/convergence)")
+    p.add_argument("--render", action="store_true",
+                   help="no computing: re-analyse the study JSONs in --out and rewrite tables, plots, summary")
 
 
 def _fmt(v, spec: str = ".1f", none: str = "-") -> str:
@@ -42,19 +44,23 @@ def _pct(v) -> str:
 
 def table(res: dict) -> str:
     """Markdown table of a part's study: steps, then the extrapolation per mode and quantity."""
-    modes = list(res["modes"])
+    cols = [(m, q) for m in res["modes"] for q in res["modes"][m]]
+    name = {"peak_mpa": "peak", "away_mpa": "away"}
     head = "| step | order | size mm | local mm | dirs | DOFs | time s | peak RSS MiB |"
-    head += "".join(f" {m} peak MPa | {m} error |" for m in modes)
+    head += "".join(f" {m} {name[q]} MPa | error |" for m, q in cols)
     lines = [f"## {res['part']} ({res['part_def']} {res['params'] or ''})", "", head,
-             "|" + "---|" * (8 + 2 * len(modes))]
+             "|" + "---|" * (8 + 2 * len(cols))]
     for s in res["steps"]:
         row = (f"| {s['label']} | P{s['order']} | {s['size_mm']:.3g} | {s['local_size_mm']:.3g} | "
-               f"{s['bearing_directions']} | {s['dofs']} | {s['seconds']:.1f} | {_fmt(s['peak_rss_mib'], '.0f')} |")
-        for m in modes:
-            row += f" {s['modes'][m]['peak_mpa']:.2f} | {_pct(res['modes'][m].get('peak_mpa', {}).get('errors', {}).get(s['label']))} |"
+               f"{s['bearing_directions']} | {s['dofs']} | {s['seconds']:.1f} | "
+               f"{_fmt(s['peak_rss_mib'], '.0f')} |")
+        for m, q in cols:
+            err = res["modes"][m][q].get("errors", {}).get(s["label"])
+            row += f" {s['modes'][m][q]:.2f} | {_pct(err)} |"
         lines.append(row)
-    lines.append("")
-    for m in modes:
+    lines += ["", "'away': peak away from the I-profile's sharp web-flange corners and clamped base "
+              f"(nodes farther than {AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
+    for m in res["modes"]:
         for qty, a in res["modes"][m].items():
             ex = a.get("extrapolation")
             what = "peak" if qty == "peak_mpa" else "peak away from the web-flange corners and clamped base"
@@ -96,11 +102,11 @@ def plot(res: dict, path: Path) -> None:
             if not ex or not ex["converging"]:
                 notes.append(f"{tag}: NOT CONVERGING")
                 continue
-            hs = [s for s in res["steps"] if s["kind"] == "h"]
+            hs = [s for s in res["steps"] if s["kind"] == "h" and a["errors"][s["label"]] is not None]
             err = [max(abs(a["errors"][s["label"]]), 1e-6) * 100 for s in hs]
             ax.loglog([s["seconds"] for s in hs], err, ls, marker="o", color=f"C{i}", label=f"{tag}: h, P2")
             for s in res["steps"]:
-                if s["kind"] != "h":
+                if s["kind"] != "h" and a["errors"][s["label"]] is not None:
                     e = max(abs(a["errors"][s["label"]]), 1e-6) * 100
                     ax.loglog(s["seconds"], e, "s" if s["kind"] == "preset" else "^", color=f"C{i}")
                     ax.annotate(s["label"], (s["seconds"], e), fontsize=7)
@@ -111,11 +117,17 @@ def plot(res: dict, path: Path) -> None:
     ax.set_ylabel("|error| vs extrapolated peak (%)")
     ax.set_title(f"{res['part']}: peak von Mises error vs time" + (f"\n{'; '.join(notes)}" if notes else ""),
                  fontsize="small")
-    if ax.lines:
+    if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize="small")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _abs_err(a: dict, label: str) -> float:
+    """|error| of a step, or the reference's own uncertainty (oscillating sequence)."""
+    e = a["errors"][label]
+    return abs(e) if e is not None else a["extrapolation"]["gci"]
 
 
 def summary(results: list[dict]) -> str:
@@ -126,21 +138,51 @@ def summary(results: list[dict]) -> str:
              "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
              "Presets: " + "; ".join(f"{n}: P{f['order']}, {f['size_mm']:g}/{f['local_size_mm']:g} mm, "
                                      f"{f['bearing_directions']} dirs" for n, f in FIDELITY.items()) + ".",
-             "", "| part | mode | extrapolated MPa | order | preset | time s | peak RSS MiB | DOFs | peak MPa | error | target met |",
-             "|---|---|---:|---:|---|---:|---:|---:|---:|---:|---|"]
+             "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25); an oscillating "
+             "sequence has no Richardson limit, its reference is the finest level and the uncertainty "
+             "its last change.",
+             "", "| part | mode | extrapolated MPa | order | uncertainty | preset | time s | peak RSS MiB | DOFs "
+                 "| peak MPa | error | target met |",
+             "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---|"]
     for res in results:
         for m, qs in res["modes"].items():
             a = qs.get("peak_mpa", {})
             ex = a.get("extrapolation")
-            lim = f"{ex['limit']:.2f}" if ex and ex["converging"] else "**not converging**"
-            order = _fmt(ex["order"], ".2f") if ex and ex["converging"] else "≤0/-"
+            if not ex or not ex["converging"]:
+                lim, order = "**not converging**", "≤0 / -"
+            elif ex["order"] is None:
+                lim, order = f"{ex['limit']:.2f} (finest, oscillating)", "-"
+            else:
+                lim, order = f"{ex['limit']:.2f}", _fmt(ex["order"], ".2f")
+            gci = _pct(ex["gci"]).lstrip("+") if ex and ex["converging"] else "-"
             for p, v in a.get("presets", {}).items():
-                met = "-" if v["meets"] is None else ("yes" if v["meets"] else "**no**")
-                if v["meets"] is None:
-                    met = "n/a (singular)"
-                lines.append(f"| {res['part']} | {m} | {lim} | {order} | {p} | {v['seconds']:.1f} | "
-                             f"{_fmt(v['peak_rss_mib'], '.0f')} | {v['dofs']} | {v['value']:.2f} | "
-                             f"{_pct(v['error'])} | {met} |")
+                met = {None: "n/a (singular)", True: "yes", False: "**no**"}[v["meets"]]
+                err = _pct(v["error"])
+                if v["error"] is None and v.get("error_bound") is not None:
+                    err = f"±{100 * v['error_bound']:.2f} % (the reference)"
+                lines.append(f"| {res['part']} | {m} | {lim} | {order} | {gci} | {p} | {v['seconds']:.1f} | "
+                             f"{_fmt(v['peak_rss_mib'], '.0f')} | {v['dofs']} | {v['value']:.2f} | {err} | "
+                             f"{met} |")
+    lines += ["", "## Coarsest h level meeting each target (P2, 24 bearing directions)", "",
+              "Per part and mode, the coarsest level of the h sequence whose peak is within the target "
+              "of the extrapolated peak (and every finer level is too); a preset meeting the target on "
+              "every part needs sizes no larger than the finest of these.", "",
+              "| part | mode | " + " | ".join(f"{p} ≤ {100 * t:g} %" for p, t in TARGETS.items()) + " |",
+              "|---|---|" + "---|" * len(TARGETS)]
+    for res in results:
+        hs = [s for s in res["steps"] if s["kind"] == "h"]
+        for m, qs in res["modes"].items():
+            a = qs.get("peak_mpa", {})
+            if not a.get("extrapolation") or not a["extrapolation"]["converging"]:
+                lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in TARGETS)
+                             + " |")
+                continue
+            cells = []
+            for t in TARGETS.values():
+                ok = [s for i, s in enumerate(hs) if all(_abs_err(a, x["label"]) <= t for x in hs[i:])]
+                cells.append(f"{ok[0]['size_mm']:.3g}/{ok[0]['local_size_mm']:.3g} mm ({ok[0]['label']}, "
+                             f"{ok[0]['seconds']:.0f} s)" if ok else "none")
+            lines.append(f"| {res['part']} | {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -170,20 +212,32 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} exists and is not a folder")
-    scene, parts = _targets(args.target)
-    settings, by_part = scene_cases(scene, parts, {"modes": [args.mode]} if args.mode else None)
-    out.mkdir(parents=True, exist_ok=True)
-    for name, cases in by_part.items():
-        res = study(cases, settings, int(levels), ratio, max_gib=max_gib, presets=not args.no_presets,
-                    progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
-        res["scene"] = scene
-        res["command"] = _command(args)
-        stem = name if args.mode is None else f"{name}_{args.mode}"
-        (out / f"{stem}.json").write_text(to_json(res))
-        md = table(res)
-        (out / f"{stem}.md").write_text(f"# Convergence: {scene} {name}\n\nCommand: `{res['command']}`\n\n{md}")
-        plot(res, out / f"{stem}.png")
-        print(md)
+    if args.render:
+        if not out.is_dir():
+            raise InputError(f"--out {out}: no such folder to render")
+        for path in sorted(out.glob("*.json")):
+            res = json.loads(path.read_text())
+            if "steps" in res:
+                _write(analyse(res), out, path.stem)
+    else:
+        scene, parts = _targets(args.target)
+        settings, by_part = scene_cases(scene, parts, {"modes": [args.mode]} if args.mode else None)
+        out.mkdir(parents=True, exist_ok=True)
+        for name, cases in by_part.items():
+            res = study(cases, settings, int(levels), ratio, max_gib=max_gib, presets=not args.no_presets,
+                        progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
+            res["scene"], res["command"] = scene, _command(args)
+            print(_write(res, out, name if args.mode is None else f"{name}_{args.mode}"))
     studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     (out / "summary.md").write_text(summary([s for s in studies if "steps" in s]))
     return 0
+
+
+def _write(res: dict, out: Path, stem: str) -> str:
+    """Write <stem>.json, .md and .png; return the Markdown table."""
+    (out / f"{stem}.json").write_text(to_json(res))
+    md = table(res)
+    (out / f"{stem}.md").write_text(f"# Convergence: {res['scene']} {res['part']}\n\nCommand: "
+                                    f"`{res['command']}`\n\n{md}")
+    plot(res, out / f"{stem}.png")
+    return md
