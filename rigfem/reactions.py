@@ -230,7 +230,8 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
 
 
 # ----------------------------------------------------------------------------- CSV
-_TORQUE_COLS = ("torque_Nm", "torque_nm", "torque", "M2", "driver")
+_TORQUE_COLS = ("torque_Nm", "torque", "M2", "driver")
+_ANGLE_COLS = ("crank_deg", "theta_deg", "angle_deg", "theta", "angle", "crank_rad", "theta_rad", "angle_rad")
 
 
 def write_csv(h: ReactionHistory, path: str | Path) -> None:
@@ -266,9 +267,10 @@ def write_csv(h: ReactionHistory, path: str | Path) -> None:
 def read_csv(path: str | Path) -> ReactionHistory:
     """Import a reaction history (rigfem's own CSV or an external one, e.g. from MATLAB).
 
-    Needed columns: a crank-angle column (``crank_deg``, ``theta_deg``, ``angle_deg`` or
-    ``theta``/``angle``), and per joint ``<J>_fx_N``/``<J>_fy_N`` (also ``<J>_fx``/``<J>_fy``
-    or ``<J>x``/``<J>y``); optional torque column (``torque_Nm``, ``torque``, ``M2``).
+    Needed columns (names case-insensitive): a crank-angle column in degrees (``crank_deg``,
+    ``theta_deg``, ``angle_deg``, ``theta``, ``angle``) or radians (``crank_rad``, ``theta_rad``,
+    ``angle_rad``), and per joint ``<J>_fx_N``/``<J>_fy_N`` (also ``<J>_fx``/``<J>_fy`` or
+    ``<J>x``/``<J>y``) in N; optional torque column in N·m (``torque_Nm``, ``torque``, ``M2``).
     Lines starting with ``#`` are comments.  Raises InputError naming the problem.
     """
     p = Path(path)
@@ -289,10 +291,9 @@ def read_csv(path: str | Path) -> ReactionHistory:
     rows = list(csv.reader(lines))
     head = [c.strip() for c in rows[0]]
     lower = [c.lower() for c in head]
-    ang = next((lower.index(c) for c in ("crank_deg", "theta_deg", "angle_deg", "theta", "angle")
-                if c in lower), None)
+    ang = next((lower.index(c) for c in _ANGLE_COLS if c in lower), None)
     if ang is None:
-        raise InputError(f"reaction CSV {str(p)!r}: no crank-angle column (crank_deg, theta_deg or angle_deg)")
+        raise InputError(f"reaction CSV {str(p)!r}: no crank-angle column ({', '.join(_ANGLE_COLS)})")
     data = []
     for k, r in enumerate(rows[1:], start=2):
         try:
@@ -303,33 +304,35 @@ def read_csv(path: str | Path) -> ReactionHistory:
     if arr.ndim != 2 or arr.shape[1] != len(head):
         raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
     joints: dict[str, JointHistory] = {}
-    for i, c in enumerate(head):
-        for sx, sy in (("_fx_N", "_fy_N"), ("_fx", "_fy"), ("x", "y")):
+    for i, c in enumerate(lower):
+        for sx, sy in (("_fx_n", "_fy_n"), ("_fx", "_fy"), ("x", "y")):
             if c.endswith(sx) and len(c) > len(sx):
-                jn = c[: -len(sx)]
-                cy = jn + sy
-                if cy in head and jn not in joints:
+                jn = head[i][: -len(sx)]
+                cy = c[: -len(sx)] + sy
+                if cy in lower and jn not in joints:
                     ba, bb = pairs.get(jn, ("?", "?"))
-                    joints[jn] = JointHistory(jn, ba, bb, np.stack([arr[:, i], arr[:, head.index(cy)]], -1))
+                    joints[jn] = JointHistory(jn, ba, bb, np.stack([arr[:, i], arr[:, lower.index(cy)]], -1))
                 break
     if not joints:
         raise InputError(f"reaction CSV {str(p)!r}: no joint force columns (<joint>_fx_N, <joint>_fy_N)")
     tcol = next((lower.index(c.lower()) for c in _TORQUE_COLS + ("driver_force_N",) if c.lower() in lower), None)
     torque = arr[:, tcol] if tcol is not None else np.zeros(arr.shape[0])
     sing = arr[:, lower.index("singular")] > 0.5 if "singular" in lower else np.zeros(arr.shape[0], bool)
-    bad = ~sing & (np.isnan(torque) | np.any([np.isnan(j.force_N).any(1) for j in joints.values()], 0))
+    bad = ~sing & (~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0))
     if np.any(bad):
         raise InputError(f"reaction CSV {str(p)!r}: empty or non-finite values at crank angle "
                          f"{arr[np.argmax(bad), ang]:g} deg")
-    deg = arr[:, ang]
+    deg = np.degrees(arr[:, ang]) if lower[ang].endswith("_rad") else arr[:, ang]
+    if not np.all(np.isfinite(deg)):
+        raise InputError(f"reaction CSV {str(p)!r}: empty or non-finite crank angle")
     if np.any(np.diff(deg) <= 0):
         raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
     for j in joints.values():
-        j.force_N = np.nan_to_num(j.force_N)
+        j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)        # blank singular rows
     meta = {"source": str(p), "model": "imported"}
     if "driver_force_N" in head:
         meta["driver_unit"] = "N"
-    h = ReactionHistory(deg, joints, np.nan_to_num(torque), None, meta,
+    h = ReactionHistory(deg, joints, np.where(np.isfinite(torque), torque, 0.0), None, meta,
                         singular_mask=sing if sing.any() else None)
     h.meta["singular"] = singular_ranges(deg, h.singular_mask)
     return h

@@ -91,3 +91,23 @@ def test_bad_external_csv(tmp_path, text, needle):
     path.write_text(text)
     with pytest.raises(InputError, match=needle):
         read_csv(path)
+
+
+def test_import_matlab_style_radians_and_case(tmp_path):
+    t = np.linspace(0, 2 * np.pi, 36, endpoint=False)
+    rows = ["Theta_rad,O2_Fx,O2_Fy,M2"] + [f"{a:.17g},{100 * np.cos(a):.17g},{40 * np.sin(a):.17g},{5 * np.cos(a):.17g}"
+                                           for a in t]
+    path = tmp_path / "m.csv"
+    path.write_text("\n".join(rows) + "\n")
+    h = read_csv(path)
+    assert np.allclose(h.crank_deg, np.degrees(t)) and set(h.joints) == {"O2"}
+    p = peaks(h)
+    assert p["O2"]["force_N"] == pytest.approx(100.0, rel=1e-6)
+    assert p["torque"]["peak"] == pytest.approx(5.0, rel=1e-6)
+
+
+def test_import_rejects_infinite_values(tmp_path):
+    path = tmp_path / "inf.csv"
+    path.write_text("theta,Px,Py\n0,1,1\n10,inf,1\n20,1,1\n30,1,1\n")
+    with pytest.raises(InputError, match="non-finite values at crank angle 10"):
+        read_csv(path)
