@@ -218,21 +218,37 @@ def test_driven_slider_kinematics_and_power():
     th = np.arccos((x**2 + 150**2 - 350**2) / (2 * 150 * x))
     assert np.allclose(h.bodies["crank"].angle_rad, th, atol=1e-10)
     assert h.meta["driver_unit"] == "N"
-    # power balance: P_driver = dT/dt with T from the body motion (periodic spectral derivative)
-    w = 2 * np.pi
-    v = 80e-3 * w * np.cos(np.radians(deg))
+    v = 80e-3 * 2 * np.pi * np.cos(np.radians(deg))
+    _, dke = _power_balance(h, lk)
+    assert np.allclose(h.torque_Nm * v, dke, atol=1e-7 * np.abs(dke).max())
+
+
+def _power_balance(h, lk):
+    """(driver power input by torque·omega, dT/dt) with the kinetic energy T of all bodies
+    differentiated spectrally over the periodic cycle (independent of the force solution)."""
+    deg = h.crank_deg
+    w = 2 * np.pi * h.meta["speed_hz"]
+    k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
     ke = np.zeros(deg.size)
     for body in lk.bodies:
         m, c_loc, inertia = body.totals()
         bh = h.bodies[body.name]
         ca, sa = np.cos(bh.angle_rad), np.sin(bh.angle_rad)
         G = bh.origin_mm / 1000 + np.stack([ca * c_loc[0] - sa * c_loc[1], sa * c_loc[0] + ca * c_loc[1]], -1)
-        k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
         vg = np.fft.irfft(np.fft.rfft(G, axis=0) * k[:, None], n=deg.size, axis=0)
         ke += 0.5 * m * np.sum(vg**2, 1) + 0.5 * inertia * bh.omega_rad_s**2
-    k = np.fft.rfftfreq(deg.size, 1.0 / deg.size) * 1j * w
     dke = np.fft.irfft(np.fft.rfft(ke) * k, n=deg.size)
-    assert np.allclose(h.torque_Nm * v, dke, atol=1e-7 * np.abs(dke).max())
+    return h.torque_Nm * w, dke
+
+
+@pytest.mark.parametrize("make", [lambda: four_bar(*REF), lambda: quick_return(150, 350, 800),
+                                  lambda: inverted_slider_crank(500, 200, 200)],
+                         ids=["rig-fourbar", "quick-return", "inverted"])
+def test_motor_power_equals_rate_of_kinetic_energy(make):
+    lk = make()
+    h = solve(lk, crank_angles(360), speed_hz=1.0)
+    p_in, dke = _power_balance(h, lk)
+    assert np.allclose(p_in, dke, atol=1e-7 * np.abs(dke).max())
 
 
 def test_guess_at_another_angle_keeps_the_branch():
