@@ -510,10 +510,12 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     # every accepted continuation point serves the predictor (dense where the motion is fast)
     state = (model, th_c, qc, qdc, qddc, warnings)
     h = _evaluate(lk, state, deg, speed_hz, tol)
-    # a toggle narrower than the sampling still shows at the (locally dense) continuation points
-    qd_c, qdd_c, J_c, Jinv_c = _rates(model, qc, th_c, 2 * np.pi * speed_hz)
-    probe = _dynamics(lk, model, state, np.degrees(th_c), qc, qd_c, qdd_c, J_c, Jinv_c, speed_hz, tol)
-    h.meta["singular"] = merge_ranges(h.meta["singular"], probe.meta["singular"])
+    # a toggle narrower than the sampling still shows at the continuation points, which are
+    # locally denser than the samples wherever the continuation had to shorten its steps
+    if th_c.size > 1 and deg.size > 1 and np.min(np.abs(np.diff(th_c))) < abs(theta[1] - theta[0]):
+        qd_c, qdd_c, J_c, Jinv_c = _rates(model, qc, th_c, 2 * np.pi * speed_hz)
+        probe = _dynamics(lk, model, state, np.degrees(th_c), qc, qd_c, qdd_c, J_c, Jinv_c, speed_hz, tol)
+        h.meta["singular"] = merge_ranges(h.meta["singular"], probe.meta["singular"])
     return h
 
 
