@@ -16,9 +16,13 @@ native and invisible to ``tracemalloc``; the process's RSS after imports is repo
 :func:`richardson` extrapolates the three finest levels (general refinement ratios, fixed-point
 iteration as in Celik et al. 2008), gives the observed order and the GCI, and flags a peak whose
 successive differences do not shrink or give an order ≤ 0 as **not converging** (a
-singularity): such a peak has no extrapolated value and no preset can meet a target on it.  A
-sequence that alternates with shrinking differences (unstructured remeshing noise) has no
-Richardson limit either: its reference is the finest level, with the last change as uncertainty.
+singularity): such a peak has no extrapolated value and no preset can meet a target on it.
+Two cases have no Richardson limit but are not singular, and are reported as such with the
+finest level as reference and an explicit uncertainty: a sequence that alternates with
+shrinking differences (``oscillating``: the limit lies between the last two levels), and one
+whose last two changes are both below :data:`NOISE` of the value and do not grow
+(``noise-limited``: unstructured remeshing moves the peak node by more than the discretisation
+error left).  A peak that keeps rising level after level is never noise-limited.
 """
 
 from __future__ import annotations
@@ -46,6 +50,8 @@ RATIO = 2 ** 0.5
 H_DIRECTIONS = FIDELITY["fine"]["bearing_directions"]
 #: accuracy targets against the extrapolated peak, per preset (issue 6)
 TARGETS = {"draft": 0.10, "standard": 0.03, "fine": 0.01}
+#: relative change between the finest levels below which a non-growing peak is remeshing noise
+NOISE = 0.01
 #: radius (mm) around the I-profile's sharp web-flange corners and clamped base edge excluded
 #: from the second quantity ("peak away from the singular edges")
 AWAY_MM = 4.0
@@ -60,7 +66,8 @@ class Extrapolation:
     order: float | None  #: observed order of convergence (in h)
     orders: list[float | None]  #: observed order of every triple, coarse to fine (< 0: oscillating)
     asymptotic: bool  #: the last two triples' orders agree within 30 % (needs ≥ 4 levels)
-    gci: float | None  #: grid convergence index of the finest level (Roache, Fs = 1.25), relative
+    gci: float | None  #: relative uncertainty of the limit: GCI of the finest level (Roache, Fs = 1.25)
+    status: str  #: converged | oscillating | noise-limited | round-off | not converging
     note: str
 
     def as_dict(self) -> dict:
@@ -109,11 +116,19 @@ def richardson(h: Sequence[float], q: Sequence[float]) -> Extrapolation:
     p, why = _order(h[-3:], q[-3:])
     clean = [None if o is None or math.isinf(o) else o for o in orders]  # negative: oscillating
     if p is None:
-        return Extrapolation(False, None, None, clean, False, None, why)
+        e21, e32 = q[-2] - q[-3], q[-1] - q[-2]
+        growing = e21 * q[-1] > 0 and e32 * q[-1] > 0  # |q| rises level after level: a singularity
+        if not growing and max(abs(e21), abs(e32)) <= NOISE * abs(q[-1]):
+            u = 1.25 * max(abs(e21), abs(e32)) / abs(q[-1])
+            return Extrapolation(True, q[-1], None, clean, False, u, "noise-limited",
+                                 f"changes of the finest levels ≤ {100 * NOISE:g} % and not growing: "
+                                 "remeshing noise, no Richardson limit; reference = finest level, "
+                                 "uncertainty = 1.25 × the larger of its last two changes")
+        return Extrapolation(False, None, None, clean, False, None, "not converging", why)
     if math.isinf(p):
-        return Extrapolation(True, q[-1], None, clean, True, 0.0, why)
-    if p < 0:  # shrinking but alternating: no Richardson limit; finest value, ± the last difference
-        return Extrapolation(True, q[-1], None, clean, False, abs((q[-1] - q[-2]) / q[-1]),
+        return Extrapolation(True, q[-1], None, clean, True, 0.0, "round-off", why)
+    if p < 0:  # shrinking but alternating: the limit lies between the last two levels
+        return Extrapolation(True, q[-1], None, clean, False, abs((q[-1] - q[-2]) / q[-1]), "oscillating",
                              "oscillating with shrinking differences (|order| "
                              f"{-p:.2f}): no Richardson limit; reference = finest level, uncertainty "
                              "(gci) = its last change")
@@ -123,7 +138,7 @@ def richardson(h: Sequence[float], q: Sequence[float]) -> Extrapolation:
     asym = len(q) >= 4 and clean[-2] is not None and clean[-2] > 0 and abs(clean[-2] - p) <= 0.3 * p
     note = "" if asym else "3 levels: asymptotic range unchecked" if len(q) < 4 else \
         "order of the previous triple differs: not yet in the asymptotic range, extrapolation uncertain"
-    return Extrapolation(True, limit, p, clean, asym, gci, note)
+    return Extrapolation(True, limit, p, clean, asym, gci, "converged", note)
 
 
 # ----------------------------------------------------------------------------- one step
@@ -286,7 +301,7 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool)
         ex = richardson([s["local_size_mm"] for s in hs], [s["modes"][mode][qty] for s in hs])
         errors, presets = {}, {}
         # oscillating: the reference *is* the finest level, whose own error is only known as ± gci
-        own = ex.converging and ex.order is None and (ex.gci or 0.0) > 0.0
+        own = ex.status in ("oscillating", "noise-limited")
         for s in steps:
             q = s["modes"][mode][qty]
             ok = ex.converging and ex.limit and not (own and s is hs[-1])

@@ -67,19 +67,21 @@ def table(res: dict) -> str:
             if ex is None:
                 lines.append(f"- **{m}**, {what}: {a['note']}")
                 continue
-            where = res["steps"][-1]["modes"][m] if qty == "away_mpa" else \
-                [s for s in res["steps"] if s["kind"] == "h"][-1]["modes"][m]
+            fin = [s for s in res["steps"] if s["kind"] == "h"][-1]["modes"][m]
+            where = f"; finest peak at {fin['surface']} {fin['xyz']}" if qty == "peak_mpa" else ""
             orders = ", ".join(_fmt(o, ".2f") for o in ex["orders"])
-            if ex["converging"]:
+            status = ex.get("status", "converged" if ex["order"] else "oscillating")
+            if not ex["converging"]:
+                lines.append(f"- **{m}**, {what}: **NOT CONVERGING** — {ex['note']} (orders {orders}); "
+                             f"no extrapolated value, no preset can meet a target on it{where}")
+            elif status == "converged":
                 lines.append(f"- **{m}**, {what}: extrapolated **{ex['limit']:.2f} MPa**, observed order "
                              f"{_fmt(ex['order'], '.2f')} (triples coarse→fine: {orders}), GCI(finest) "
                              f"{_pct(ex['gci'])}, asymptotic: {'yes' if ex['asymptotic'] else 'no'}"
-                             f"{'; ' + ex['note'] if ex['note'] else ''}; finest peak at {where['surface']} "
-                             f"{where['xyz']}")
+                             f"{'; ' + ex['note'] if ex['note'] else ''}{where}")
             else:
-                lines.append(f"- **{m}**, {what}: **NOT CONVERGING** — {ex['note']} (orders {orders}); "
-                             f"no extrapolated value, no preset can meet a target on it; finest peak at "
-                             f"{where['surface']} {where['xyz']}")
+                lines.append(f"- **{m}**, {what}: **{status}**, reference = finest level **{ex['limit']:.2f} MPa "
+                             f"± {100 * (ex['gci'] or 0):.2f} %** — {ex['note']} (orders {orders}){where}")
     if res["refused"]:
         lines.append(f"- memory guard refused: {'; '.join(res['refused'])}")
     return "\n".join(lines) + "\n"
@@ -125,7 +127,7 @@ def plot(res: dict, path: Path) -> None:
 
 
 def _abs_err(a: dict, label: str) -> float:
-    """|error| of a step, or the reference's own uncertainty (oscillating sequence)."""
+    """|error| of a step, or the reference's own uncertainty (oscillating or noise-limited)."""
     e = a["errors"][label]
     return abs(e) if e is not None else a["extrapolation"]["gci"]
 
@@ -138,9 +140,9 @@ def summary(results: list[dict]) -> str:
              "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
              "Presets: " + "; ".join(f"{n}: P{f['order']}, {f['size_mm']:g}/{f['local_size_mm']:g} mm, "
                                      f"{f['bearing_directions']} dirs" for n, f in FIDELITY.items()) + ".",
-             "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25); an oscillating "
-             "sequence has no Richardson limit, its reference is the finest level and the uncertainty "
-             "its last change.",
+             "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25). Oscillating and "
+             "noise-limited sequences (last changes ≤ 1 %, not growing) have no Richardson limit: their "
+             "reference is the finest level, the uncertainty its last change (× 1.25 if noise-limited).",
              "", "| part | mode | extrapolated MPa | order | uncertainty | preset | time s | peak RSS MiB | DOFs "
                  "| peak MPa | error | target met |",
              "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---|"]
@@ -151,7 +153,7 @@ def summary(results: list[dict]) -> str:
             if not ex or not ex["converging"]:
                 lim, order = "**not converging**", "≤0 / -"
             elif ex["order"] is None:
-                lim, order = f"{ex['limit']:.2f} (finest, oscillating)", "-"
+                lim, order = f"{ex['limit']:.2f} (finest, {ex.get('status', 'oscillating')})", "-"
             else:
                 lim, order = f"{ex['limit']:.2f}", _fmt(ex["order"], ".2f")
             gci = _pct(ex["gci"]).lstrip("+") if ex and ex["converging"] else "-"
