@@ -18,6 +18,8 @@
 >>> peak = sol.peak(np.array([1.0, 0.5]))   # superposed case: σ = 1·σ_0 + 0.5·σ_1
 >>> bool(peak.value > 0 and peak.error >= 0)
 True
+>>> problem = StaticProblem(model, [Fixed("root")])   # factorise once ...
+>>> more = problem.solve([SurfaceForce("tip", (5, 0, 0))])   # ... solve later batches on the same factors
 """
 
 from __future__ import annotations
@@ -92,33 +94,52 @@ def export_data(model: Model, supports: list, cases: list) -> ExportData:
                       model.material.E, model.material.nu)
 
 
+class StaticProblem:
+    """A model with its supports, factorised once; :meth:`solve` takes any number of load cases."""
+
+    def __init__(self, model: Model, supports: list, solver: str = "auto", rtol: float = 1e-10) -> None:
+        fm = model.mesh
+        self.model = model
+        self.fixed, springs, self.support_dofs = constraints(fm, model.part.holes, supports, model.material.E)
+        self.free_body = any(isinstance(s, FreeBody) for s in supports)
+        A = model.K if springs is None else (model.K + springs).tocsr()
+        self.free = np.setdiff1d(np.arange(fm.ndof), self.fixed)
+        self._R = rigid_modes(fm.nodes)
+        self._amg = (default_method(len(self.free)) if solver == "auto" else solver) == "amg"
+        if self._amg:
+            # keep every node's 3 DOFs for aggregation: fixed DOFs become decoupled (scaled) identity rows
+            d = np.ones(fm.ndof)
+            d[self.fixed] = 0.0
+            D = sp.diags(d)
+            A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
+            self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
+        else:
+            self.linear_solver = LinearSolver(A[self.free][:, self.free], solver, rtol=rtol)
+
+    def solve(self, cases: list) -> Solution:
+        """Displacements, reactions and recovered stresses of every load case (one factorisation)."""
+        model, ls = self.model, self.linear_solver
+        F = load_matrix(model, cases)
+        U = np.zeros_like(F)
+        t_solve = ls.solve_time
+        if self._amg:
+            keep = np.ones(len(F), bool)
+            keep[self.fixed] = False
+            U[:] = ls.solve(F * keep[:, None])
+        else:
+            U[self.free] = ls.solve(F[self.free])
+        reactions = model.K @ U - F
+        if self.free_body:
+            U -= self._R @ np.linalg.lstsq(self._R, U, rcond=None)[0]
+        t0 = time.perf_counter()
+        S = nodal_stress(model.mesh, model.material.E, model.material.nu, U)
+        return Solution(model=model, F=F, U=U, reactions=reactions, nodal_stress=S, support_dofs=self.support_dofs,
+                        residuals=ls.residuals, backward_errors=ls.backward_errors, method=ls.method,
+                        free_body=self.free_body,
+                        times={"assembly": model.assembly_time, "factorise": ls.setup_time,
+                               "solve": ls.solve_time - t_solve, "stress": time.perf_counter() - t0})
+
+
 def solve(model: Model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10) -> Solution:
-    """Solve all load cases with one factorisation; stresses recovered per case."""
-    fm, mat = model.mesh, model.material
-    fixed, springs, groups = constraints(fm, model.part.holes, supports, mat.E)
-    F = load_matrix(model, cases)
-    A = model.K if springs is None else (model.K + springs).tocsr()
-    free = np.setdiff1d(np.arange(fm.ndof), fixed)
-    R = rigid_modes(fm.nodes)
-    U = np.zeros_like(F)
-    if (default_method(len(free)) if solver == "auto" else solver) == "amg":
-        # keep every node's 3 DOFs for aggregation: fixed DOFs become decoupled (scaled) identity rows
-        d = np.ones(fm.ndof)
-        d[fixed] = 0.0
-        D = sp.diags(d)
-        A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
-        ls = LinearSolver(A, "amg", near_null=R, rtol=rtol)
-        U[:] = ls.solve(F * d[:, None])
-    else:
-        ls = LinearSolver(A[free][:, free], solver, rtol=rtol)
-        U[free] = ls.solve(F[free])
-    reactions = model.K @ U - F
-    free_body = any(isinstance(s, FreeBody) for s in supports)
-    if free_body:
-        U -= R @ np.linalg.lstsq(R, U, rcond=None)[0]
-    t0 = time.perf_counter()
-    S = nodal_stress(fm, mat.E, mat.nu, U)
-    return Solution(model=model, F=F, U=U, reactions=reactions, nodal_stress=S, support_dofs=groups,
-                    residuals=ls.residuals, backward_errors=ls.backward_errors, method=ls.method, free_body=free_body,
-                    times={"assembly": model.assembly_time, "factorise": ls.setup_time, "solve": ls.solve_time,
-                           "stress": time.perf_counter() - t0})
+    """Solve all load cases with one factorisation: ``StaticProblem(model, supports).solve(cases)``."""
+    return StaticProblem(model, supports, solver, rtol).solve(cases)

@@ -66,6 +66,23 @@ class Solution:
         """Nodal von Mises stress (N,) of the combination c."""
         return von_mises(self.stress(c))
 
+    def peak_sweep(self, C: np.ndarray, chunk: int = 32) -> tuple[np.ndarray, np.ndarray]:
+        """Peak nodal von Mises (n,) and its node (n,) for each row of combinations C (n, k).
+
+        The cheap path for a sweep over crank angles; call :meth:`peak` on the
+        worst row for location, surface and error estimate.
+        """
+        C = np.atleast_2d(np.asarray(C, dtype=float))
+        if C.shape[1] != self.U.shape[1] or not np.isfinite(C).all():
+            from rigfem.errors import InputError
+            raise InputError(f"combination matrix must be (n, {self.U.shape[1]}) and finite, got {C.shape}")
+        vals, nodes = np.empty(len(C)), np.empty(len(C), dtype=np.int64)
+        for s in range(0, len(C), chunk):
+            vm = von_mises(np.tensordot(C[s:s + chunk], self.nodal_stress, 1))
+            nodes[s:s + chunk] = vm.argmax(1)
+            vals[s:s + chunk] = vm.max(1)
+        return vals, nodes
+
     def principal(self, c=None) -> np.ndarray:
         """Nodal principal stresses (N, 3), descending, of the combination c."""
         return principal(self.stress(c))

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 from fe_shapes import bar_with_holes, box
 
 from rigfem.errors import InputError
-from rigfem.fe import build_model, export_data, solve
+from rigfem.fe import StaticProblem, build_model, export_data, solve
 from rigfem.loads import BearingLoad, SurfaceForce
 from rigfem.material import get_material, material_from_dict
 from rigfem.supports import Fixed, ShaftInHole
@@ -98,3 +98,16 @@ def test_materials():
     with pytest.raises(InputError, match="missing"):
         material_from_dict({"name": "x", "E": 1e5})
     assert sp.issparse(build_model(box(1, 1, 1, 1, 1, 1), get_material("abs"), 1).K)
+
+
+def test_factorise_once_and_superposition(cantilever):
+    problem = StaticProblem(cantilever, [Fixed("xmin")])
+    a = problem.solve([SurfaceForce("xmax", (0, 0, -100)), SurfaceForce("xmax", (0, 40, 0))])
+    b = problem.solve([[SurfaceForce("xmax", (0, 0, -50)), SurfaceForce("xmax", (0, 60, 0))]])
+    c = np.array([0.5, 1.5])
+    assert np.allclose(a.U @ c, b.U[:, 0], rtol=1e-9, atol=1e-12)
+    assert np.allclose(a.stress(c), b.stress(), atol=1e-9 * b.peak().value)
+    assert a.peak(c).value == pytest.approx(b.peak().value, rel=1e-9)
+    vals, nodes = a.peak_sweep(np.array([c, [1.0, 0.0], [0.0, 1.0]]))
+    assert vals[0] == pytest.approx(b.peak().value, rel=1e-9) and nodes[0] == b.peak().node
+    assert vals[1] == pytest.approx(a.peak(np.array([1.0, 0.0])).value, rel=1e-12)
