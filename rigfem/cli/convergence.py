@@ -132,6 +132,14 @@ def _abs_err(a: dict, label: str) -> float:
     return abs(e) if e is not None else a["extrapolation"]["gci"]
 
 
+def _quantities(res: dict):
+    """(mode label, analysis, extrapolation) of the peak, and of the peak away from singular edges."""
+    for m, qs in res["modes"].items():
+        for qty, a in qs.items():
+            label = m if qty == "peak_mpa" else f"{m}, away from corners"
+            yield label, a, a.get("extrapolation")
+
+
 def summary(results: list[dict]) -> str:
     """summary.md: per part, mode and preset the cost and the error against the extrapolated peak."""
     lines = ["# Convergence summary: what each preset costs and how accurate it is", "",
@@ -147,9 +155,7 @@ def summary(results: list[dict]) -> str:
                  "| peak MPa | error | target met |",
              "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---|"]
     for res in results:
-        for m, qs in res["modes"].items():
-            a = qs.get("peak_mpa", {})
-            ex = a.get("extrapolation")
+        for m, a, ex in _quantities(res):
             if not ex or not ex["converging"]:
                 lim, order = "**not converging**", "≤0 / -"
             elif ex["order"] is None:
@@ -173,9 +179,8 @@ def summary(results: list[dict]) -> str:
               "|---|---|" + "---|" * len(TARGETS)]
     for res in results:
         hs = [s for s in res["steps"] if s["kind"] == "h"]
-        for m, qs in res["modes"].items():
-            a = qs.get("peak_mpa", {})
-            if not a.get("extrapolation") or not a["extrapolation"]["converging"]:
+        for m, a, ex in _quantities(res):
+            if not ex or not ex["converging"]:
                 lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in TARGETS)
                              + " |")
                 continue
