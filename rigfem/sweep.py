@@ -1,0 +1,495 @@
+"""Sweep every mountable rig configuration: rules, dynamics and part stresses by superposition.
+
+For each rail geometry and support set, one FE factorisation gives the *unit* stress fields
+of every load a configuration can apply (bearing loads in fixed directions on every hole a
+coupling can use, the rail's inertia fields; plate bore and post screws).  A configuration's
+stress at any crank angle is then ``σ = Σ_k c_k σ_k`` with the coefficients that
+:func:`rigfem.loadcases.part_cases` produces for it, so the sweep does no FE solve per
+configuration.  The peak von Mises is evaluated on *candidate nodes* (the top nodes of every
+unit field the configuration uses and of its own combination at a few crank angles); the
+tests check it against every node and against a full :func:`rigfem.check.run_check`.
+
+Chunks of configurations run serially or on Dask (an in-process LocalCluster by default, or
+an existing scheduler); finished chunks are stored as CSV in a work folder keyed by the
+sweep parameters, so an interrupted sweep resumes where it stopped.
+
+Bearing directions not in the basis (the study's case along the peak force direction) are
+split over the two neighbouring basis directions (:data:`ORIGINAL_DIRECTIONS` of them), as
+the cycle mode does with its ``bearing_directions``.
+
+Units: mm, N, MPa, deg.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import json
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigfem.errors import InputError, check_range
+from rigfem.loadcases import (INERTIA, Bar, Fitting, PartCase, RailLayout, UnitLoad, cycle_fitting,
+                              cycle_rail, directions, hole_name, original_fitting, original_rail)
+from rigfem.mechanisms import MODELS, RIG_RAILS_MM, four_bar, simulate, slider_crank
+from rigfem.reactions import peaks
+from rigfem.rules import HOLE_PITCH_MM, MIN_GROUND_MM, fourbar_rules, slider_crank_rules
+from rigfem.settings import FIDELITY, PLATE, CheckSettings, check_settings
+
+TYPES = ("four-bar", "slider-crank")
+#: ground rail length (mm), RIG.md §3
+GROUND_RAIL_MM = 2500.0
+#: basis directions for bearing loads whose direction is set by the configuration (original mode)
+ORIGINAL_DIRECTIONS = 72
+#: candidate nodes of each unit field (its highest von Mises)
+TOP_NODES = 30
+#: crank angles at which the combination is evaluated on every node to find more candidates
+PROBE_ROWS = 12
+#: candidate nodes taken from each probed crank angle
+PROBE_NODES = 50
+#: crank-angle rows superposed at once
+ROW_CHUNK = 24
+#: joints whose peak reaction the table reports, per linkage type
+JOINTS = {"four-bar": ("O2", "A", "B", "O4"), "slider-crank": ("O2", "A", "B", "slide")}
+LENGTHS = {"four-bar": ("b2", "b3", "b4", "d"), "slider-crank": ("b2", "b3", "offset")}
+
+
+@dataclass(frozen=True)
+class SweepParams:
+    """What a sweep computes; its hash keys the stored chunks."""
+
+    linkage_type: str = "four-bar"
+    speed_hz: float = 1.0
+    model: str = "rigid-body"
+    fidelity: str = "draft"
+    samples: int = 360
+    rails_mm: tuple[float, ...] = RIG_RAILS_MM
+    ground_mm: float = GROUND_RAIL_MM
+    check: tuple[tuple[str, object], ...] = ()  #: extra ``[check]`` fields (e.g. coarser test meshes)
+
+    def __post_init__(self) -> None:
+        if self.linkage_type not in TYPES:
+            raise InputError(f"linkage type = {self.linkage_type!r} must be one of {', '.join(TYPES)}")
+        if self.model not in MODELS:
+            raise InputError(f"model = {self.model!r} must be one of {', '.join(MODELS)}")
+        if self.model == "original" and self.linkage_type != "four-bar":
+            raise InputError("model = 'original' exists only for the four-bar; use rigid-body")
+        if self.fidelity not in FIDELITY:
+            raise InputError(f"fidelity = {self.fidelity!r} must be one of {', '.join(FIDELITY)}")
+        check_range("speed_hz", self.speed_hz, 0.0, 100.0, "Hz", lo_open=True)
+        check_range("samples", self.samples, 36, 100_000)
+        check_range("ground rail length", self.ground_mm, 700.0, 6000.0, "mm")
+
+    @property
+    def rails(self) -> tuple[float, ...]:
+        """Rail lengths of the linkage type (crank, coupler/rod, rocker)."""
+        return tuple(self.rails_mm[:3] if self.linkage_type == "four-bar" else self.rails_mm[:2])
+
+    def settings(self) -> CheckSettings:
+        return check_settings({"fidelity": self.fidelity, **dict(self.check)}, self.linkage_type,
+                              list(self.rails))
+
+    def key(self) -> str:
+        """Short hash of the parameters (and the code-relevant constants)."""
+        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=1)
+        return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
+
+
+# ----------------------------------------------------------------------------- enumeration
+@functools.lru_cache(maxsize=None)
+def _layout(length_mm: float) -> RailLayout:
+    from rigfem.parts import load_part, rail_hole_x
+
+    rail = load_part("rail_size25", {"length": length_mm})
+    return RailLayout(rail_hole_x(rail), rail["pitch"], load_part(PLATE)["screw_spacing"])
+
+
+def rail_lengths(length_mm: float, first: float = HOLE_PITCH_MM) -> list[float]:
+    """Joint distances (mm) on the 60 mm grid from ``first`` whose coupling lands on holes."""
+    lay = _layout(length_mm)
+    out, b = [], first
+    while True:
+        try:
+            lay.coupling(b, "rail")
+        except InputError:
+            return out
+        out.append(b)
+        b += HOLE_PITCH_MM
+
+
+def enumerate_configs(p: SweepParams) -> list[dict]:
+    """Every mountable configuration: each length on the hole grid within its rail (RIG.md §1-2).
+
+    Four-bar: b2, b3, b4 on their rails, d on the ground rail from 660 mm (the rule; shorter
+    ground lengths collide and are not enumerated).  Slider-crank: b2, b3 on their rails,
+    slide line through O2 (offset 0: the ground rail carries both).
+    """
+    ground = [d for d in rail_lengths(p.ground_mm) if d >= MIN_GROUND_MM]
+    if p.linkage_type == "four-bar":
+        b2s, b3s, b4s = (rail_lengths(r) for r in p.rails)
+        return [dict(b2=b2, b3=b3, b4=b4, d=d) for b2 in b2s for b3 in b3s for b4 in b4s for d in ground]
+    b2s, b3s = (rail_lengths(r) for r in p.rails)
+    return [dict(b2=b2, b3=b3, offset=0.0) for b2 in b2s for b3 in b3s if b2 + b3 <= max(ground)]
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "_", name.split("(")[0].strip().lower()).strip("_")
+
+
+def rules_row(p: SweepParams, cfg: dict) -> dict:
+    """Every rig rule of a configuration: value and pass/fail columns, and whether all pass."""
+    rules = fourbar_rules(**cfg) if p.linkage_type == "four-bar" else slider_crank_rules(**cfg)
+    row = {}
+    for r in rules:
+        row[f"rule_{_slug(r.name)}"] = round(r.value, 6)
+        row[f"rule_{_slug(r.name)}_ok"] = r.ok
+    row["rules_ok"] = all(r.ok for r in rules)
+    return row
+
+
+# ----------------------------------------------------------------------------- FE unit bases
+@dataclass
+class UnitBasis:
+    """Unit stress fields of one part geometry and support set (float32, every node)."""
+
+    key: tuple
+    loads: list[UnitLoad]
+    groups: dict[str, tuple[np.ndarray, np.ndarray]]  #: group -> (angles rad sorted, columns)
+    inertia: dict[tuple, int]  #: (component, origin) -> column
+    S: np.ndarray  #: (k, N, 6) float32 nodal stress of every unit load
+    top: np.ndarray  #: (k, TOP_NODES) the nodes where each unit field is highest
+    fe_mass: float  #: kg, mass of the meshed part
+
+
+def _case_key(case: PartCase) -> tuple:
+    return case.part, tuple(sorted(case.params.items())), tuple(case.supports)
+
+
+def _basis_specs(s: CheckSettings) -> dict[tuple, tuple[PartCase, list[UnitLoad]]]:
+    """Per (part, params, supports): a template case (mesh, supports) and every unit load."""
+    from rigfem.parts import load_part
+
+    specs: dict[tuple, tuple[PartCase, list[UnitLoad]]] = {}
+    ncyc, norig = directions(s.bearing_directions), directions(ORIGINAL_DIRECTIONS)
+
+    def add(part, params, supports, refine, loads):
+        case = PartCase("basis", part, params, supports, [], np.zeros((0, 0)), np.zeros(0), tuple(refine))
+        key = _case_key(case)
+        old = specs.get(key, (case, []))
+        specs[key] = (dataclasses.replace(case, refine=tuple(sorted(set(old[0].refine) | set(refine)))),
+                      list(dict.fromkeys(old[1] + loads)))
+
+    for spec in s.parts.values():
+        if "length" in spec:
+            lay = _layout(spec["length"])
+            params = {"length": float(spec["length"])}
+            holes = [hole_name(i) for i in range(len(lay.hole_x))]
+            pivot = tuple(hole_name(i) for i in lay.coupling(0.0, "rail"))
+            k = int(round(lay.screw_spacing / lay.pitch))
+            last = (hole_name(len(holes) - 1 - k), hole_name(len(holes) - 1))
+            if "cycle" in s.modes:
+                origin = (lay.pivot_x, 0.0, 0.0)
+                add(spec["part"], params, [("free", ())], holes,
+                    [UnitLoad("bearing", g, d) for g in holes for d in ncyc]
+                    + [UnitLoad("inertia", None, origin, c) for c in INERTIA])
+            if "original" in s.modes:
+                add(spec["part"], params, [("bolt", pivot)], pivot + last,
+                    [UnitLoad("bearing", g, d) for g in last for d in norig])
+        elif load_part(spec["part"]).kind == "plate":
+            dirs = (ncyc if "cycle" in s.modes else []) + (norig if "original" in s.modes else [])
+            add(spec["part"], {}, [("bolt", ("screw_1", "screw_2"))], ("bore", "screw_1", "screw_2"),
+                [UnitLoad("bearing", "bore", d) for d in dirs])
+        else:  # I-profile post: the study's fixed screw loads, and the pin force through the top screws
+            screws = tuple(f"screw_{i}" for i in range(1, 5))
+            dirs = ((ncyc if "cycle" in s.modes else [])
+                    + ([(float(np.sqrt(0.5)), float(np.sqrt(0.5)), 0.0)] if "original" in s.modes else []))
+            add(spec["part"], {}, [("fixed", ("base",))], screws,
+                [UnitLoad("bearing", g, d) for g in screws for d in dirs])
+    return specs
+
+
+def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
+    """One mesh, one factorisation and the unit solutions of every part geometry and support set."""
+    from rigfem.fe import build_model, solve
+    from rigfem.partcheck import RTOL, _fe_load, _volume, mesh_case, relieved_cases, supports_of
+    from rigfem.stress import von_mises
+    from rigfem.supports import FreeBody
+
+    s = p.settings()
+    out = {}
+    models: dict[tuple, tuple] = {}
+    for key, (case, loads) in _basis_specs(s).items():
+        geo = key[:2]
+        refine = tuple(sorted({g for k2, (c, _) in _basis_specs(s).items() if k2[:2] == geo for g in c.refine}))
+        if geo not in models:
+            pm = mesh_case(dataclasses.replace(case, refine=refine), s.size_mm, s.local_size_mm)
+            models[geo] = (pm, build_model(pm, s.material, s.order))
+        pm, model = models[geo]
+        supports = supports_of(case)
+        fe_loads = [_fe_load(u) for u in loads]
+        if any(isinstance(x, FreeBody) for x in supports):
+            fe_loads = relieved_cases(model, fe_loads)[0]
+        sol = solve(model, supports, fe_loads, solver=solver, rtol=RTOL)
+        out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
+                           _volume(pm) * s.material.density * 1e3)
+    return out
+
+
+def _reduce(key: tuple, loads: list[UnitLoad], S: np.ndarray, vm: np.ndarray, fe_mass: float) -> UnitBasis:
+    """Index the unit loads and keep float32 fields and each field's top nodes."""
+    groups: dict[str, list] = {}
+    inertia = {}
+    for j, u in enumerate(loads):
+        if u.kind == "bearing":
+            groups.setdefault(u.group, []).append((np.mod(np.arctan2(u.direction[1], u.direction[0]), 2 * np.pi), j))
+        else:
+            inertia[(u.component, tuple(u.direction))] = j
+    g = {}
+    for name, lst in groups.items():
+        lst.sort()
+        g[name] = (np.array([a for a, _ in lst]), np.array([j for _, j in lst]))
+    n_top = min(TOP_NODES, vm.shape[1])
+    top = np.argpartition(-vm, n_top - 1, axis=1)[:, :n_top]
+    return UnitBasis(key, loads, g, inertia, S.astype(np.float32), top, fe_mass)
+
+
+def _columns(b: UnitBasis, u: UnitLoad, mass_ratio: float) -> list[tuple[int, float]]:
+    """Basis columns and weights that reproduce unit load ``u`` (direction split if needed)."""
+    if u.kind == "inertia":
+        return [(b.inertia[(u.component, tuple(u.direction))], mass_ratio)]
+    ang, cols = b.groups[u.group]
+    a = np.mod(np.arctan2(u.direction[1], u.direction[0]), 2 * np.pi)
+    diff = np.abs((ang - a + np.pi) % (2 * np.pi) - np.pi)
+    i = int(np.argmin(diff))
+    if diff[i] < 1e-9:
+        return [(int(cols[i]), 1.0)]
+    lo = int(np.searchsorted(ang, a)) - 1
+    i0, i1 = lo % len(ang), (lo + 1) % len(ang)
+    e0, e1 = np.array([np.cos(ang[i0]), np.sin(ang[i0])]), np.array([np.cos(ang[i1]), np.sin(ang[i1])])
+    w = np.linalg.solve(np.c_[e0, e1], [np.cos(a), np.sin(a)])
+    if (w < -1e-12).any() or (diff[i0] + diff[i1]) > np.pi / 2 + 1e-9:
+        raise InputError(f"bearing direction on {u.group} is not between two basis directions")
+    return [(int(cols[i0]), float(w[0])), (int(cols[i1]), float(w[1]))]
+
+
+def _row_peaks(C: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Peak von Mises of every row of coefficients C (n, k) over the nodes of S (k, P, 6)."""
+    from rigfem.stress import von_mises
+
+    return np.concatenate([von_mises(np.tensordot(C[s:s + ROW_CHUNK], S, 1)).max(axis=1)
+                           for s in range(0, len(C), ROW_CHUNK)])
+
+
+def case_peak(b: UnitBasis, case: PartCase, exact: bool = False) -> tuple[float, float]:
+    """Peak von Mises (MPa) of a case over all rows, and its crank angle (deg).
+
+    Evaluated at candidate nodes: the :data:`TOP_NODES` highest of every unit field the case
+    uses, and the :data:`PROBE_NODES` highest of the combination itself at
+    :data:`PROBE_ROWS` crank angles; ``exact=True`` evaluates every node (the tests' reference).
+    """
+    from rigfem.stress import von_mises
+
+    M = np.zeros((len(case.loads), len(b.loads)))
+    for i, u in enumerate(case.loads):
+        ratio = case.mass_kg / b.fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
+        for j, w in _columns(b, u, ratio):
+            M[i, j] += w
+    C = case.coef @ M
+    used = np.flatnonzero(np.abs(C).max(axis=0) > 0)
+    if used.size == 0:
+        return 0.0, float(case.rows[0])
+    C = C[:, used].astype(np.float32)
+    if exact:
+        rows_peak = _row_peaks(C, b.S[used])
+    else:
+        # candidates: every used field's top nodes, then the top nodes of the actual combination
+        # at a few crank angles (all nodes), which catches peaks no single unit field has
+        cand = np.unique(b.top[used])
+        rows_peak = _row_peaks(C, b.S[np.ix_(used, cand)])
+        probe = np.unique(np.r_[np.argmax(rows_peak), np.linspace(0, len(C), PROBE_ROWS, endpoint=False).astype(int)])
+        vm = von_mises(np.tensordot(C[probe], b.S[used], 1))
+        more = np.setdiff1d(np.argpartition(-vm, PROBE_NODES - 1, axis=1)[:, :PROBE_NODES], cand)
+        if more.size:
+            rows_peak = np.maximum(rows_peak, _row_peaks(C, b.S[np.ix_(used, more)]))
+    r = int(np.argmax(rows_peak))
+    return float(rows_peak[r]), float(case.rows[r])
+
+
+# ----------------------------------------------------------------------------- one configuration
+@functools.lru_cache(maxsize=None)
+def _kind(part: str) -> str:
+    from rigfem.parts import load_part
+
+    return load_part(part).kind
+
+
+def config_cases(h, pk: dict, s: CheckSettings) -> list[tuple[str, PartCase]]:
+    """The (mode, PartCase) list of :func:`rigfem.loadcases.part_cases`, with rail layouts
+    cached (part_cases reads the part files on every call: too slow for a sweep)."""
+    spacing = _layout(1000.0).screw_spacing
+
+    def bar(name: str, spec: dict) -> Bar:
+        p, q = h.joints[spec["pivot"]].position_mm, h.joints[spec["far"]].position_mm
+        return Bar(name, spec["pivot"], spec["far"], spec["part"], float(spec["length"]),
+                   _layout(float(spec["length"])), float(np.hypot(*(q[0] - p[0]))), bool(spec.get("driven")))
+
+    out = []
+    for name, spec in s.parts.items():
+        for mode in s.modes:
+            if "length" in spec:
+                b = bar(name, spec)
+                case = (original_rail(h, pk, b, s.load_factor) if mode == "original"
+                        else cycle_rail(h, b, s.bearing_directions))
+            else:
+                fit = Fitting(name, spec["part"], _kind(spec["part"]), spec["joint"], bar(spec["on"], spec["rail"]))
+                case = (original_fitting(h, pk, fit, s.load_factor) if mode == "original"
+                        else cycle_fitting(h, fit, s.bearing_directions))
+            out.append((mode, case))
+    return out
+
+
+def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
+             settings: CheckSettings | None = None) -> dict:
+    """One table row: lengths, every rule, peak reactions and per-part utilisation and verdict.
+
+    ``bases=None`` skips the stress check (rules and dynamics only).  A configuration that
+    cannot be assembled or passes through a toggle gets a status and no numbers.
+    """
+    from rigfem.linkage import AssemblyError
+
+    s = settings or p.settings()
+    row: dict = {"type": p.linkage_type, **cfg, **rules_row(p, cfg)}
+    try:
+        lk = (four_bar(**cfg, rails_mm=p.rails) if p.linkage_type == "four-bar"
+              else slider_crank(**cfg, rails_mm=p.rails))
+    except AssemblyError:
+        return {**row, "status": "cannot assemble"}
+    h = simulate(lk, samples=p.samples, speed_hz=p.speed_hz, model=p.model)
+    if h.meta.get("mu_deg"):
+        row["mu_min_deg"], row["mu_max_deg"] = h.meta["mu_deg"]["min"], h.meta["mu_deg"]["max"]
+    if h.meta.get("singular"):
+        return {**row, "status": "toggle"}
+    pk = peaks(h)
+    if any(v.get("singular") for v in pk.values()):
+        return {**row, "status": "toggle"}
+    for j in JOINTS[p.linkage_type]:
+        row[f"peak_{j}_N"] = pk[j]["force_N"]
+        row[f"peak_{j}_deg"] = pk[j]["crank_deg"]
+    row["peak_torque_Nm"] = pk["torque"]["peak"]
+    row["status"] = "ok"
+    if bases is None:
+        return row
+    limit = s.limit_factor * s.material.sigma_u
+    worst = ("", 0.0)
+    for mode, case in config_cases(h, pk, s):
+        peak, deg = case_peak(bases[_case_key(case)], case)
+        util = 100.0 * peak / limit
+        row[f"{case.name}_{mode}_mpa"] = peak
+        row[f"{case.name}_{mode}_deg"] = deg
+        row[f"{case.name}_{mode}_util_pct"] = util
+        if util > worst[1]:
+            worst = (f"{case.name} ({mode})", util)
+    row["limiting_part"], row["max_util_pct"] = worst
+    row["verdict"] = "pass" if worst[1] < 100.0 else "fail"
+    return row
+
+
+# ----------------------------------------------------------------------------- chunks, resume, Dask
+def run_chunk(configs: list[dict], p: SweepParams, bases: dict[tuple, UnitBasis] | None) -> list[dict]:
+    """Table rows of a chunk of configurations (what a Dask task runs)."""
+    s = p.settings()
+    rows = [evaluate(c, p, bases, s) for c in configs]
+    for r in rows:
+        bad = [k for k, v in r.items() if isinstance(v, float) and not np.isfinite(v)]
+        if bad:
+            raise InputError(f"configuration {configs[0]}: non-finite {', '.join(bad)}")
+    return rows
+
+
+def _column_order(cols: list[str], p: SweepParams) -> list[str]:
+    lead = ["type", *LENGTHS[p.linkage_type]]
+    rules = [c for c in cols if c.startswith("rule")]
+    tail = ["limiting_part", "max_util_pct", "verdict"]
+    rest = [c for c in cols if c not in lead + rules + tail]
+    return [c for c in lead + rules + rest + tail if c in cols]
+
+
+def _chunk_path(work, i: int):
+    return work / f"chunk_{i:05d}.csv"
+
+
+def _write_chunk(work, i: int, rows: list[dict]) -> None:
+    import pandas as pd
+
+    tmp = work / f".chunk_{i:05d}.tmp"
+    pd.DataFrame(rows).to_csv(tmp, index=False, float_format="%.10g")
+    tmp.replace(_chunk_path(work, i))
+
+
+def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 1,
+              scheduler: str | None = None, distributed: bool | None = None, configs: list[dict] | None = None,
+              progress: bool = True, bases: dict | None = None, solver: str = "auto"):
+    """Run (or resume) a sweep; return the table (pandas DataFrame, one row per configuration).
+
+    ``work_dir``: where finished chunks are stored (a folder per parameter hash is made in it).
+    ``distributed``: run chunks on Dask (default: when ``workers > 1`` or a ``scheduler`` is
+    given); ``scheduler`` is ``tcp://HOST:PORT`` of an existing cluster, else a LocalCluster
+    with ``workers`` processes runs inside this process.  ``configs``: only these configurations
+    (default: every mountable one).  ``bases``: unit solutions already built for ``p``.
+    """
+    from pathlib import Path
+
+    import pandas as pd
+    from tqdm import tqdm
+
+    check_range("chunk_size", chunk_size, 1, 100_000)
+    check_range("workers", workers, 1, 256)
+    configs = enumerate_configs(p) if configs is None else configs
+    tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
+    work = Path(work_dir) / f"{p.key()}-{tag}"
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "params.json").write_text(json.dumps(dataclasses.asdict(p), indent=1, default=str))
+    chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
+    todo = [i for i in range(len(chunks)) if not _chunk_path(work, i).is_file()]
+    bar = tqdm(total=len(configs), unit="cfg", disable=not progress or None, desc=p.linkage_type,
+               initial=sum(len(chunks[i]) for i in range(len(chunks)) if i not in set(todo)))
+    with bar:
+        if todo:
+            if bases is None:
+                bar.set_postfix_str("unit solutions")
+                bases = build_bases(p, solver)
+                bar.set_postfix_str("")
+            if distributed is None:
+                distributed = workers > 1 or scheduler is not None
+            if distributed:
+                _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar)
+            else:
+                for i in todo:
+                    _write_chunk(work, i, run_chunk(chunks[i], p, bases))
+                    bar.update(len(chunks[i]))
+    table = pd.concat([pd.read_csv(_chunk_path(work, i), keep_default_na=False, na_values=[""])
+                       for i in range(len(chunks))], ignore_index=True)
+    return table[_column_order(list(table.columns), p)]
+
+
+def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               host="127.0.0.1", dashboard_address=None)
+    with Client(scheduler or cluster) as client:
+        try:
+            [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
+            futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
+            for fut in as_completed(futures):
+                i = futures[fut]
+                _write_chunk(work, i, fut.result())
+                bar.update(len(chunks[i]))
+        finally:
+            if cluster is not None:
+                cluster.close()

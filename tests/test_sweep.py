@@ -1,0 +1,154 @@
+"""Sweep of rig configurations: enumeration, rules, dynamics, superposed stresses, resume, Dask."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rigfem.errors import InputError
+from rigfem.loadcases import part_cases
+from rigfem.mechanisms import four_bar, simulate
+from rigfem.partcheck import solve_cases
+from rigfem.reactions import peaks
+from rigfem.rules import fourbar_rules
+from rigfem.sweep import (SweepParams, _case_key, build_bases, case_peak, config_cases, enumerate_configs,
+                          evaluate, run_sweep)
+
+#: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
+CHECK = (("order", 1), ("size_mm", 14.0), ("local_size_mm", 7.0), ("bearing_directions", 4),
+         ("parts", ("crank_rail", "plate_A", "post_B")))
+FINAL = dict(b2=480.0, b3=840.0, b4=780.0, d=1020.0)
+SMALL = dict(b2=120.0, b3=600.0, b4=540.0, d=660.0)
+TOGGLE = dict(b2=540.0, b3=780.0, b4=660.0, d=660.0)
+NO_LOOP = dict(b2=60.0, b3=60.0, b4=60.0, d=660.0)
+
+
+@pytest.fixture(scope="module")
+def params() -> SweepParams:
+    return SweepParams(check=CHECK)
+
+
+@pytest.fixture(scope="module")
+def bases(params):
+    return build_bases(params)
+
+
+def test_enumeration_is_every_mountable_length():
+    four = enumerate_configs(SweepParams())
+    # crank 60..540 on the 700 mm rail, coupler/rocker 60..840 on 1000 mm, ground 660..2340 on 2500 mm
+    assert len(four) == 9 * 14 * 14 * 29
+    arr = np.array([[c["b2"], c["b3"], c["b4"], c["d"]] for c in four])
+    assert np.all(arr % 60 == 0) and arr[:, 0].max() == 540 and arr[:, 1].max() == 840
+    assert arr[:, 3].min() == 660 and arr[:, 3].max() == 2340
+    slider = enumerate_configs(SweepParams(linkage_type="slider-crank"))
+    assert len(slider) == 9 * 14 and all(c["offset"] == 0 for c in slider)
+
+
+def test_rows_without_stress(params):
+    row = evaluate(FINAL, params, None)
+    pk = peaks(simulate(four_bar(**FINAL)))
+    assert row["status"] == "ok" and row["peak_A_N"] == pytest.approx(pk["A"]["force_N"], rel=1e-12)
+    assert row["peak_torque_Nm"] == pytest.approx(pk["torque"]["peak"], rel=1e-12)
+    rules = fourbar_rules(**FINAL)
+    assert sum(k.startswith("rule_") and k.endswith("_ok") for k in row) == len(rules) and row["rules_ok"]
+    assert evaluate(NO_LOOP, params, None)["status"] == "cannot assemble"
+    toggle = evaluate(TOGGLE, params, None)
+    assert toggle["status"] == "toggle" and not any(k.startswith("peak_") for k in toggle)
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="linkage type"):
+        SweepParams(linkage_type="five-bar")
+    with pytest.raises(InputError, match="speed_hz"):
+        SweepParams(speed_hz=0.0)
+    with pytest.raises(InputError, match="original"):
+        SweepParams(linkage_type="slider-crank", model="original")
+
+
+@pytest.mark.parametrize("cfg", [FINAL, SMALL])
+def test_superposition_equals_full_solve(params, bases, cfg):
+    """Sweep peaks == a full FE solve of the configuration's own cases on the same mesh.
+
+    Cycle mode uses the basis directions themselves (1e-5: float32 fields); original mode splits
+    the peak force direction over the two nearest of 72 basis directions (1e-3)."""
+    s = params.settings()
+    h = simulate(four_bar(**cfg))
+    pk = peaks(h)
+    mine = config_cases(h, pk, s)
+    ref = part_cases(h, pk, s)
+    for (m1, a), (m2, b) in zip(mine, ref):
+        assert m1 == m2 and a.loads == b.loads and np.array_equal(a.coef, b.coef)
+    # same mesh as the sweep: refine every hole the basis refines
+    refine = {k[:2]: c.refine for k, c in ((k, _spec_case(params, k)) for k in bases)}
+    cases = [(m, dataclasses.replace(c, refine=refine[_case_key(c)[:2]])) for m, c in ref]
+    for (mode, case), res in zip(cases, solve_cases(cases, s)):
+        b = bases[_case_key(case)]
+        peak, deg = case_peak(b, case)
+        tol = 1e-5 if mode == "cycle" else 1e-3
+        assert peak == pytest.approx(float(res.vm_rows.max()), rel=tol), (case.name, mode)
+        assert deg == pytest.approx(float(case.rows[res.row]))
+        assert peak == pytest.approx(case_peak(b, case, exact=True)[0], rel=1e-6)
+
+
+def _spec_case(params, key):
+    from rigfem.sweep import _basis_specs
+
+    specs = _basis_specs(params.settings())
+    refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})
+    return dataclasses.replace(specs[key][0], refine=tuple(refine))
+
+
+def test_against_run_check(params, bases, tmp_path):
+    """End to end against rigfem.check.run_check: plates and posts on the same mesh agree to
+    1e-4; rails within 10 % (run_check refines only the loaded holes, the sweep every hole)."""
+    from rigfem.check import run_check
+
+    scene = tmp_path / "cfg.toml"
+    scene.write_text("[linkage]\ntype = \"four-bar\"\n" + "".join(f"{k} = {v}\n" for k, v in FINAL.items())
+                     + "speed_hz = 1.0\nmasses = \"rig\"\n")
+    rep = run_check(scene, out=tmp_path / "rc", overrides={**dict(CHECK), "parts": list(dict(CHECK)["parts"]),
+                                                             "frames": 0}, quiet=True)
+    row = evaluate(FINAL, params, bases)
+    for p in rep["parts"]:
+        got = row[f"{p['name']}_{p['mode']}_util_pct"]
+        tol = 0.10 if "rail" in p["name"] else 1e-4
+        assert got == pytest.approx(p["utilisation_pct"], rel=tol), (p["name"], p["mode"])
+        assert row[f"{p['name']}_{p['mode']}_deg"] == pytest.approx(p["crank_deg"], abs=1e-6)
+
+
+CONFIGS = [NO_LOOP, FINAL, TOGGLE, SMALL, dict(b2=60.0, b3=840.0, b4=840.0, d=1500.0)]
+
+
+def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
+    full = run_sweep(params, tmp_path, configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
+    assert list(full["status"]) == ["cannot assemble", "ok", "toggle", "ok", "ok"]
+    num = full.select_dtypes("number")
+    assert not np.isinf(num.to_numpy()).any() and num[full["status"] == "ok"].notna().all().all()
+    chunk = sorted(tmp_path.glob("*/chunk_*.csv"))
+    text = "".join(c.read_text().lower() for c in chunk)
+    assert "nan" not in text and "inf" not in text
+    assert len(chunk) == 3
+    chunk[1].unlink()  # an interrupted sweep: the second chunk never finished
+    import rigfem.sweep as sw
+
+    calls = []
+    real = sw.run_chunk
+    monkeypatch.setattr(sw, "run_chunk", lambda c, p, b: calls.append(c) or real(c, p, b))
+    again = run_sweep(params, tmp_path, configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
+    assert calls == [CONFIGS[2:4]]
+    pd.testing.assert_frame_equal(full, again)
+
+
+def test_dask_equals_serial(params, bases, tmp_path):
+    from dask.distributed import LocalCluster
+
+    serial = run_sweep(params, tmp_path / "serial", configs=CONFIGS, chunk_size=2, bases=bases,
+                       progress=False)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp", host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        dist = run_sweep(params, tmp_path / "dask", configs=CONFIGS, chunk_size=2, bases=bases,
+                         scheduler=cluster.scheduler_address, progress=False)
+    pd.testing.assert_frame_equal(serial, dist)
