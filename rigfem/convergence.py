@@ -9,9 +9,10 @@ For a part case of a scene (both modes share one mesh per step) :func:`study` ru
 
 Every step reports, per mode, the check's peak (max over the crank cycle of the superposed
 unit solutions), DOFs, wall time (``time.perf_counter`` around mesh + assembly + solves +
-superposition, meshing uncached) and peak memory.  Memory is the ``ru_maxrss`` of a fresh
-process per step (spawned), because the dominant allocations (gmsh, PARDISO/MKL factors) are
-native and invisible to ``tracemalloc``; the process's RSS after imports is reported beside it.
+superposition, meshing uncached), the process's CPU time over the same span, and peak
+memory.  Memory is the ``ru_maxrss`` of a fresh process per step (spawned), because the
+dominant allocations (gmsh, PARDISO/MKL factors) are native and invisible to ``tracemalloc``;
+the process's RSS after imports is reported beside it.
 
 :func:`richardson` extrapolates the three finest levels (general refinement ratios, fixed-point
 iteration as in Celik et al. 2008), gives the observed order and the GCI, and flags a peak whose
@@ -175,6 +176,12 @@ def away_from_singular_edges(part_name: str, params: dict | None, nodes: np.ndar
     return (d > away_mm) & (z > away_mm)
 
 
+def _cpu() -> float:
+    """CPU seconds of this process, all threads (wall time alone misleads on a shared machine)."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
     """Solve the cases at one setting: peaks per mode, DOFs, seconds, memory (in this process)."""
     from rigfem.partcheck import solve_cases
@@ -187,9 +194,9 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
         old = os.environ.get("RIGFEM_CACHE")
         os.environ["RIGFEM_CACHE"] = cache  # mesh every step afresh: its time is part of the cost
         try:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), _cpu()
             results = solve_cases(cases, s)
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, _cpu() - c0
         finally:
             if old is None:
                 os.environ.pop("RIGFEM_CACHE")
@@ -212,8 +219,8 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
         raise RuntimeError(f"step {spec.label}: non-finite peak")
     mem = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 if isolate else None
     return {**dataclasses.asdict(spec), "modes": modes, "dofs": int(results[0].solution.model.mesh.ndof),
-            "tets": int(len(results[0].mesh.tets)), "seconds": seconds, "peak_rss_mib": mem,
-            "base_rss_mib": rss0 if isolate else None}
+            "tets": int(len(results[0].mesh.tets)), "seconds": seconds, "cpu_seconds": cpu,
+            "peak_rss_mib": mem, "base_rss_mib": rss0 if isolate else None}
 
 
 def _isolated(cases: list, settings, spec: StepSpec) -> dict:
@@ -330,6 +337,7 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
                 e = errors[named[p]["label"]]
                 bound = ex.gci if (e is None and own and named[p] is hs[-1]) else None
                 presets[p] = {"step": named[p]["label"], "seconds": named[p]["seconds"],
+                              "cpu_seconds": named[p].get("cpu_seconds"),
                               "peak_rss_mib": named[p]["peak_rss_mib"], "dofs": named[p]["dofs"],
                               "value": named[p]["modes"][mode][qty], "error": e, "error_bound": bound,
                               "target": tol, "meets": (abs(e) <= tol if e is not None else

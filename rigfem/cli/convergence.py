@@ -46,13 +46,13 @@ def table(res: dict) -> str:
     """Markdown table of a part's study: steps, then the extrapolation per mode and quantity."""
     cols = [(m, q) for m in res["modes"] for q in res["modes"][m]]
     name = {"peak_mpa": "peak", "away_mpa": "away"}
-    head = "| step | order | size mm | local mm | dirs | DOFs | time s | peak RSS MiB |"
+    head = "| step | order | size mm | local mm | dirs | DOFs | time s | CPU s | peak RSS MiB |"
     head += "".join(f" {m} {name[q]} MPa | error |" for m, q in cols)
     lines = [f"## {res['part']} ({res['part_def']} {res['params'] or ''})", "", head,
-             "|" + "---|" * (8 + 2 * len(cols))]
+             "|" + "---|" * (9 + 2 * len(cols))]
     for s in res["steps"]:
         row = (f"| {s['label']} | P{s['order']} | {s['size_mm']:.3g} | {s['local_size_mm']:.3g} | "
-               f"{s['bearing_directions']} | {s['dofs']} | {s['seconds']:.1f} | "
+               f"{s['bearing_directions']} | {s['dofs']} | {s['seconds']:.1f} | {_fmt(s.get('cpu_seconds'))} | "
                f"{_fmt(s['peak_rss_mib'], '.0f')} |")
         for m, q in cols:
             err = res["modes"][m][q].get("errors", {}).get(s["label"])
@@ -80,7 +80,8 @@ def table(res: dict) -> str:
                              f"{_pct(ex['gci'])}, asymptotic: {'yes' if ex['asymptotic'] else 'no'}"
                              f"{'; ' + ex['note'] if ex['note'] else ''}{where}")
             else:
-                lines.append(f"- **{m}**, {what}: **{status}**, reference = finest level **{ex['limit']:.2f} MPa "
+                lines.append(f"- **{m}**, {what}: **{status}**, reference = finest level "
+                             f"**{ex['limit']:.2f} MPa "
                              f"± {100 * (ex['gci'] or 0):.2f} %** — {ex['note']} (orders {orders}){where}")
     if res["refused"]:
         lines.append(f"- memory guard refused: {'; '.join(res['refused'])}")
@@ -151,9 +152,9 @@ def summary(results: list[dict]) -> str:
              "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25). Oscillating and "
              "noise-limited sequences (last changes ≤ 1 %, not growing) have no Richardson limit: their "
              "reference is the finest level, the uncertainty its last change (× 1.25 if noise-limited).",
-             "", "| part | mode | extrapolated MPa | order | uncertainty | preset | time s | peak RSS MiB | DOFs "
-                 "| peak MPa | error | target met |",
-             "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---|"]
+             "", "| part | mode | extrapolated MPa | order | uncertainty | preset | time s | CPU s "
+                 "| peak RSS MiB | DOFs | peak MPa | error | target met |",
+             "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|"]
     for res in results:
         for m, a, ex in _quantities(res):
             if not ex or not ex["converging"]:
@@ -169,6 +170,7 @@ def summary(results: list[dict]) -> str:
                 if v["error"] is None and v.get("error_bound") is not None:
                     err = f"±{100 * v['error_bound']:.2f} % (the reference)"
                 lines.append(f"| {res['part']} | {m} | {lim} | {order} | {gci} | {p} | {v['seconds']:.1f} | "
+                             f"{_fmt(v.get('cpu_seconds'))} | "
                              f"{_fmt(v['peak_rss_mib'], '.0f')} | {v['dofs']} | {v['value']:.2f} | {err} | "
                              f"{met} |")
     lines += ["", "## Coarsest h level meeting each target (P2, 24 bearing directions)", "",
