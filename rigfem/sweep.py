@@ -451,6 +451,7 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
     work = Path(work_dir) / f"{p.key()}-{tag}"
     work.mkdir(parents=True, exist_ok=True)
+    (Path(work_dir) / ".gitignore").write_text("*\n")  # stored chunks never enter the repository
     (work / "params.json").write_text(json.dumps(dataclasses.asdict(p), indent=1, default=str))
     chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
     todo = [i for i in range(len(chunks)) if not _chunk_path(work, i).is_file()]

@@ -152,3 +152,24 @@ def test_dask_equals_serial(params, bases, tmp_path):
         dist = run_sweep(params, tmp_path / "dask", configs=CONFIGS, chunk_size=2, bases=bases,
                          scheduler=cluster.scheduler_address, progress=False)
     pd.testing.assert_frame_equal(serial, dist)
+
+
+def test_report_files(params, bases, tmp_path):
+    from rigfem.sweep_report import write_report
+
+    table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
+    files = write_report(table, params, tmp_path / "out")
+    assert files == ["sweep_four-bar.csv", "map_four-bar_d_b3.png", "map_four-bar_b4_b3.png", "worst_four-bar.md"]
+    text = (tmp_path / "out" / "sweep_four-bar.csv").read_text().lower()
+    assert "nan" not in text and "inf" not in text
+    md = (tmp_path / "out" / "worst_four-bar.md").read_text()
+    assert "worst configurations" in md and "2013 study" in md and "computed: 3" in md
+
+
+def test_cli_bad_input(capsys):
+    from rigfem.cli import main
+
+    assert main(["sweep", "--speed-hz", "0", "--quiet"]) == 2
+    assert "speed_hz" in capsys.readouterr().err
+    assert main(["sweep", "--scheduler", "localhost:8786", "--quiet"]) == 2
+    assert "tcp://HOST:PORT" in capsys.readouterr().err
