@@ -220,7 +220,7 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
     mem = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 if isolate else None
     return {**dataclasses.asdict(spec), "modes": modes, "dofs": int(results[0].solution.model.mesh.ndof),
             "tets": int(len(results[0].mesh.tets)), "seconds": seconds, "cpu_seconds": cpu,
-            "peak_rss_mib": mem, "base_rss_mib": rss0 if isolate else None}
+            "peak_rss_mib": mem, "base_rss_mib": rss0 if isolate else None, "load_avg": os.getloadavg()[0]}
 
 
 def _isolated(cases: list, settings, spec: StepSpec) -> dict:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -133,6 +134,16 @@ def _abs_err(a: dict, label: str) -> float:
     return abs(e) if e is not None else a["extrapolation"]["gci"]
 
 
+def _conditions(results: list[dict]) -> str:
+    """One line on how the times were measured and how busy the machine was."""
+    loads = [s["load_avg"] for r in results for s in r["steps"] if s.get("load_avg") is not None]
+    busy = (f"1-min load average {min(loads):.1f}–{max(loads):.1f} at the end of the steps that recorded it"
+            if loads else "load average not recorded")
+    return (f"Machine: {os.cpu_count()} cores shared with other jobs ({busy}); wall time is inflated by "
+            "waiting for a core, CPU time (all threads of the step's process) is the steadier figure. "
+            "Memory: peak RSS of the step's own spawned process (gmsh, PARDISO are native allocations).")
+
+
 def _quantities(res: dict):
     """(mode label, analysis, extrapolation) of the peak, and of the peak away from singular edges."""
     for m, qs in res["modes"].items():
@@ -152,6 +163,7 @@ def summary(results: list[dict]) -> str:
              "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25). Oscillating and "
              "noise-limited sequences (last changes ≤ 1 %, not growing) have no Richardson limit: their "
              "reference is the finest level, the uncertainty its last change (× 1.25 if noise-limited).",
+             "", _conditions(results),
              "", "| part | mode | extrapolated MPa | order | uncertainty | preset | time s | CPU s "
                  "| peak RSS MiB | DOFs | peak MPa | error | target met |",
              "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|"]
