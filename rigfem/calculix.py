@@ -320,9 +320,15 @@ def compare(solution: Any, result: CcxResult, coef: np.ndarray | None = None) ->
             u_cx = (v - R @ np.linalg.lstsq(R, v, rcond=None)[0]).reshape(-1, 3)
         vm_fe, vm_cx = solution.von_mises(c).max(), von_mises(result.stress[j, :n]).max()
         d_fe, d_cx = np.linalg.norm(u_fe, axis=1).max(), np.linalg.norm(u_cx, axis=1).max()
-        out.append(Comparison(float(vm_fe), float(vm_cx), float(vm_cx / vm_fe - 1), float(d_fe), float(d_cx),
-                              float(np.linalg.norm(u_cx - u_fe, axis=1).max() / d_fe)))
+        du = np.linalg.norm(u_cx - u_fe, axis=1).max()
+        out.append(Comparison(float(vm_fe), float(vm_cx), _rel(vm_cx - vm_fe, vm_fe), float(d_fe), float(d_cx),
+                              _rel(du, d_fe)))
     return out
+
+
+def _rel(diff: float, ref: float) -> float:
+    """diff / ref; 0 when both are 0 (an unloaded case), inf when only ref is."""
+    return float(diff / ref) if ref != 0 else (0.0 if diff == 0 else float("inf"))
 
 
 def cross_check(model: Any, supports: list, cases: list | None = None, solution: Any = None,
