@@ -102,16 +102,41 @@ def _orient(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     return out
 
 
+#: corner nodes (0-based) of the faces P1..P4 of CalculiX's C3D4/C3D10
+_TET_FACES = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]])
+
+
+def _element_faces(elements: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Element index and ccx face number (1..4) of each boundary triangle (corner nodes first)."""
+    if tris.ndim != 2 or tris.shape[1] < 3 or len(tris) == 0:
+        raise InputError(f"pressure triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
+    m = int(max(elements.max(), tris.max())) + 1
+
+    def code(corners: np.ndarray) -> np.ndarray:
+        c = np.sort(corners, axis=-1).astype(np.int64)
+        return (c[..., 0] * m + c[..., 1]) * m + c[..., 2]
+
+    faces = code(elements[:, _TET_FACES]).ravel()  # row 4e + f
+    order = np.argsort(faces)
+    key = code(tris[:, :3])
+    pos = np.searchsorted(faces[order], key).clip(0, len(faces) - 1)
+    if not np.array_equal(faces[order][pos], key):
+        raise InputError("pressure triangles must be faces of the elements")
+    idx = order[pos]
+    return idx // 4, idx % 4 + 1
+
+
 def _lines(rows: np.ndarray, fmt: str) -> str:
     """Rows formatted line by line (floats as %.14g: ccx reads at most 20 characters a field)."""
     return "".join(fmt % tuple(r) for r in rows.tolist())
 
 
 def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, material: Any,
-              fixed: Any, nodal_forces: np.ndarray | Sequence[np.ndarray],
+              fixed: Any, nodal_forces: np.ndarray | Sequence[np.ndarray], *,
               equations: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]] = (),
               springs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-              heading: str = "rigfem model") -> Path:
+              gravity: Sequence[float] | None = None,
+              pressure: tuple[np.ndarray, np.ndarray] | None = None, heading: str = "rigfem model") -> Path:
     """Write a CalculiX static deck of the model and return its path.
 
     ``nodes`` (N, 3) mm; ``elements`` (M, 10) C3D10 or (M, 4) C3D4, 0-based, in the order
@@ -122,7 +147,10 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
     ``equations`` are homogeneous linear constraints ``sum c_i u[node_i, dof_i] = 0`` given
     as (nodes, dofs, coeffs), the first term being the dependent one (not also fixed);
     ``springs`` = (nodes, dofs, stiffness) are grounded SPRING1 elements (N/mm), one *SPRING
-    card per distinct (dof, stiffness).
+    card per distinct (dof, stiffness); ``gravity`` (3,) mm/s² adds ccx's own *DLOAD GRAV
+    body load (needs ``density``) to every step; ``pressure`` = (triangles (K, ≥3) node
+    indices of boundary faces, p (K,) MPa, positive into the material) adds ccx's own *DLOAD
+    face pressure to every step.
     """
     nodes = np.asarray(nodes, dtype=float)
     if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
@@ -142,7 +170,16 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
     for i, f in enumerate(cases):
         if f.shape != (n, 3) or not np.all(np.isfinite(f)):
             raise InputError(f"nodal_forces[{i}] must be a finite ({n}, 3) array, got {f.shape}")
+    if gravity is not None:
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)) or not g.any() or rho is None:
+            raise InputError("gravity must be 3 finite numbers, not all 0, with a material density")
     elements = _orient(nodes, elements)
+    if pressure is not None:
+        p_elem, p_face = _element_faces(elements, np.asarray(pressure[0]))
+        p_val = np.broadcast_to(np.asarray(pressure[1], dtype=float), p_elem.shape)
+        if not np.all(np.isfinite(p_val)):
+            raise InputError("pressure values must be finite")
     etype = "C3D10" if elements.shape[1] == 10 else "C3D4"
 
     out = [f"*HEADING\n{heading.splitlines()[0] if heading else ''}\n", "*NODE, NSET=NALL\n"]
@@ -174,6 +211,11 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
         idx = np.argwhere(f != 0.0)
         out.append("*STEP\n*STATIC\n*CLOAD, OP=NEW\n")
         out.append(_lines(np.column_stack([idx[:, 0] + 1, idx[:, 1] + 1, f[idx[:, 0], idx[:, 1]]]), "%d,%d,%.14g\n"))
+        if pressure is not None:
+            out.append("*DLOAD\n" + _lines(np.column_stack([p_elem + 1, p_face, p_val]), "%d,P%d,%.14g\n"))
+        if gravity is not None:
+            gn = float(np.linalg.norm(g))
+            out.append(f"*DLOAD\nEALL,GRAV,{gn:.14g},{g[0] / gn:.14g},{g[1] / gn:.14g},{g[2] / gn:.14g}\n")
         out.append("*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n")
     path = Path(path)
     path.write_text("".join(out))
@@ -282,7 +324,8 @@ def export_model(model: Any, supports: list, cases: list | np.ndarray, path: str
         springs = (np.array(sn), np.array(sd), np.full(len(sn), k0))
     pad = np.zeros((len(nodes) - n, 3))
     loads = [np.vstack([F[:, k].reshape(-1, 3), pad]) for k in range(F.shape[1])]
-    return write_inp(path, nodes, fm.elements, model.material, fixed, loads, equations, springs, heading)
+    return write_inp(path, nodes, fm.elements, model.material, fixed, loads, equations=equations, springs=springs,
+                     heading=heading)
 
 
 @dataclass

@@ -294,3 +294,50 @@ def test_reference_scene_against_calculix():
     assert len(rows) >= 6
     for r in rows:
         assert abs(r["peak_rel_diff"]) < 1e-2 and r["displacement_rel_diff"] < 5e-3, r
+
+
+@needs_ccx
+def test_gravity_against_ccx_body_load(tmp_path):
+    """rigfem's consistent gravity loads (P1 and P2) against ccx's own *DLOAD GRAV on the same mesh."""
+    from fe_shapes import box
+
+    from rigfem.fe import build_model, solve as fe_solve
+    from rigfem.loads import Gravity
+    from rigfem.material import get_material
+    from rigfem.supports import Fixed, constraints
+
+    for order in (1, 2):
+        model = build_model(box(80.0, 8.0, 12.0, 10, 2, 2, jitter=0.2), get_material("rig_steel"), order=order)
+        g = (0.0, 3000.0, -9810.0)  # mm/s²
+        sol = fe_solve(model, [Fixed("xmin")], [[Gravity(g)]])
+        fixed, _, _ = constraints(model.mesh, {}, [Fixed("xmin")], model.material.E)
+        deck = write_inp(tmp_path / f"grav{order}.inp", model.mesh.nodes, model.mesh.elements, model.material,
+                         np.column_stack([fixed // 3, fixed % 3]), np.zeros((len(model.mesh.nodes), 3)), gravity=g)
+        res = run_ccx(deck)
+        u = sol.displacement()
+        assert np.abs(res.displacement[0] - u).max() <= 1e-4 * np.abs(u).max()
+        vm = sol.von_mises()
+        assert von_mises(res.stress[0]).max() == pytest.approx(vm.max(), rel=1e-4)
+
+
+@needs_ccx
+def test_hole_pressure_against_ccx_face_load(tmp_path):
+    """rigfem's Pressure on a curved hole wall (P2) against ccx's own *DLOAD face pressure."""
+    from fe_shapes import plate_with_hole
+
+    from rigfem.fe import build_model, solve as fe_solve
+    from rigfem.loads import Pressure
+    from rigfem.material import get_material
+    from rigfem.supports import Symmetry, constraints
+
+    model = build_model(plate_with_hole(60.0, 40.0, 5.0, 6.0, 5.0, 1.5), get_material("rig_steel"), order=2)
+    supports = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
+    sol = fe_solve(model, supports, [[Pressure("hole", 50.0)]])
+    fixed, _, _ = constraints(model.mesh, model.part.holes, supports, model.material.E)
+    deck = write_inp(tmp_path / "p.inp", model.mesh.nodes, model.mesh.elements, model.material,
+                     np.column_stack([fixed // 3, fixed % 3]), np.zeros((len(model.mesh.nodes), 3)),
+                     pressure=(model.mesh.surfaces["hole"], 50.0))
+    res = run_ccx(deck)
+    u, vm = sol.displacement(), sol.von_mises()
+    assert np.abs(res.displacement[0] - u).max() <= 1e-4 * np.abs(u).max()
+    assert np.abs(von_mises(res.stress[0]) - vm).max() <= 1e-4 * vm.max()
