@@ -156,11 +156,6 @@ class StepSpec:
     bearing_directions: int
 
 
-def _away_mask(case, nodes: np.ndarray, away_mm: float) -> np.ndarray | None:
-    """Nodes farther than ``away_mm`` from an I-profile's web-flange corners and clamped base."""
-    return away_from_singular_edges(case.part, case.params, nodes, away_mm)
-
-
 def away_from_singular_edges(part_name: str, params: dict | None, nodes: np.ndarray,
                              away_mm: float = AWAY_MM) -> np.ndarray | None:
     """Mask of points (n, 3) farther than ``away_mm`` from the sharp re-entrant web-flange corners
@@ -208,7 +203,7 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
         pk = r.peak
         entry = {"peak_mpa": float(pk.value), "crank_deg": float(r.case.rows[r.row]), "surface": pk.surface,
                  "xyz": [round(float(v), 3) for v in pk.xyz], "zz_error": float(pk.error)}
-        mask = _away_mask(r.case, r.solution.model.mesh.nodes, AWAY_MM)
+        mask = away_from_singular_edges(r.case.part, r.case.params, r.solution.model.mesh.nodes)
         if mask is not None:
             sub = S[:, mask]
             away = max(float(von_mises(np.tensordot(r.coef[i:i + 24], sub, 1)).max())
@@ -223,16 +218,12 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
             "peak_rss_mib": mem, "base_rss_mib": rss0 if isolate else None, "load_avg": os.getloadavg()[0]}
 
 
-def _isolated(cases: list, settings, spec: StepSpec) -> dict:
-    return _run_step(cases, settings, spec, True)
-
-
 def run_step(cases: list, settings, spec: StepSpec, isolate: bool = True) -> dict:
     """One step, in a fresh spawned process (``isolate``: memory measured) or in this one."""
     if not isolate:
         return _run_step(cases, settings, spec, False)
     with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as ex:
-        return ex.submit(_isolated, cases, settings, spec).result()
+        return ex.submit(_run_step, cases, settings, spec, True).result()
 
 
 # ----------------------------------------------------------------------------- a study
