@@ -308,6 +308,13 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         _set_fields(refine_tags, settings)
         gmsh.model.mesh.generate(3)
         points, tets, surfaces, q = _extract()
+        if len(q) and q.min() < settings.min_quality:
+            # HXT can leave a flat tet across a thin wall whose two faces carry mirrored surface
+            # meshes (the filleted I-profile web); gmsh's Delaunay inserts points and recovers
+            gmsh.model.mesh.clear()
+            gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+            gmsh.model.mesh.generate(3)
+            points, tets, surfaces, q = _extract()
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:

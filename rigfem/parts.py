@@ -18,7 +18,8 @@ or "assumed: ...") so an engineer corrects a dimension without touching code.  K
   volume ``plate``.
 - ``PF_4b_003_v2`` (kind ``iprofile``): x along the profile, y across the flanges, z up.
   Groups ``screw_1``..``screw_4`` (bottom flange y<0, y>0, top flange y<0, y>0), ``base``
-  (z=0), ``top`` (z=height); volume ``iprofile``.
+  (z=0), ``top`` (z=height); volume ``iprofile``.  ``fillet_radius`` > 0 rounds the four
+  web-flange root corners (0: sharp corners, a stress singularity).
 - Custom parts: a path to a ``.geo`` file (its physical groups are used; it may ``Merge`` a
   STEP/BREP) or a ``.step``/``.stp``/``.brep`` file whose named entities become groups.
 
@@ -255,6 +256,13 @@ def validate(part: PartDef) -> None:
         _need(s + r <= b / 2 - MIN_WALL,
               f"hole_spacing = {2 * s:g} mm puts the holes outside the flange: must be <= "
               f"{2 * (b / 2 - MIN_WALL - r):g} mm")
+        rf = check_range("fillet_radius", part["fillet_radius"], 0.0, None, "mm")
+        _need(2 * rf + MIN_WALL <= part["height"] - 2 * tf,
+              f"fillet_radius = {rf:g} mm does not fit the web's clear height: must be <= "
+              f"{(part['height'] - 2 * tf - MIN_WALL) / 2:g} mm")
+        _need(s - r >= tw / 2 + rf + MIN_WALL,
+              f"fillet_radius = {rf:g} mm runs into the screw holes: must be <= "
+              f"{s - r - tw / 2 - MIN_WALL:g} mm")
     elif part.kind != "custom":
         raise InputError(f"part kind {part.kind!r} is unknown; allowed: rail, plate, iprofile")
 
@@ -391,6 +399,22 @@ def _build_plate(part: PartDef) -> dict[str, Hole]:
             "screw_2": _vertical_hole(s, 0.0, 0.0, t, rs)}
 
 
+def _fillet_web_roots(body: list[tuple[int, int]], Lx: float, h: float, tf: float, tw: float,
+                      rf: float) -> list[tuple[int, int]]:
+    """Round the four web-flange corners (edges along x at y = +-tw/2, z = tf and h - tf)."""
+    occ = gmsh.model.occ
+    occ.synchronize()
+    roots = []
+    for _, e in gmsh.model.getEntities(1):
+        lo, hi = _bbox(e, 1)
+        if (_close(hi[0] - lo[0], Lx) and _close(abs(lo[1]), tw / 2) and _close(lo[1], hi[1])
+                and _close(lo[2], hi[2]) and (_close(lo[2], tf) or _close(lo[2], h - tf))):
+            roots.append(e)
+    if len(roots) != 4:
+        raise RuntimeError(f"I-profile geometry: found {len(roots)} web-flange edges, expected 4")
+    return occ.fillet([t for _, t in body], roots, [rf], removeVolume=True)
+
+
 def _build_iprofile(part: PartDef) -> dict[str, Hole]:
     occ = gmsh.model.occ
     Lx, b, h = part["length"], part["flange_width"], part["height"]
@@ -399,6 +423,8 @@ def _build_iprofile(part: PartDef) -> dict[str, Hole]:
     pieces = [(3, occ.addBox(0, -b / 2, 0, Lx, b, tf)), (3, occ.addBox(0, -b / 2, h - tf, Lx, b, tf)),
               (3, occ.addBox(0, -tw / 2, tf, Lx, tw, h - 2 * tf))]
     body, _ = occ.fuse(pieces[:1], pieces[1:])
+    if part["fillet_radius"] > 0:
+        body = _fillet_web_roots(body, Lx, h, tf, tw, part["fillet_radius"])
     spots = {"screw_1": (-s, 0.0), "screw_2": (s, 0.0), "screw_3": (-s, h - tf), "screw_4": (s, h - tf)}
     tools = [(3, occ.addCylinder(Lx / 2, y, z0 - 1, 0, 0, tf + 2, r)) for y, z0 in spots.values()]
     out, _ = occ.cut(body, tools)

@@ -101,6 +101,15 @@ def test_plate_and_iprofile_groups_quality_and_volume(name, refine):
         assert fit.radius == pytest.approx(h.radius, abs=1e-6) and fit.depth == pytest.approx(h.depth, abs=1e-6)
 
 
+def test_filleted_iprofile_where_hxt_leaves_a_flat_tet_still_meshes():
+    """Height 70, size 6: HXT puts a zero-volume tet across the 6 mm web (mirrored face meshes);
+    mesh_part falls back to gmsh's Delaunay and meets the quality threshold."""
+    part = load_part("PF_4b_003_v2", {"height": 70})
+    assert part["fillet_radius"] == 3
+    pm = mesh_part(part, MeshSettings(6.0), use_cache=False)
+    assert pm.quality["min"] >= 0.1 and (tet_volumes(pm) > 0).all()
+
+
 def test_plate_screws_on_x_axis_at_two_pitches():
     pm = mesh_part(load_part("PF_4b_006"), MeshSettings(10.0), use_cache=False)
     assert pm.holes["screw_1"].center[0] == pytest.approx(-60) and pm.holes["screw_2"].center[0] == pytest.approx(60)

@@ -86,12 +86,40 @@ def test_plate_family_differs_only_in_thickness():
 
 
 def test_iprofile_volume_against_hand_calculation():
-    """Two flanges 40 x 80 x 8, web 40 x 6 x 44, four Ø6.6 holes through 8 mm flanges."""
+    """Two flanges 40 x 80 x 8, web 40 x 6 x 44, four Ø6.6 holes through 8 mm flanges, and four
+    r = 3 root fillets each adding (1 - pi/4) r^2 of section area along the 40 mm length."""
     part = load_part("PF_4b_003_v2")
-    hand = 2 * 40 * 80 * 8 + 40 * 6 * (60 - 16) - 4 * math.pi / 4 * 6.6**2 * 8
-    assert hand == pytest.approx(60665.2, abs=0.1)
+    assert part["fillet_radius"] == 3
+    sharp = 2 * 40 * 80 * 8 + 40 * 6 * (60 - 16) - 4 * math.pi / 4 * 6.6**2 * 8
+    hand = sharp + 4 * (1 - math.pi / 4) * 3**2 * 40
+    assert (sharp, hand) == (pytest.approx(60665.2, abs=0.1), pytest.approx(60974.2, abs=0.1))
     assert volume_mm3(part) == pytest.approx(hand, rel=1e-6)
-    assert mass_kg(part) == pytest.approx(0.4762, abs=1e-4)
+    assert mass_kg(part) == pytest.approx(0.4786, abs=1e-4)
+    assert volume_mm3(load_part("PF_4b_003_v2", {"fillet_radius": 0})) == pytest.approx(sharp, rel=1e-6)
+
+
+def test_iprofile_fillets_keep_groups_and_holes():
+    """The fillets add four cylindrical faces of radius 3 along x; named groups and holes unchanged."""
+    import gmsh
+
+    from rigfem.parts import build, gmsh_session
+
+    def groups_and_fillets(fillet: float):
+        with gmsh_session():
+            holes = build(load_part("PF_4b_003_v2", {"fillet_radius": fillet}))
+            names = {gmsh.model.getPhysicalName(d, t): len(gmsh.model.getEntitiesForPhysicalGroup(d, t))
+                     for d, t in gmsh.model.getPhysicalGroups()}
+            rounds = [t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Cylinder"
+                      and np.ptp(np.reshape(gmsh.model.getBoundingBox(2, t), (2, 3))[:, 0]) > 39.9]
+        return holes, names, len(rounds)
+
+    h0, n0, r0 = groups_and_fillets(0)
+    h3, n3, r3 = groups_and_fillets(3)
+    assert (r0, r3) == (0, 4) and n0 == n3
+    assert set(n3) == {"screw_1", "screw_2", "screw_3", "screw_4", "base", "top", "iprofile"}
+    for k in h0:
+        np.testing.assert_allclose(h3[k].center, h0[k].center)
+        assert (h3[k].radius, h3[k].depth) == (h0[k].radius, h0[k].depth)
 
 
 def test_every_dimension_has_unit_and_source():
@@ -117,6 +145,9 @@ def test_every_dimension_has_unit_and_source():
     ("PF_4b_006", {"bore_diameter": 150}, "hub_diameter"),
     ("PF_4b_003_v2", {"flange_thickness": 40}, "height"),
     ("PF_4b_003_v2", {"hole_diameter": 45}, "hole_diameter"),
+    ("PF_4b_003_v2", {"fillet_radius": 25}, "fillet_radius"),    # larger than the web's clear height
+    ("PF_4b_003_v2", {"fillet_radius": 10, "hole_spacing": 34}, "fillet_radius"),  # into the holes
+    ("PF_4b_003_v2", {"fillet_radius": -1}, "fillet_radius"),
     ("rail_size25", {"thickness": 3}, "thickness"),              # not a rail dimension
 ])
 def test_impossible_dimensions_are_input_errors_naming_the_field(name, overrides, field):
