@@ -11,6 +11,7 @@ mode (the critical crank angle), a ParaView ``.pvd`` animation per part over the
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import tomllib
 from dataclasses import dataclass
@@ -22,11 +23,12 @@ from rigfem import __version__
 from rigfem.cli.reactions import plot as plot_reactions
 from rigfem.cli.reactions import result_dict
 from rigfem.errors import InputError, check_range
+from rigfem.linkage import solve
 from rigfem.loadcases import part_cases
 from rigfem.mechanisms import MODELS, simulate
 from rigfem.output import atomic_dir, check_writable
 from rigfem.partcheck import CaseResult, solve_cases, verdict_of
-from rigfem.reactions import peaks
+from rigfem.reactions import JointHistory, ReactionHistory, peaks, read_csv, spline_evaluator
 from rigfem.render import field_picture
 from rigfem.report import overall, render_markdown, write_json
 from rigfem.scene import Scene, load_scene, resolve
@@ -35,8 +37,8 @@ from rigfem.vtk import write_vtu
 
 #: the built-in reference scene ``rigfem check`` runs with no argument
 REFERENCE_SCENE = "final-cm"
-#: [check] fields about the dynamics (the rest is rigfem.settings)
-_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12}
+#: [check] fields about the dynamics and outputs (the rest is rigfem.settings)
+_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None}
 
 
 @dataclass
@@ -49,6 +51,7 @@ class CheckScene:
     samples: int
     mass_model: str
     frames: int  #: VTU frames of the cycle animation (0: none)
+    reactions_csv: Path | None  #: external reaction history replacing the dynamics' forces
 
 
 def load_check_scene(name: str | Path, overrides: dict | None = None) -> CheckScene:
@@ -64,7 +67,54 @@ def load_check_scene(name: str | Path, overrides: dict | None = None) -> CheckSc
     frames = int(check_range("[check] frames", dyn["frames"], 0, 360))
     settings = check_settings(table, sc.linkage.meta["type"], sc.linkage.meta.get("rails_mm"))
     desc = data.get("description", data["linkage"].get("title", ""))
-    return CheckScene(sc, settings, desc, samples, dyn["mass_model"], frames)
+    csv_path = None
+    if dyn["reactions_csv"] is not None:
+        csv_path = path.parent / str(dyn["reactions_csv"])
+        if not csv_path.is_file():
+            raise InputError(f"[check] reactions_csv = {str(dyn['reactions_csv'])!r}: no such file next to "
+                             f"the scene ({csv_path})")
+    return CheckScene(sc, settings, desc, samples, dyn["mass_model"], frames, csv_path)
+
+
+def imported_history(cs: CheckScene) -> ReactionHistory:
+    """An external reaction history (CSV) on the scene's linkage.
+
+    The CSV gives the joint forces and the driver torque; the linkage gives the joint
+    positions and the bodies' motion at the CSV's crank angles (to place the loads on the
+    parts and, in cycle mode, for the inertia loads).  Peaks are refined on a spline of the
+    CSV.  A CSV whose forces do not balance the linkage's inertia shows up as the relieved
+    imbalance of each free part.
+    """
+    ext = read_csv(cs.reactions_csv)
+    kin = solve(cs.scene.linkage, ext.crank_deg, cs.scene.speed_hz)
+    missing = [n for n in kin.joints if n not in ext.joints]
+    if missing:
+        raise InputError(f"reactions CSV {cs.reactions_csv.name} lacks joint(s) {', '.join(missing)}; "
+                         f"the linkage has {', '.join(kin.joints)}")
+    sign = {n: -1.0 if (ext.joints[n].body_a, ext.joints[n].body_b) == (j.body_b, j.body_a) else 1.0
+            for n, j in kin.joints.items()}
+    forces = spline_evaluator(ext)
+    meta = dict(kin.meta, model=f"imported from {cs.reactions_csv.name}", singular=None)
+
+    def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:
+        joints = {n: JointHistory(n, j.body_a, j.body_b, sign[n] * f.joints[n].force_N, j.position_mm)
+                  for n, j in k.joints.items()}
+        return ReactionHistory(f.crank_deg, joints, f.torque_Nm, k.bodies, meta, evaluator=at)
+
+    def at(deg) -> ReactionHistory:
+        d = np.atleast_1d(np.asarray(deg, float))
+        order = np.argsort(d)  # the solver wants increasing angles; answer in the order asked
+        k = solve(cs.scene.linkage, d[order], cs.scene.speed_hz, check_closure=False)
+        back = np.argsort(order)
+        for j in k.joints.values():
+            j.position_mm = j.position_mm[back]
+        k.bodies = {n: dataclasses.replace(b, angle_rad=b.angle_rad[back], omega_rad_s=b.omega_rad_s[back],
+                                           alpha_rad_s2=b.alpha_rad_s2[back], origin_mm=b.origin_mm[back],
+                                           origin_acc_mm_s2=b.origin_acc_mm_s2[back])
+                    for n, b in k.bodies.items()}
+        return combine(forces(d), k)
+
+    return combine(ext, kin)
 
 
 def _progress(total: int, quiet: bool):
@@ -157,7 +207,8 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     s = cs.settings
     out = Path(out) if out is not None else Path("results") / cs.scene.name
     check_writable(out, force)
-    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
+    h = (imported_history(cs) if cs.reactions_csv else
+         simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
     reactions = result_dict(h)
     limit = s.limit_factor * s.material.sigma_u
     results: list[CaseResult] = []
@@ -176,7 +227,8 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
         "scene": cs.scene.name, "description": cs.description, "rigfem_version": __version__,
         "verdict": overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
-                          "speed_hz": cs.scene.speed_hz, "model": cs.mass_model, "samples": cs.samples},
+                          "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],
+                          "samples": int(h.crank_deg.size)},
         **{k: reactions[k] for k in ("rules", "transmission_angle_deg", "peaks", "singular", "warnings")},
         "torque_Nm": reactions.get("torque_Nm") or reactions.get("driver_force_N"),
         "settings": {"modes": list(s.modes), "fidelity": s.fidelity, "order": s.order, "size_mm": s.size_mm,

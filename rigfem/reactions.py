@@ -149,7 +149,7 @@ def _series(h: ReactionHistory) -> dict[str, np.ndarray]:
     return out
 
 
-def _spline_evaluator(h: ReactionHistory) -> Callable[[np.ndarray], ReactionHistory]:
+def spline_evaluator(h: ReactionHistory) -> Callable[[np.ndarray], ReactionHistory]:
     """Periodic (full turn) or not-a-knot cubic spline through an imported history."""
     deg = h.crank_deg
     periodic = is_full_turn(deg)
@@ -189,7 +189,7 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     toggle = h.meta.get("singular")[0][0] if h.meta.get("singular") else None
     if toggle is None and mask.any():
         toggle = float(deg[np.argmax(mask)])
-    ev = h.evaluator if h.evaluator is not None else (_spline_evaluator(h) if deg.size >= 4 else None)
+    ev = h.evaluator if h.evaluator is not None else (spline_evaluator(h) if deg.size >= 4 else None)
     step = abs(deg[1] - deg[0]) if deg.size > 1 else 0.0
     series = _series(h)
     best = {n: (float(deg[int(np.argmax(v))]), float(np.max(v))) for n, v in series.items()}

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import tomllib
+from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.report import EXIT
@@ -31,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--samples", type=int, help="crank angles per turn (default 360)")
     p.add_argument("--model", help="mass model: rigid-body (default) or original")
     p.add_argument("--frames", type=int, help="VTU frames of the cycle animation (default 12, 0 = none)")
+    p.add_argument("--reactions-csv", metavar="PATH",
+                   help="reaction history from outside (CSV as written by rigfem reactions --csv) "
+                        "instead of rigfem's dynamics; the scene's linkage places the loads")
     p.add_argument("--solver", default="auto", help="auto | pardiso | superlu | amg")
     p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -39,6 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _overrides(a: argparse.Namespace) -> dict:
     o = {"fidelity": a.fidelity, "order": a.order, "size_mm": a.size, "local_size_mm": a.local_size,
          "samples": a.samples, "mass_model": a.model, "frames": a.frames,
+         "reactions_csv": str(Path(a.reactions_csv).resolve()) if a.reactions_csv else None,
          "modes": a.modes.split(",") if a.modes else None, "parts": a.parts.split(",") if a.parts else None}
     return {k: v for k, v in o.items() if v is not None}
 
