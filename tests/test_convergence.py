@@ -96,3 +96,34 @@ def test_cli_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path):
     assert main(["convergence", *argv, "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("rigfem: error:") and msg in err and err.count("\n") == 1
+
+
+def _synthetic_study(peaks: dict[str, list[float]]) -> dict:
+    """A study dict as rigfem.convergence.study writes it, from given h-sequence peaks per mode."""
+    sizes = [(11.3, 1.7), (8.0, 1.2), (5.66, 0.85), (4.0, 0.6)]
+    steps = [{"label": f"h{k}", "kind": "h", "order": 2, "size_mm": g, "local_size_mm": loc,
+              "bearing_directions": 24, "dofs": 10000 * 3 ** k, "tets": 1000 * 3 ** k, "seconds": 2.0 ** k,
+              "cpu_seconds": 1.5 * 2.0 ** k, "peak_rss_mib": 300.0 + k, "base_rss_mib": 250.0, "load_avg": 1.0,
+              "modes": {m: {"peak_mpa": q[k], "crank_deg": 0.0, "surface": "hole_00", "xyz": [0.0, 0.0, 0.0],
+                            "zz_error": 0.1} for m, q in peaks.items()}}
+             for k, (g, loc) in enumerate(sizes)]
+    steps.append(dict(steps[1], label="standard", kind="preset", bearing_directions=12))
+    return {"part": "crank_rail", "part_def": "rail_size25", "params": {"length": 700.0}, "ratio": 2 ** 0.5,
+            "h_directions": 24, "fine_is_finest": True, "steps": steps, "refused": [], "scene": "final-cm",
+            "command": "rigfem convergence crank_rail"}
+
+
+def test_render_tables_plot_and_summary(tmp_path, capsys):
+    h = [1.7, 1.2, 0.85, 0.6]
+    res = _synthetic_study({"original": [100 - 8 * x ** 2 for x in h],  # converges, order 2, limit 100
+                            "cycle": [50 * x ** -0.45 for x in h]})  # singular
+    (tmp_path / "crank_rail.json").write_text(json.dumps(res))
+    assert main(["convergence", "--render", "--out", str(tmp_path)]) == 0
+    md = (tmp_path / "crank_rail.md").read_text()
+    assert "extrapolated **100.00 MPa**, observed order 2.00" in md and "**NOT CONVERGING**" in md
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| crank_rail | cycle | **not converging**" in summary and "n/a (singular)" in summary
+    std = 100 - 8 * 1.2 ** 2
+    assert f"| {std:.2f} | {100 * (std / 100 - 1):+.2f} % | **no** |" in summary  # -11.5 %: misses 3 %
+    assert (tmp_path / "crank_rail.png").stat().st_size > 10_000
+    assert "nan" not in (tmp_path / "crank_rail.json").read_text().lower()
