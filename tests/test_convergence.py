@@ -75,6 +75,7 @@ def test_real_coarse_h_sequence_on_the_plate_converges():
     json.loads(to_json(res))
 
 
+@pytest.mark.heavy  # a spawned process importing the FE stack: ~8 s alone, ~45 s on the busy machine
 def test_isolated_step_measures_time_memory_and_a_finite_peak():
     """One coarse plate step in a spawned process: its own peak RSS above the post-import RSS."""
     settings, by = scene_cases("final-cm", ["plate_A"], {"modes": ["original"]})
