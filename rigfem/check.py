@@ -27,7 +27,8 @@ from rigfem.linkage import solve
 from rigfem.loadcases import part_cases
 from rigfem.mechanisms import MODELS, simulate
 from rigfem.output import atomic_dir, check_writable
-from rigfem.partcheck import CaseResult, solve_cases, verdict_of
+from rigfem.calculix import export_model
+from rigfem.partcheck import CaseResult, solve_cases, supports_of, verdict_of
 from rigfem.reactions import JointHistory, ReactionHistory, peaks, read_csv, spline_evaluator
 from rigfem.render import field_picture
 from rigfem.report import overall, render_markdown, write_json
@@ -169,7 +170,8 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path) -> None:
     plt.close(fig)
 
 
-def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int) -> list[str]:
+def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int,
+                   export_inp: bool) -> list[str]:
     files = []
     worst = {}
     for r in results:  # one picture per part: its mode with the highest peak
@@ -180,6 +182,10 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
         c = r.coef[r.row]
         write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
         files.append(f"{stem}.vtu")
+        if export_inp:  # the identical model at the critical crank angle, for CalculiX
+            export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
+                         heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
+            files.append(f"{stem}.inp")
         if worst[r.case.name] is r:
             fm = r.solution.model.mesh
             field_picture(fm.nodes, fm.elements, r.solution.von_mises(c), d / f"{r.case.name}.png",
@@ -201,8 +207,13 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
-              overrides: dict | None = None, quiet: bool = False, solver: str = "auto") -> dict:
-    """Check a scene; write the report folder ``out`` (default results/<scene>); return the report."""
+              overrides: dict | None = None, quiet: bool = False, solver: str = "auto",
+              export_inp: bool = False) -> dict:
+    """Check a scene; write the report folder ``out`` (default results/<scene>); return the report.
+
+    ``export_inp`` also writes each part case's model at its critical crank angle as a
+    CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
+    """
     cs = load_check_scene(name, overrides)
     s = cs.settings
     out = Path(out) if out is not None else Path("results") / cs.scene.name
@@ -242,7 +253,7 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
         files = ["report.json", "report.md", "reactions.png"]
         if results:
             _plot_peaks(results, limit, d / "peak_von_mises.png")
-            files += ["peak_von_mises.png"] + _write_outputs(d, results, limit, cs.frames)
+            files += ["peak_von_mises.png"] + _write_outputs(d, results, limit, cs.frames, export_inp)
         report["files"] = files
         write_json(report, d / "report.json")
         (d / "report.md").write_text(render_markdown(report))

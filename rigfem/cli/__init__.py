@@ -20,6 +20,7 @@ COMMANDS: dict[str, str] = {
     "mesh": "mesh",
     "parts": "parts",
     "reactions": "reactions",
+    "verify": "verify",
     "sweep": "sweep",
 }
 

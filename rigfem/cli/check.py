@@ -36,6 +36,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="reaction history from outside (CSV as written by rigfem reactions --csv) "
                         "instead of rigfem's dynamics; the scene's linkage places the loads")
     p.add_argument("--solver", default="auto", help="auto | pardiso | superlu | amg")
+    p.add_argument("--export-inp", action="store_true",
+                   help="also write each part case at its critical crank angle as a CalculiX deck (.inp)")
     p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -70,6 +72,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"{name:32s} {data.get('description', data['linkage'].get('title', ''))}")
         return 0
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
-                       quiet=args.quiet, solver=args.solver)
+                       quiet=args.quiet, solver=args.solver, export_inp=args.export_inp)
     print(json.dumps(report, indent=2) if args.json else _summary(report))
     return EXIT[report["verdict"]]
