@@ -10,7 +10,8 @@ or "assumed: ...") so an engineer corrects a dimension without touching code.  K
   x = first_offset + i*pitch (as many as fit with the same end distance on the far end).
   Surface groups: ``hole_00``, ``hole_01``, ... (through-bore walls, in x order), ``cbore_00``...
   (counterbore walls), ``cbore_floor_00``... (annulus where the screw head bears), ``ends``,
-  ``bottom``, ``top``, ``sides`` (and ``grooves`` if modelled); volume group ``rail``.
+  ``bottom``, ``top``, ``sides`` (and ``grooves`` if modelled; a waist's faces are ``sides``);
+  volume group ``rail``.
 - ``PF_4b_006``, ``PF_4b_005_v2``, ``PF_4b_004_v2``, ``PF_4b_002_v2``, ``PF_4b_001_v2`` (kind
   ``plate``, thickness variants of one definition): z along the bore axis, z=0 the face against
   the rail, origin on the axis, screws on the x axis.  Groups ``bore`` (bearing seat),
@@ -222,6 +223,17 @@ def validate(part: PartDef) -> None:
                       f"groove_radius = {rg:g} mm cuts into the counterbore at {k} = {z:g} mm")
             _need(part["groove_z_upper"] - part["groove_z_lower"] >= 2 * rg + MIN_WALL,
                   "groove_z_upper - groove_z_lower must be >= 2*groove_radius + 1 mm")
+        ww = check_range("waist_width", part["waist_width"], 0.0, W, "mm")
+        if ww > 0:
+            _need(rg == 0, "waist_width and groove_radius cannot both be > 0 (choose one simplified profile)")
+            za = check_range("waist_z_lower", part["waist_z_lower"], MIN_WALL, H - MIN_WALL, "mm")
+            zb = check_range("waist_z_upper", part["waist_z_upper"], za, H - MIN_WALL, "mm", lo_open=True)
+            _need(ww >= part["hole_diameter"] + 2 * MIN_WALL,
+                  f"waist_width = {ww:g} mm cuts into the through-hole: must be >= "
+                  f"{part['hole_diameter'] + 2 * MIN_WALL:g} mm")
+            _need(ww >= part["cbore_diameter"] + 2 * MIN_WALL or zb <= H - part["cbore_depth"] - MIN_WALL,
+                  f"waist_width = {ww:g} mm cuts into the counterbore: waist_z_upper = {zb:g} mm must be "
+                  f"<= {H - part['cbore_depth'] - MIN_WALL:g} mm")
     elif part.kind == "plate":
         _positive(part, "diameter", "thickness", "bore_diameter", "seat_width", "hub_diameter",
                   "screw_spacing", "screw_diameter")
@@ -329,6 +341,12 @@ def _build_rail(part: PartDef) -> dict[str, Hole]:
         for y in (-W / 2, W / 2):
             for z in (part["groove_z_lower"], part["groove_z_upper"]):
                 tools.append((3, occ.addCylinder(-1, y, z, L + 2, 0, 0, rg)))
+    ww = part["waist_width"]
+    steps = (part["waist_z_lower"], part["waist_z_upper"]) if ww > 0 else ()
+    if steps:
+        za, zb = steps
+        for y0 in (-W / 2 - 1, ww / 2):
+            tools.append((3, occ.addBox(-1, y0, za, L + 2, (W - ww) / 2 + 1, zb - za)))
     out, _ = occ.cut([(3, body)], tools)
     occ.synchronize()
     names = {"ends": [], "bottom": [], "top": [], "sides": []}
@@ -348,7 +366,7 @@ def _build_rail(part: PartDef) -> dict[str, Hole]:
             names["bottom"].append(s)
         elif hi[2] - lo[2] < 1e-6 and _close(lo[2], H):
             names["top"].append(s)
-        elif hi[1] - lo[1] < 1e-6:
+        elif hi[1] - lo[1] < 1e-6 or (hi[2] - lo[2] < 1e-6 and any(_close(lo[2], z) for z in steps)):
             names["sides"].append(s)
         elif gmsh.model.getType(2, s) == "Cylinder" and hi[0] - lo[0] > L - 1e-3:
             names["grooves"].append(s)

@@ -48,6 +48,18 @@ def test_rail_grooves_remove_four_half_discs():
     assert volume_mm3(plain) - volume_mm3(grooved) == pytest.approx(removed, rel=1e-6)
 
 
+def test_rail_waist_removes_two_strips_and_matches_catalogue_mass():
+    """Waist 11.95 mm wide from z = 2 to 14: (23 - 11.95) * 12 mm^2 off the section (clear of the
+    Ø7 bores); 1000 mm rail: (552 - 132.6) * 1000 - 17 * 1432.6 mm^3 -> 3.101 kg/m (catalogue 3.1)."""
+    plain = load_part("rail_size25", {"length": 700})
+    waisted = load_part("rail_size25", {"length": 700, "waist_width": 11.95})
+    assert plain["waist_width"] == 0  # default off
+    assert volume_mm3(plain) - volume_mm3(waisted) == pytest.approx((23 - 11.95) * 12 * 700, rel=1e-6)
+    per_m = mass_kg(load_part("rail_size25", {"waist_width": 11.95}))
+    assert per_m == pytest.approx(((552 - 11.05 * 12) * 1000 - 17 * 1432.6) * RHO, rel=1e-4)
+    assert per_m == pytest.approx(3.1, abs=2e-3)
+
+
 def test_rail_hole_positions_and_pitch():
     part = load_part("rail_size25", {"length": 700})
     np.testing.assert_allclose(rail_hole_x(part), 20 + 60 * np.arange(12))
@@ -137,6 +149,10 @@ def test_every_dimension_has_unit_and_source():
     ("rail_size25", {"cbore_depth": 30}, "cbore_depth"),
     ("rail_size25", {"length": 30}, "length"),
     ("rail_size25", {"groove_radius": 8}, "groove_radius"),
+    ("rail_size25", {"waist_width": 8}, "waist_width"),          # into the Ø7 bores
+    ("rail_size25", {"waist_width": 12, "waist_z_upper": 20}, "waist_width"),  # into the counterbore
+    ("rail_size25", {"waist_width": 12, "waist_z_lower": 15}, "waist_z_upper"),
+    ("rail_size25", {"waist_width": 12, "groove_radius": 2.5}, "waist_width"),
     ("PF_4b_006", {"thickness": -10}, "thickness"),              # negative thickness
     ("PF_4b_006", {"thickness": 0}, "thickness"),
     ("PF_4b_006", {"screw_spacing": 50}, "screw_spacing"),       # into the bearing seat
