@@ -362,12 +362,16 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
 
     s = settings or p.settings()
     row: dict = {"type": p.linkage_type, **cfg, **rules_row(p, cfg)}
-    try:
-        lk = (four_bar(**cfg, rails_mm=p.rails) if p.linkage_type == "four-bar"
-              else slider_crank(**cfg, rails_mm=p.rails))
-    except AssemblyError:
-        return {**row, "status": "cannot assemble"}
-    h = simulate(lk, samples=p.samples, speed_hz=p.speed_hz, model=p.model)
+    with np.errstate(divide="ignore", invalid="ignore"):  # toggles are flagged below, never numbers
+        try:
+            lk = (four_bar(**cfg, rails_mm=p.rails) if p.linkage_type == "four-bar"
+                  else slider_crank(**cfg, rails_mm=p.rails))
+        except AssemblyError:
+            return {**row, "status": "cannot assemble"}
+        try:
+            h = simulate(lk, samples=p.samples, speed_hz=p.speed_hz, model=p.model)
+        except AssemblyError as exc:  # the loop just closes: it locks at a dead point on the way
+            return {**row, "status": "toggle", "note": f"dead point: {exc}"}
     if h.meta.get("mu_deg"):
         row["mu_min_deg"], row["mu_max_deg"] = h.meta["mu_deg"]["min"], h.meta["mu_deg"]["max"]
     if h.meta.get("singular"):

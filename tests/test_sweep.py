@@ -57,6 +57,9 @@ def test_rows_without_stress(params):
     assert evaluate(NO_LOOP, params, None)["status"] == "cannot assemble"
     toggle = evaluate(TOGGLE, params, None)
     assert toggle["status"] == "toggle" and not any(k.startswith("peak_") for k in toggle)
+    # b2 + d == b3 + b4: the loop closes on the grid but locks at a dead point (solver stops there)
+    dead = evaluate(dict(b2=60.0, b3=60.0, b4=660.0, d=660.0), params, None)
+    assert dead["status"] == "toggle" and dead["note"].startswith("dead point")
 
 
 def test_bad_input():
