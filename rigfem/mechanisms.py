@@ -200,7 +200,7 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
         return np.abs(np.cos(bodies_h["rod"].angle_rad)) < np.sin(np.radians(MU_TOGGLE_DEG))
 
     meta = dict(type="slider-crank", lengths_mm=dict(b2=b2, b3=b3, offset=offset),
-                masses=masses or "custom", singular_fn=toggle)
+                rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle)
     return Linkage(bodies, joints, CrankDriver("crank"), guess, loads, gravity_mm_s2, meta)
 
 

@@ -62,7 +62,7 @@ def render_markdown(r: dict) -> str:
                      f"are not reported")
     lines += ["", "| rule | value | limit | ok |", "|---|---|---|---|"]
     for rule in r.get("rules", []):
-        lines.append(f"| {rule['name']} | {rule['value']} | {rule['limit']} | "
+        lines.append(f"| {rule['name']} | {rule['value']:.6g} | {rule['limit']:.6g} | "
                      f"{'yes' if rule['ok'] else '**no**'} |")
     lines += ["", "## Peak reactions", "", "| joint | peak (N) | crank angle (°) |", "|---|---|---|"]
     for name, p in r["peaks"].items():
