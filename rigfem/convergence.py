@@ -35,8 +35,9 @@ import os
 import resource
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 
 import numpy as np
@@ -183,6 +184,11 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
     from rigfem.stress import von_mises
 
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    for _, c in cases:  # a cycle case carries its unit bearing loads in exactly n_dir directions
+        n = len({u.direction for u in c.loads if u.kind == "bearing"})
+        if len(c.rows) > 1 and n != spec.bearing_directions:
+            raise ValueError(f"step {spec.label}: {c.name} was built with {n} bearing directions, "
+                             f"not {spec.bearing_directions}")
     s = dataclasses.replace(settings, order=spec.order, size_mm=spec.size_mm,
                             local_size_mm=spec.local_size_mm, bearing_directions=spec.bearing_directions)
     with tempfile.TemporaryDirectory(prefix="rigfem-conv-") as cache:
@@ -257,32 +263,50 @@ def _predicted_gib(prev: dict | None, spec: StepSpec) -> float:
     return estimate(int(prev["tets"] * grow)).gib
 
 
-def study(cases: list, settings, levels: int = 4, ratio: float = RATIO, modes: Sequence[str] | None = None,
-          max_gib: float = 12.0, isolate: bool = True, presets: bool = True, progress=None,
-          finest: tuple[float, float] | None = None, order: int = 2) -> dict:
-    """Convergence study of one part's cases [(mode, PartCase)]: steps, extrapolation, errors."""
-    cases = [(m, c) for m, c in cases if modes is None or m in modes]
-    if not cases:
-        raise InputError(f"--mode {list(modes or [])}: no case of this part in that mode")
+def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: float = RATIO,
+          modes: Sequence[str] | None = None, max_gib: float = 12.0, isolate: bool = True,
+          presets: bool = True, progress=None, finest: tuple[float, float] | None = None, order: int = 2,
+          on_step: Callable[[dict], None] | None = None) -> dict:
+    """Convergence study of one part: ``cases_for(n_dir)`` gives its [(mode, PartCase)] with
+    ``n_dir`` bearing directions (see :func:`scene_cases`).  ``on_step(partial result)`` after
+    every step (to save progress).  A step whose process dies (e.g. killed out of memory) ends
+    the h sequence and is listed in ``refused``."""
     check_range("--max-gib", max_gib, 0.5, 1024.0, "GiB")
-    name = cases[0][1].name
-    steps, refused = [], []
+    first = [(m, c) for m, c in cases_for(H_DIRECTIONS) if modes is None or m in modes]
+    if not first:
+        raise InputError(f"--mode {list(modes or [])}: no case of this part in that mode")
+    name = first[0][1].name
+    out = {"part": name, "part_def": first[0][1].part, "params": first[0][1].params, "ratio": ratio,
+           "h_directions": H_DIRECTIONS, "fine_is_finest": finest is None and order == 2, "steps": [],
+           "refused": []}
+    steps, refused = out["steps"], out["refused"]
+
+    def run(spec: StepSpec) -> bool:
+        if progress:
+            progress(name, spec.label)
+        cases = [(m, c) for m, c in cases_for(spec.bearing_directions) if modes is None or m in modes]
+        try:
+            steps.append(run_step(cases, settings, spec, isolate))
+        except BrokenProcessPool:
+            refused.append(f"{spec.label}: the step's process was killed (out of memory on the shared "
+                           f"machine?)")
+            return False
+        if on_step:
+            on_step(analyse(out) if len([s for s in steps if s["kind"] == "h"]) else out)
+        return True
+
     for spec in h_levels(levels, ratio, finest, order):
         need = _predicted_gib(steps[-1] if steps else None, spec)
         if need > max_gib:
             refused.append(f"{spec.label}: about {need:.3g} GiB predicted > --max-gib {max_gib:g}")
             break
-        if progress:
-            progress(name, spec.label)
-        steps.append(run_step(cases, settings, spec, isolate))
+        if not run(spec):
+            break
     if presets:
         for spec in preset_steps():
-            if progress:
-                progress(name, spec.label)
-            steps.append(run_step(cases, settings, spec, isolate))
-    out = {"part": name, "part_def": cases[0][1].part, "params": cases[0][1].params, "ratio": ratio,
-           "h_directions": H_DIRECTIONS, "fine_is_finest": finest is None and order == 2, "steps": steps,
-           "refused": refused}
+            run(spec)
+    if not [s for s in steps if s["kind"] == "h"]:
+        raise InputError(f"{name}: no h level could be solved ({'; '.join(refused)})")
     return analyse(out)
 
 
@@ -338,8 +362,9 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
 
 
 def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict | None = None
-                ) -> tuple[object, dict[str, list]]:
-    """Check settings and {part: [(mode, PartCase)]} of a scene (dynamics run once)."""
+                ) -> tuple[object, dict[str, Callable[[int], list]]]:
+    """Check settings and {part: cases_for} of a scene, ``cases_for(n_dir)`` giving the part's
+    [(mode, PartCase)] with ``n_dir`` bearing directions (the dynamics run once)."""
     from rigfem.check import load_check_scene
     from rigfem.loadcases import part_cases
     from rigfem.mechanisms import simulate
@@ -352,10 +377,13 @@ def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict 
     h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     if h.meta.get("singular"):
         raise InputError(f"{scene}: the linkage passes a toggle (singular) position; no part loads")
-    by: dict[str, list] = {}
-    for mode, case in part_cases(h, peaks(h), cs.settings):
-        by.setdefault(case.name, []).append((mode, case))
-    return cs.settings, by
+    pk = peaks(h)
+    s = cs.settings
+
+    def builder(name: str) -> Callable[[int], list]:
+        return lambda n_dir: part_cases(h, pk, dataclasses.replace(s, parts={name: s.parts[name]},
+                                                                   bearing_directions=n_dir))
+    return s, {name: builder(name) for name in s.parts}
 
 
 def to_json(result: dict) -> str:

@@ -257,13 +257,19 @@ def run(args: argparse.Namespace) -> int:
                 _write(analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        settings, by_part = scene_cases(scene, parts, {"modes": [args.mode]} if args.mode else None)
+        settings, by_part = scene_cases(scene, parts)
         out.mkdir(parents=True, exist_ok=True)
-        for name, cases in by_part.items():
-            res = study(cases, settings, int(levels), ratio, max_gib=max_gib, presets=not args.no_presets,
+        for name, cases_for in by_part.items():
+            stem = name if args.mode is None else f"{name}_{args.mode}"
+            extra = {"scene": scene, "command": _command(args)}
+
+            def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
+                (out / f"{stem}.json").write_text(to_json({**partial, **extra, "partial": True}))
+
+            res = study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
+                        max_gib=max_gib, presets=not args.no_presets, on_step=save,
                         progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
-            res["scene"], res["command"] = scene, _command(args)
-            print(_write(res, out, name if args.mode is None else f"{name}_{args.mode}"))
+            print(_write({**res, **extra}, out, stem))
     studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     (out / "summary.md").write_text(summary([s for s in studies if "steps" in s]))
     return 0
