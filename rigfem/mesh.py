@@ -56,7 +56,7 @@ class PartMesh:
 #  module importable by the FE code without building any geometry)
 
 #: bump when the meshing recipe changes, so cached meshes are not reused
-MESH_RECIPE = 2  # 2: I-profile root fillets; Delaunay retry after a flat HXT tet
+MESH_RECIPE = 3  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets
 #: machine memory the estimate is checked against, GiB
 MACHINE_GIB = 24.0
 #: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)

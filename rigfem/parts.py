@@ -19,8 +19,8 @@ or "assumed: ...") so an engineer corrects a dimension without touching code.  K
   volume ``plate``.
 - ``PF_4b_003_v2`` (kind ``iprofile``): x along the profile, y across the flanges, z up.
   Groups ``screw_1``..``screw_4`` (bottom flange y<0, y>0, top flange y<0, y>0), ``base``
-  (z=0), ``top`` (z=height); volume ``iprofile``.  ``fillet_radius`` > 0 rounds the four
-  web-flange root corners (0: sharp corners, a stress singularity).
+  (z=0), ``top`` (z=height), ``fillets`` (if ``fillet_radius`` > 0: the four web-flange root
+  fillets; 0 keeps sharp corners, a stress singularity); volume ``iprofile``.
 - Custom parts: a path to a ``.geo`` file (its physical groups are used; it may ``Merge`` a
   STEP/BREP) or a ``.step``/``.stp``/``.brep`` file whose named entities become groups.
 
@@ -448,12 +448,16 @@ def _build_iprofile(part: PartDef) -> dict[str, Hole]:
     out, _ = occ.cut(body, tools)
     occ.synchronize()
     names = {k: [] for k in spots} | {"base": [], "top": []}
+    if part["fillet_radius"] > 0:
+        names["fillets"] = []
     for _, tag in gmsh.model.getEntities(2):
         bb = _bbox(tag)
         if bb[1, 2] - bb[0, 2] < 1e-6 and _close(bb[0, 2], 0.0):
             names["base"].append(tag)
         elif bb[1, 2] - bb[0, 2] < 1e-6 and _close(bb[0, 2], h):
             names["top"].append(tag)
+        elif gmsh.model.getType(2, tag) == "Cylinder" and _close(bb[1, 0] - bb[0, 0], Lx):
+            names["fillets"].append(tag)  # the web-flange root fillets run the full length
         else:
             for k, (y, z0) in spots.items():
                 if _cylinder_at(bb, Lx / 2, y, r) and _close(bb[0, 2], z0):

@@ -108,6 +108,11 @@ def test_filleted_iprofile_where_hxt_leaves_a_flat_tet_still_meshes():
     assert part["fillet_radius"] == 3
     pm = mesh_part(part, MeshSettings(6.0), use_cache=False)
     assert pm.quality["min"] >= 0.1 and (tet_volumes(pm) > 0).all()
+    # the fillet group: four quarter cylinders r = 3 along the 40 mm length, (pi/2)*3*40 each
+    tri = pm.points[pm.surfaces["fillets"]]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    exact = 4 * math.pi / 2 * 3 * 40
+    assert area == pytest.approx(exact, rel=5e-2) and area < exact  # flat facets are chords of the arc
 
 
 def test_plate_screws_on_x_axis_at_two_pitches():
