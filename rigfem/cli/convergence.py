@@ -84,8 +84,10 @@ def table(res: dict) -> str:
                 lines.append(f"- **{m}**, {what}: **{status}**, reference = finest level "
                              f"**{ex['limit']:.2f} MPa "
                              f"± {100 * (ex['gci'] or 0):.2f} %** — {ex['note']} (orders {orders}){where}")
+    if res.get("directions_note"):
+        lines.append(f"- bearing directions: {res['directions_note']}")
     if res["refused"]:
-        lines.append(f"- memory guard refused: {'; '.join(res['refused'])}")
+        lines.append(f"- not run (memory): {'; '.join(res['refused'])}")
     return "\n".join(lines) + "\n"
 
 
@@ -200,6 +202,11 @@ def summary(results: list[dict]) -> str:
                              f"{_fmt(v.get('cpu_seconds'))} | "
                              f"{_fmt(v['peak_rss_mib'], '.0f')} | {v['dofs']} | {v['value']:.2f} | {err} | "
                              f"{met} |")
+    old = [r["part"] for r in results if r.get("directions_note")]
+    if old:
+        lines += ["", f"Bearing directions: the studies of {', '.join(old)} were measured before the "
+                      "per-step directions fix: all their steps used 12 directions, so their preset rows give "
+                      "the mesh error alone; the direction error (cycle mode) is in sampling.md."]
     lines += ["", "## Coarsest h level meeting each target (P2, 24 bearing directions)", "",
               "Per part and mode, the coarsest level of the h sequence whose peak is within the target "
               "of the extrapolated peak (and every finer level is too); a preset meeting the target on "
