@@ -93,7 +93,7 @@ def directions(part: str) -> list[dict]:
         f = FIDELITY[preset]
         for n in (8, 12, 24, 48):
             spec = StepSpec(f"{preset}/{n}", "d", 2, f["size_mm"], f["local_size_mm"], n)
-            r = run_step(by[part], settings, spec, isolate=False)
+            r = run_step(by[part](n), settings, spec, isolate=False)
             rows.append({"part": part, "mesh": preset, "directions": n,
                          "peak_mpa": r["modes"]["cycle"]["peak_mpa"], "seconds": r["seconds"],
                          "cpu_seconds": r["cpu_seconds"]})
