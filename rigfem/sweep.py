@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigfem.errors import InputError, check_range
-from rigfem.loadcases import (INERTIA, Bar, Fitting, PartCase, RailLayout, UnitLoad, cycle_fitting,
+from rigfem.loadcases import (Bar, Fitting, PartCase, RailLayout, UnitLoad, cycle_fitting,
                               cycle_rail, directions, hole_name, original_fitting, original_rail)
 from rigfem.mechanisms import MODELS, RIG_RAILS_MM, four_bar, simulate, slider_crank
 from rigfem.reactions import peaks
@@ -168,46 +168,47 @@ def _case_key(case: PartCase) -> tuple:
     return case.part, tuple(sorted(case.params.items())), tuple(case.supports)
 
 
-def _basis_specs(s: CheckSettings) -> dict[tuple, tuple[PartCase, list[UnitLoad]]]:
-    """Per (part, params, supports): a template case (mesh, supports) and every unit load."""
-    from rigfem.parts import load_part
+def _reference_cases(p: SweepParams, s: CheckSettings) -> list[tuple[str, PartCase]]:
+    """The cases of the first configuration that runs (its parts, supports and load groups)."""
+    from rigfem.linkage import AssemblyError
 
+    q = dataclasses.replace(p, samples=36)
+    for cfg in enumerate_configs(p):
+        try:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lk = four_bar(**cfg, rails_mm=p.rails) if p.linkage_type == "four-bar" else \
+                    slider_crank(**cfg, rails_mm=p.rails)
+                h = simulate(lk, samples=q.samples, speed_hz=q.speed_hz, model=q.model)
+        except AssemblyError:
+            continue
+        pk = peaks(h)
+        if not h.meta.get("singular") and not any(v.get("singular") for v in pk.values()):
+            return config_cases(h, pk, s)
+    raise InputError(f"no {p.linkage_type} configuration of rails {list(p.rails)} mm can run")
+
+
+def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase, list[UnitLoad]]]:
+    """Per (part, params, supports): a template case (mesh, supports, refinement) and every unit
+    load any configuration can use.  Supports, load groups and inertia loads come from the
+    load-case functions themselves (a reference configuration); only the sets are widened:
+    a rail's coupling may use any hole in cycle mode, and bearing directions span the basis."""
     specs: dict[tuple, tuple[PartCase, list[UnitLoad]]] = {}
     ncyc, norig = directions(s.bearing_directions), directions(ORIGINAL_DIRECTIONS)
-
-    def add(part, params, supports, refine, loads):
-        case = PartCase("basis", part, params, supports, [], np.zeros((0, 0)), np.zeros(0), tuple(refine))
+    for mode, case in _reference_cases(p, s):
+        groups = list(dict.fromkeys(u.group for u in case.loads if u.kind == "bearing"))
+        refine = tuple(case.refine)
+        if "length" in case.params and mode == "cycle":
+            groups = [hole_name(i) for i in range(len(_layout(case.params["length"]).hole_x))]
+            refine = tuple(dict.fromkeys(refine + tuple(groups)))
+        loads = [UnitLoad("bearing", g, d) for g in groups for d in (ncyc if mode == "cycle" else norig)]
+        loads += [u for u in case.loads if u.kind == "inertia"]
+        if mode == "original" and "length" not in case.params:  # a fitting's fixed study load stays exact
+            loads += list(case.loads)
         key = _case_key(case)
-        old = specs.get(key, (case, []))
-        specs[key] = (dataclasses.replace(case, refine=tuple(sorted(set(old[0].refine) | set(refine)))),
-                      list(dict.fromkeys(old[1] + loads)))
-
-    for spec in s.parts.values():
-        if "length" in spec:
-            lay = _layout(spec["length"])
-            params = {"length": float(spec["length"])}
-            holes = [hole_name(i) for i in range(len(lay.hole_x))]
-            pivot = tuple(hole_name(i) for i in lay.coupling(0.0, "rail"))
-            k = int(round(lay.screw_spacing / lay.pitch))
-            last = (hole_name(len(holes) - 1 - k), hole_name(len(holes) - 1))
-            if "cycle" in s.modes:
-                origin = (lay.pivot_x, 0.0, 0.0)
-                add(spec["part"], params, [("free", ())], holes,
-                    [UnitLoad("bearing", g, d) for g in holes for d in ncyc]
-                    + [UnitLoad("inertia", None, origin, c) for c in INERTIA])
-            if "original" in s.modes:
-                add(spec["part"], params, [("bolt", pivot)], pivot + last,
-                    [UnitLoad("bearing", g, d) for g in last for d in norig])
-        elif load_part(spec["part"]).kind == "plate":
-            dirs = (ncyc if "cycle" in s.modes else []) + (norig if "original" in s.modes else [])
-            add(spec["part"], {}, [("bolt", ("screw_1", "screw_2"))], ("bore", "screw_1", "screw_2"),
-                [UnitLoad("bearing", "bore", d) for d in dirs])
-        else:  # I-profile post: the study's fixed screw loads, and the pin force through the top screws
-            screws = tuple(f"screw_{i}" for i in range(1, 5))
-            dirs = ((ncyc if "cycle" in s.modes else [])
-                    + ([(float(np.sqrt(0.5)), float(np.sqrt(0.5)), 0.0)] if "original" in s.modes else []))
-            add(spec["part"], {}, [("fixed", ("base",))], screws,
-                [UnitLoad("bearing", g, d) for g in screws for d in dirs])
+        old_case, old_loads = specs.get(key, (case, []))
+        specs[key] = (dataclasses.replace(old_case, name="basis",
+                                          refine=tuple(sorted(set(old_case.refine) | set(refine)))),
+                      list(dict.fromkeys(old_loads + loads)))
     return specs
 
 
@@ -221,9 +222,10 @@ def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
     s = p.settings()
     out = {}
     models: dict[tuple, tuple] = {}
-    for key, (case, loads) in _basis_specs(s).items():
+    specs = _basis_specs(p, s)
+    for key, (case, loads) in specs.items():
         geo = key[:2]
-        refine = tuple(sorted({g for k2, (c, _) in _basis_specs(s).items() if k2[:2] == geo for g in c.refine}))
+        refine = tuple(sorted({g for k2, (c, _) in specs.items() if k2[:2] == geo for g in c.refine}))
         if geo not in models:
             pm = mesh_case(dataclasses.replace(case, refine=refine), s.size_mm, s.local_size_mm)
             models[geo] = (pm, build_model(pm, s.material, s.order))

@@ -19,7 +19,19 @@ WORST = 15
 
 
 def _ok(table: pd.DataFrame) -> pd.DataFrame:
-    return table[table["status"] == "ok"]
+    """Computed rows, with the utilisation of the cases whose load depends on the configuration
+    (``config_util_pct``, ``config_limiting``): a case with the same utilisation everywhere (the
+    study's fixed 1000 N on the I-profile post) would otherwise tie every configuration."""
+    ok = table[table["status"] == "ok"].copy()
+    cols = [c for c in ok if c.endswith("_util_pct") and c != "max_util_pct"]
+    if ok.empty or not cols:
+        return ok
+    span = ok[cols].max() - ok[cols].min()
+    varying = [c for c in cols if len(ok) == 1 or span[c] > 1e-9 * max(1.0, ok[c].abs().max())]
+    ok.attrs["fixed"] = {c[:-len("_util_pct")]: float(ok[c].iloc[0]) for c in cols if c not in varying}
+    ok["config_util_pct"] = ok[varying].max(axis=1)
+    ok["config_limiting"] = ok[varying].idxmax(axis=1).str.replace("_util_pct", "")
+    return ok
 
 
 def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
@@ -29,9 +41,11 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     import matplotlib.pyplot as plt
 
     ok = _ok(table)
-    if ok.empty or "max_util_pct" not in ok:
+    if ok.empty or "config_util_pct" not in ok:
         return []
-    vmax = max(100.0, float(ok["max_util_pct"].max()))
+    vmax = max(100.0, float(ok["config_util_pct"].max()))
+    fixed = ", ".join(f"{k} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
+    note = f" (not shown, the same everywhere: {fixed})" if fixed else ""
     files = []
     if p.linkage_type == "four-bar":
         for (x, y, over), name in ((("d", "b3", "b4"), "d_b3"), (("b4", "b3", "d"), "b4_b3")):
@@ -42,7 +56,7 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
             xs, ys = sorted(table[x].unique()), sorted(table[y].unique())
             im = None
             for ax, b2 in zip(axes.flat, b2s):
-                sub = ok[ok["b2"] == b2].groupby([y, x])["max_util_pct"].max().unstack()
+                sub = ok[ok["b2"] == b2].groupby([y, x])["config_util_pct"].max().unstack()
                 grid = sub.reindex(index=ys, columns=xs).to_numpy(dtype=float)
                 im = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", vmin=0, vmax=vmax,
                                cmap="viridis", extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
@@ -58,21 +72,21 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
                 ax.set_ylabel(f"{y} (mm)")
             fig.colorbar(im, ax=axes, shrink=0.6, label=f"peak utilisation (%), max over {over}")
             fig.suptitle(f"four-bar: peak part utilisation vs σu/2 (grey: cannot assemble or toggle), "
-                         f"{p.speed_hz:g} Hz, {p.model}, {p.fidelity}", fontsize="small")
+                         f"{p.speed_hz:g} Hz, {p.model}, {p.fidelity}{note}", fontsize="small")
             f = f"map_four-bar_{name}.png"
             fig.savefig(out / f, dpi=90)
             plt.close(fig)
             files.append(f)
     else:
         xs, ys = sorted(table["b2"].unique()), sorted(table["b3"].unique())
-        grid = ok.groupby(["b3", "b2"])["max_util_pct"].max().unstack().reindex(index=ys, columns=xs)
+        grid = ok.groupby(["b3", "b2"])["config_util_pct"].max().unstack().reindex(index=ys, columns=xs)
         fig, ax = plt.subplots(figsize=(6, 5))
         im = ax.imshow(np.ma.masked_invalid(grid.to_numpy(dtype=float)), origin="lower", aspect="auto",
                        vmin=0, vmax=vmax, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
         ax.set_facecolor("0.85")
         ax.set_xlabel("b2 (mm)"), ax.set_ylabel("b3 (mm)")
         fig.colorbar(im, label="peak utilisation (%)")
-        ax.set_title(f"slider-crank: peak part utilisation, {p.speed_hz:g} Hz", fontsize="small")
+        ax.set_title(f"slider-crank: peak part utilisation, {p.speed_hz:g} Hz{note}", fontsize="x-small")
         f = "map_slider-crank_b2_b3.png"
         fig.savefig(out / f, dpi=90)
         plt.close(fig)
@@ -80,13 +94,15 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     return files
 
 
-def _spearman(a: pd.Series, b: pd.Series) -> float:
-    return float(a.rank().corr(b.rank()))
+def _spearman(a: pd.Series, b: pd.Series) -> str:
+    r = a.rank().corr(b.rank())
+    return "n/a" if not np.isfinite(r) else f"{r:+.2f}"
 
 
 def _fmt(df: pd.DataFrame, p: SweepParams) -> str:
     cols = [*LENGTHS[p.linkage_type]] + (["mu_min_deg", "mu_max_deg"] if p.linkage_type == "four-bar" else [])
-    cols += ["rules_ok", "max_reaction_N", "peak_torque_Nm", "limiting_part", "max_util_pct", "verdict"]
+    cols += ["rules_ok", "max_reaction_N", "peak_torque_Nm", "config_limiting", "config_util_pct",
+             "limiting_part", "max_util_pct", "verdict"]
     head = "| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n"
     lines = []
     for _, r in df.iterrows():
@@ -122,12 +138,20 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
         lines.append(f"- wall time of this sweep: {seconds / 60:.1f} min")
     if ok.empty:
         return "\n".join(lines) + "\n"
+    fixed = ok.attrs.get("fixed", {})
     lines += ["", "Parts that limit the computed configurations (count):", ""]
     lines += [f"- {k}: {v}" for k, v in ok["limiting_part"].value_counts().items()]
+    if fixed:
+        lines += ["", "Cases whose utilisation is the same for every configuration (their load does not "
+                  "depend on it): " + ", ".join(f"{k} {v:.1f} %" for k, v in fixed.items())
+                  + ". The lists below rank by `config_util_pct`, the highest utilisation of the other "
+                  "cases (`config_limiting` names it); `max_util_pct` and the verdict cover every case."]
+    lines += ["", "Parts that limit the configuration-dependent utilisation (count):", ""]
+    lines += [f"- {k}: {v}" for k, v in ok["config_limiting"].value_counts().items()]
     lines += ["", f"## The {WORST} worst configurations (highest utilisation)", "",
-              _fmt(ok.nlargest(WORST, "max_util_pct"), p),
+              _fmt(ok.nlargest(WORST, "config_util_pct"), p),
               f"## The {WORST} worst that comply with every rig rule", "",
-              _fmt(ok[ok["rules_ok"]].nlargest(WORST, "max_util_pct"), p),
+              _fmt(ok[ok["rules_ok"]].nlargest(WORST, "config_util_pct"), p),
               f"## The {WORST} largest peak reactions", "",
               _fmt(ok.nlargest(WORST, "max_reaction_N"), p)]
     lines += ["## Compared with the 2013 study's hand-found worst cases", "",
@@ -136,16 +160,12 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
               "configuration (Spearman rank correlation, −1..1):", ""]
     lengths = [c for c in LENGTHS[p.linkage_type] if c != "offset"]
     size = ok[lengths].sum(axis=1)
-    for what, col in (("largest peak reaction", "max_reaction_N"), ("peak utilisation", "max_util_pct")):
-        r_size = _spearman(size, ok[col])
-        parts = [f"- {what} vs mechanism size ({' + '.join(lengths)}): {r_size:+.2f}"]
-        for c in lengths:
-            parts.append(f"  - vs {c}: {_spearman(ok[c], ok[col]):+.2f}")
-        lines += parts
+    for what, col in (("largest peak reaction", "max_reaction_N"), ("utilisation", "config_util_pct")):
+        lines.append(f"- {what} vs mechanism size ({' + '.join(lengths)}): {_spearman(size, ok[col])}")
+        lines += [f"  - vs {c}: {_spearman(ok[c], ok[col])}" for c in lengths]
         if p.linkage_type == "four-bar":
             margin = np.minimum(ok["mu_min_deg"], 180.0 - ok["mu_max_deg"])
-            lines.append(f"  - vs transmission-angle margin min(μmin, 180° − μmax): "
-                         f"{_spearman(margin, ok[col]):+.2f}")
+            lines.append(f"  - vs transmission-angle margin min(μmin, 180° − μmax): {_spearman(margin, ok[col])}")
     if p.linkage_type == "four-bar":
         margin = np.minimum(ok["mu_min_deg"], 180.0 - ok["mu_max_deg"])
         bins = pd.cut(margin, [0, 15, 25, 35, 45, 90])
@@ -154,28 +174,24 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
                   "| margin (deg) | configurations | median largest reaction (N) |", "|---|---:|---:|"]
         counts = bins.value_counts()
         lines += [f"| {k} | {int(counts[k])} | {v:.0f} |" for k, v in med.items()]
-        r_mu = _spearman(margin, ok["max_reaction_N"])
-        r_size = _spearman(size, ok["max_reaction_N"])
+        r_mu = float(margin.rank().corr(ok["max_reaction_N"].rank()))
+        r_size = float(size.rank().corr(ok["max_reaction_N"].rank()))
         top = ok.nlargest(WORST, "max_reaction_N")
+        top_margin = margin[top.index]
         lines += ["", "Reading:", "",
-                  f"- Transmission angles near the limits: the rank correlation of the largest reaction "
-                  f"with the margin is {r_mu:+.2f} — "
-                  + ("confirmed: the smaller the margin, the larger the reactions; "
-                     if r_mu < -0.1 else "not confirmed as a trend over all configurations; ")
-                  + f"the {WORST} largest reactions have margins {top['mu_min_deg'].combine(180 - top['mu_max_deg'], min).min():.1f}–"
-                  f"{top['mu_min_deg'].combine(180 - top['mu_max_deg'], min).max():.1f}°.",
-                  f"- Smallest mechanisms: correlation with size {r_size:+.2f} — "
-                  + ("confirmed: smaller mechanisms give larger reactions." if r_size < -0.1 else
-                     "not confirmed: with the rig's rails the moving masses do not shrink with the "
-                     "mechanism (every bar is a full 700/1000 mm guide), so reactions follow the crank "
-                     "length and the angular accelerations of coupler and rocker rather than overall size."
+                  f"- Transmission angles near the limits: rank correlation of the largest reaction with "
+                  f"the margin {r_mu:+.2f} — "
+                  + ("the study's finding holds over all configurations: the smaller the margin, the larger "
+                     "the reactions; " if r_mu < -0.1 else "not a trend over all configurations; ")
+                  + f"the {WORST} largest reactions have margins {top_margin.min():.1f}–{top_margin.max():.1f}° "
+                  f"(all computed configurations: {margin.min():.1f}–{margin.max():.1f}°).",
+                  f"- Smallest mechanisms: rank correlation with size {r_size:+.2f} — "
+                  + ("the study's finding holds: smaller mechanisms give larger reactions."
+                     if r_size < -0.1 else "the study's finding does not hold over all configurations."
                      if r_size > 0.1 else "no clear trend with overall size."),
-                  f"- Crank length b2: correlation {_spearman(ok['b2'], ok['max_reaction_N']):+.2f} with the "
-                  f"largest reaction (the crank pin's centripetal acceleration is b2·ω²).",
-                  "- Utilisation: the table above names the part that limits each configuration; in "
-                  "original mode the study's load (1.4 × peak reaction at the rail's far end, the rail "
-                  "held at its pivot) dominates the rails; the I-profile post carries the study's fixed "
-                  "1000 N whatever the configuration."]
+                  f"- The {WORST} largest reactions have b2 = {top['b2'].min():g}–{top['b2'].max():g}, "
+                  f"b3 = {top['b3'].min():g}–{top['b3'].max():g}, b4 = {top['b4'].min():g}–{top['b4'].max():g}, "
+                  f"d = {top['d'].min():g}–{top['d'].max():g} mm."]
     return "\n".join(lines) + "\n"
 
 

@@ -99,7 +99,7 @@ def test_superposition_equals_full_solve(params, bases, cfg):
 def _spec_case(params, key):
     from rigfem.sweep import _basis_specs
 
-    specs = _basis_specs(params.settings())
+    specs = _basis_specs(params, params.settings())
     refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})
     return dataclasses.replace(specs[key][0], refine=tuple(refine))
 
