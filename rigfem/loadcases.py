@@ -270,6 +270,12 @@ def original_rail(h: ReactionHistory, pk: dict, bar: Bar, factor: float) -> Part
                            f"far end (study's worst case); held by the screws of the pivot coupling"])
 
 
+#: the I-profile rests on its base (no normal displacement, free to slide: no clamped-edge
+#: singularity) and is bolted to the rail below through its bottom screws
+POST_SUPPORTS = [("slide", ("base",)), ("bolt", ("screw_1", "screw_2"))]
+POST_HELD = "base resting on the rail (normal displacement only), bottom screws bolted"
+
+
 def original_fitting(h: ReactionHistory, pk: dict, fit: Fitting, factor: float,
                      iprofile_screw_load_n: tuple[float, float] = (250.0, 250.0)) -> PartCase:
     """The study's plate case (factor × peak pin reaction on the bore) or I-profile case."""
@@ -278,10 +284,10 @@ def original_fitting(h: ReactionHistory, pk: dict, fit: Fitting, factor: float,
         screws = tuple(f"screw_{i}" for i in range(1, 5))
         mag = float(np.hypot(fl, ft))
         d = (fl / mag, ft / mag, 0.0)
-        return PartCase(fit.name, fit.part, {}, [("fixed", ("base",))],
+        return PartCase(fit.name, fit.part, {}, POST_SUPPORTS,
                         [UnitLoad("bearing", s, d) for s in screws], [[mag] * 4], np.array([0.0]),
-                        screws, notes=[f"{fl:g} N longitudinal + {ft:g} N transverse at each screw "
-                                       f"hole (study); base held"])
+                        screws + ("fillets",), notes=[f"{fl:g} N longitudinal + {ft:g} N transverse at each screw "
+                                       f"hole (study); {POST_HELD}"])
     at, mag = _at_peak(h, pk[fit.joint], f"{fit.name} ({fit.joint})")
     d = _unit(_local_force(at, fit.joint, fit.bar, bar_body(h, fit.bar))[0])
     return PartCase(fit.name, fit.part, {}, [("bolt", ("screw_1", "screw_2"))],
@@ -346,9 +352,9 @@ def cycle_fitting(h: ReactionHistory, fit: Fitting, n_dir: int) -> PartCase:
         # the post's y axis lies along the rail (its screws go into two rail holes): x_p = -y_rail
         f = np.stack([-f[:, 1], f[:, 0]], axis=1)
         loads, coef = bearing_cases({"screw_3": f / 2, "screw_4": f / 2}, n_dir)
-        return PartCase(fit.name, fit.part, {}, [("fixed", ("base",))], loads, coef, h.crank_deg,
-                        ("screw_3", "screw_4"),
-                        notes=[f"{fit.joint} pin force through the top screws; base held"])
+        return PartCase(fit.name, fit.part, {}, POST_SUPPORTS, loads, coef, h.crank_deg,
+                        ("screw_1", "screw_2", "screw_3", "screw_4", "fillets"),
+                        notes=[f"{fit.joint} pin force through the top screws; {POST_HELD}"])
     loads, coef = bearing_cases({"bore": f}, n_dir)
     return PartCase(fit.name, fit.part, {}, [("bolt", ("screw_1", "screw_2"))], loads, coef,
                     h.crank_deg, ("bore", "screw_1", "screw_2"),
