@@ -27,6 +27,7 @@ import functools
 import hashlib
 import json
 import re
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -451,6 +452,7 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     import pandas as pd
     from tqdm import tqdm
 
+    t0 = time.perf_counter()
     check_range("chunk_size", chunk_size, 1, 100_000)
     check_range("workers", workers, 1, 256)
     configs = enumerate_configs(p) if configs is None else configs
@@ -477,9 +479,16 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
                 for i in todo:
                     _write_chunk(work, i, run_chunk(chunks[i], p, bases))
                     bar.update(len(chunks[i]))
+    timing = work / "timing.json"
+    spent = json.loads(timing.read_text())["seconds"] if timing.is_file() else 0.0
+    if todo:  # compute time over every run that computed chunks of this sweep
+        spent += time.perf_counter() - t0
+        timing.write_text(json.dumps({"seconds": spent}))
     table = pd.concat([pd.read_csv(_chunk_path(work, i), keep_default_na=False, na_values=[""])
                        for i in range(len(chunks))], ignore_index=True)
-    return table[_column_order(list(table.columns), p)]
+    table = table[_column_order(list(table.columns), p)]
+    table.attrs["compute_seconds"] = spent or None
+    return table
 
 
 def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:

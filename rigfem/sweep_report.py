@@ -43,7 +43,7 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     ok = _ok(table)
     if ok.empty or "config_util_pct" not in ok:
         return []
-    vmax = max(100.0, float(ok["config_util_pct"].max()))
+    vmax = max(1.0, float(ok["config_util_pct"].max()))
     fixed = ", ".join(f"{k} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
     note = f" (not shown, the same everywhere: {fixed})" if fixed else ""
     files = []
@@ -135,7 +135,8 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
              f"{int(ok['rules_ok'].sum())}, failing the stress criterion "
              f"{int(((ok['verdict'] == 'fail') & ok['rules_ok']).sum())}"]
     if seconds is not None:
-        lines.append(f"- wall time of this sweep: {seconds / 60:.1f} min")
+        lines.append(f"- compute wall time of this sweep (every run that computed chunks, unit solutions "
+                     f"included): {seconds / 60:.1f} min")
     if ok.empty:
         return "\n".join(lines) + "\n"
     fixed = ok.attrs.get("fixed", {})

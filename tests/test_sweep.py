@@ -128,6 +128,7 @@ CONFIGS = [NO_LOOP, FINAL, TOGGLE, SMALL, dict(b2=60.0, b3=840.0, b4=840.0, d=15
 def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
     full = run_sweep(params, tmp_path, configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
     assert list(full["status"]) == ["cannot assemble", "ok", "toggle", "ok", "ok"]
+    assert full.attrs["compute_seconds"] > 0
     num = full.select_dtypes("number")
     assert not np.isinf(num.to_numpy()).any() and num[full["status"] == "ok"].notna().all().all()
     chunk = sorted(tmp_path.glob("*/chunk_*.csv"))

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 HELP = "sweep every mountable four-bar or slider-crank configuration of the rig (table, maps, worst list)"
@@ -43,10 +42,9 @@ def run(args: argparse.Namespace) -> int:
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
     out = Path(args.out)
-    t0 = time.perf_counter()
     table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
                       scheduler=args.scheduler, progress=not args.quiet)
-    files = write_report(table, p, out, time.perf_counter() - t0)
+    files = write_report(table, p, out, table.attrs.get("compute_seconds"))
     ok = table[table["status"] == "ok"]
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "
           f"{int((ok['verdict'] == 'fail').sum())} fail; wrote {', '.join(str(out / f) for f in files)}",
