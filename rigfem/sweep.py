@@ -95,7 +95,7 @@ class SweepParams:
 
     def key(self) -> str:
         """Short hash of the parameters (and the code-relevant constants)."""
-        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=1)
+        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=2)
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
 
 
