@@ -201,7 +201,7 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
             series = []
             for k, i in enumerate(rows):
                 name = f"{stem}_{k:03d}.vtu"
-                write_vtu(d / name, r.solution, r.coef[i], allowable=limit)
+                write_vtu(d / name, r.solution, r.coef[i], allowable=limit, compact=True)
                 series.append((float(r.case.rows[i]), name))
             pvd = "\n".join(f'    <DataSet timestep="{t:g}" file="{f}"/>' for t, f in series)
             (d / f"{stem}.pvd").write_text(
