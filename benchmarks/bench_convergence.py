@@ -10,11 +10,13 @@
 
 3. Cycle-mode stress peak vs the number of bearing directions (mesh fixed): separates the
    direction error of a preset from its mesh error.
+4. On request (``candidates``): candidate preset values run on every studied part, error vs the
+   reference peak of its convergence study.
 
 Writes results/convergence/sampling.md and .json.  The mesh studies are
 ``rigfem convergence PART`` (see results/convergence/summary.md).
 
-    python benchmarks/bench_convergence.py [dynamics] [cycle_stress] [directions]
+    python benchmarks/bench_convergence.py [dynamics] [cycle_stress] [directions] [candidates]
 """
 
 from __future__ import annotations
@@ -103,6 +105,37 @@ def directions(part: str) -> list[dict]:
     return rows
 
 
+#: candidate preset values checked against the studies' references (results/convergence/<part>.json)
+CANDIDATES = {"draft (8/1.7)": (8.0, 1.7, 8)}
+CANDIDATE_PARTS = ("plate_A", "post_B", "crank_rail", "coupler_rail", "rocker_rail")
+
+
+def candidates(d: Path) -> list[dict]:
+    """Run each candidate setting on every studied part; error vs the study's reference peak."""
+    from rigfem.convergence import StepSpec, run_step, scene_cases
+
+    rows = []
+    for part in CANDIDATE_PARTS:
+        path = d / f"{part}.json"
+        if not path.is_file():
+            continue
+        res = json.loads(path.read_text())
+        settings, by = scene_cases(SCENE, [part])
+        for label, (size, local, n_dir) in CANDIDATES.items():
+            r = run_step(by[part](n_dir), settings, StepSpec(label, "preset", 2, size, local, n_dir))
+            for mode, qs in res["modes"].items():
+                for qty, a in qs.items():
+                    ex = a.get("extrapolation") or {}
+                    ref = ex.get("limit") if ex.get("converging") else None
+                    q = r["modes"][mode][qty]
+                    rows.append({"part": part, "mode": mode, "quantity": qty, "candidate": label,
+                                 "peak_mpa": q, "reference_mpa": ref, "uncertainty": ex.get("gci"),
+                                 "error": None if ref is None else q / ref - 1, "dofs": r["dofs"],
+                                 "seconds": r["seconds"], "cpu_seconds": r["cpu_seconds"],
+                                 "peak_rss_mib": r["peak_rss_mib"]})
+    return rows
+
+
 def main(sections: list[str]) -> None:
     """Recompute the named sections (all by default), keep the others from sampling.json."""
     d = ROOT / "results" / "convergence"
@@ -116,6 +149,8 @@ def main(sections: list[str]) -> None:
         data["cycle_stress"] = cycle_stress("plate_A") + cycle_stress("crank_rail")
     if "directions" in todo:
         data["directions"] = directions("plate_A") + directions("crank_rail")
+    if "candidates" in sections:  # only on request: it needs the convergence studies first
+        data["candidates"] = candidates(d)
     path.write_text(json.dumps(data, indent=1))
     dyn, cyc, dirs = (data.get(k, []) for k in ("dynamics", "cycle_stress", "directions"))
     md = ["# Sampling: crank-angle samples vs time and peak error (final-cm)", "",
@@ -123,7 +158,8 @@ def main(sections: list[str]) -> None:
           "(perf_counter), 2 shared cores.", "",
           "## Dynamics (rigid-body): peak pin reactions and torque", "",
           "Reference: 100 000 samples, refined.  Error = worst over O2, A, B, O4 and the torque.", "",
-          "| samples | simulate ms | simulate + refined peaks ms | raw max rel. error | refined max rel. error |",
+          "| samples | simulate ms | simulate + refined peaks ms | raw max rel. error "
+          "| refined max rel. error |",
           "|---:|---:|---:|---:|---:|"]
     md += [f"| {r['samples']} | {r['simulate_ms']:.1f} | {r['simulate_peaks_ms']:.1f} | "
            f"{r['raw_rel_err']:.2e} | {r['refined_rel_err']:.2e} |" for r in dyn]
@@ -141,6 +177,19 @@ def main(sections: list[str]) -> None:
            "|---|---|---:|---:|---:|---:|---:|"]
     md += [f"| {r['part']} | {r['mesh']} | {r['directions']} | {r['peak_mpa']:.3f} | "
            f"{100 * r['rel_to_48']:+.2f} % | {r['seconds']:.1f} | {r['cpu_seconds']:.1f} |" for r in dirs]
+    cand = data.get("candidates", [])
+    if cand:
+        md += ["", "## Candidate preset values vs the convergence studies' reference peaks", "",
+               "`python benchmarks/bench_convergence.py candidates`; reference and its uncertainty from "
+               "results/convergence/<part>.json (none where the peak does not converge).", "",
+               "| part | mode | quantity | candidate | peak MPa | reference MPa | error | DOFs | time s | CPU s "
+               "| peak RSS MiB |", "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+        for r in cand:
+            ref = "singular | - |" if r["error"] is None else \
+                f"{r['reference_mpa']:.2f} ± {100 * (r['uncertainty'] or 0):.2f} % | {100 * r['error']:+.2f} % |"
+            md.append(f"| {r['part']} | {r['mode']} | {r['quantity']} | {r['candidate']} | {r['peak_mpa']:.2f} | "
+                      f"{ref} {r['dofs']} | {r['seconds']:.1f} | {r['cpu_seconds']:.1f} | "
+                      f"{r['peak_rss_mib']:.0f} |")
     (d / "sampling.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
 
