@@ -24,6 +24,7 @@ True
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -36,6 +37,9 @@ try:
     import pypardiso
 except ImportError:  # pragma: no cover - platform without MKL
     pypardiso = None
+else:
+    # pypardiso searches the whole prefix for libmkl_rt on every new solver unless told where it is
+    os.environ.setdefault("PYPARDISO_MKL_RT", pypardiso.ps.libmkl._name)
 
 DIRECT_MAX_DOF = 600_000
 METHODS = ("auto", "pardiso", "superlu", "amg")

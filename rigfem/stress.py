@@ -57,7 +57,8 @@ def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 20
         for c in range(k * 6):
             acc[:, c] += np.bincount(idx, Se.reshape(len(idx), k * 6)[:, c], minlength=len(fm.nodes))
     count = np.bincount(fm.elements.ravel(), minlength=len(fm.nodes))
-    return (acc / count[:, None]).reshape(len(fm.nodes), k, 6).transpose(1, 0, 2)
+    # contiguous (k, N, 6): every superposition over the cases reads it whole
+    return np.ascontiguousarray((acc / count[:, None]).reshape(len(fm.nodes), k, 6).transpose(1, 0, 2))
 
 
 def von_mises(s: np.ndarray) -> np.ndarray:

@@ -45,5 +45,5 @@ def write_vtu(path: str | Path, sol: Solution, c=None, allowable: float | None =
         mesh = meshio.Mesh(fm.nodes, [(cell, fm.elements)], point_data=data)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    mesh.write(path, file_format="vtu")
+    mesh.write(path, file_format="vtu", compression=None)  # float data barely compresses: zlib costs time
     return path
