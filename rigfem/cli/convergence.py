@@ -207,7 +207,7 @@ def summary(results: list[dict]) -> str:
         lines += ["", f"Bearing directions: the studies of {', '.join(old)} were measured before the "
                       "per-step directions fix: all their steps used 12 directions, so their preset rows give "
                       "the mesh error alone; the direction error (cycle mode) is in sampling.md."]
-    lines += ["", "## Coarsest h level meeting each target (P2, 24 bearing directions)", "",
+    lines += ["", "## Coarsest h level meeting each target (P2)", "",
               "Per part and mode, the coarsest level of the h sequence whose peak is within the target "
               "of the extrapolated peak (and every finer level is too); a preset meeting the target on "
               "every part needs sizes no larger than the finest of these.", "",
@@ -223,8 +223,10 @@ def summary(results: list[dict]) -> str:
             cells = []
             for t in TARGETS.values():
                 ok = [s for i, s in enumerate(hs) if all(_abs_err(a, x["label"]) <= t for x in hs[i:])]
-                cells.append(f"{ok[0]['size_mm']:.3g}/{ok[0]['local_size_mm']:.3g} mm ({ok[0]['label']}, "
-                             f"{ok[0]['seconds']:.0f} s)" if ok else "none")
+                t_s = ok[0].get("cpu_seconds") if ok else None
+                cost = (f"{t_s:.0f} s CPU" if t_s else f"{ok[0]['seconds']:.0f} s wall") if ok else ""
+                cells.append(f"{ok[0]['size_mm']:.3g}/{ok[0]['local_size_mm']:.3g} mm ({ok[0]['label']}, {cost})"
+                             if ok else "none")
             lines.append(f"| {res['part']} | {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
