@@ -186,3 +186,36 @@ def test_every_solve_checks_its_backward_error():
 def test_si_material_in_a_mm_scene_is_a_clear_error():
     with pytest.raises(InputError, match=r"E = .*MPa"):
         material_from_dict({"name": "steel_si", "E": 210e9, "nu": 0.3, "sigma_u": 750e6, "density": 7850.0})
+
+
+# ----------------------------------------------------------------------------- end to end
+def test_check_at_100_hz_scales_the_plate_peak_by_1e4_and_stays_finite(tmp_path):
+    """Original mode: plate load = 1.4 × peak pin force ∝ ω² and the FE is linear, so the
+    checked peak σvm at 100 Hz (the allowed maximum) is exactly 1e4 × the 1 Hz one; the
+    report JSON written for the failing case holds no NaN or infinity."""
+    import json
+
+    from rigfem.check import run_check
+
+    fast = {"parts": ["plate_A"], "fidelity": "draft", "samples": 72, "frames": 0, "modes": ["original"]}
+    out = {}
+    for hz in (1.0, 100.0):
+        scene = tmp_path / f"hz{hz:g}.toml"
+        scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\n'
+                         f"speed_hz = {hz}\n")
+        out[hz] = run_check(scene, out=tmp_path / f"o{hz:g}", overrides=fast, quiet=True)
+        finite(json.loads((tmp_path / f"o{hz:g}" / "report.json").read_text()))
+    lo, hi = (out[h]["parts"][0] for h in (1.0, 100.0))
+    assert hi["peak_mpa"] / lo["peak_mpa"] == pytest.approx(1e4, rel=1e-8)
+    assert out[1.0]["verdict"] == "pass" and out[100.0]["verdict"] == "fail"
+
+
+@pytest.mark.heavy
+def test_rail_meshed_far_too_coarse_is_a_clear_error():
+    """A 700 mm rail at size = 200 mm: gmsh's mesh is degenerate; refused naming size (~10 s)."""
+    from rigfem.mesh import MeshSettings, mesh_part
+    from rigfem.parts import load_part
+
+    with pytest.raises(InputError, match=r"^part rail_size25: mesh quality .* change size = 200 mm") as e:
+        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(200.0), use_cache=False)
+    assert "\n" not in str(e.value)
