@@ -10,9 +10,9 @@ For a part case of a scene (both modes share one mesh per step) :func:`study` ru
 Every step reports, per mode, the check's peak (max over the crank cycle of the superposed
 unit solutions), DOFs, wall time (``time.perf_counter`` around mesh + assembly + solves +
 superposition, meshing uncached), the process's CPU time over the same span, and peak
-memory.  Memory is the ``ru_maxrss`` of a fresh process per step (spawned), because the
+memory.  Memory is the peak RSS (VmHWM) of a fresh process per step (spawned), because the
 dominant allocations (gmsh, PARDISO/MKL factors) are native and invisible to ``tracemalloc``;
-the process's RSS after imports is reported beside it.
+the process's peak RSS after imports is reported beside it.
 
 :func:`richardson` extrapolates the three finest levels (general refinement ratios, fixed-point
 iteration as in Celik et al. 2008), gives the observed order and the GCI, and flags a peak whose
@@ -172,6 +172,16 @@ def away_from_singular_edges(part_name: str, params: dict | None, nodes: np.ndar
     return (d > away_mm) & (z > away_mm)
 
 
+def _peak_rss_mib() -> float:
+    """Peak resident memory of this process image (VmHWM; ``ru_maxrss`` would include the RSS of
+    the parent at fork time, which survives the spawn's exec)."""
+    try:
+        with open("/proc/self/status") as f:
+            return next(int(x.split()[1]) for x in f if x.startswith("VmHWM:")) / 1024
+    except (OSError, StopIteration):
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def _cpu() -> float:
     """CPU seconds of this process, all threads (wall time alone misleads on a shared machine)."""
     r = resource.getrusage(resource.RUSAGE_SELF)
@@ -183,7 +193,7 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
     from rigfem.partcheck import solve_cases
     from rigfem.stress import von_mises
 
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    rss0 = _peak_rss_mib()
     for _, c in cases:  # a cycle case carries its unit bearing loads in exactly n_dir directions
         n = len({u.direction for u in c.loads if u.kind == "bearing"})
         if len(c.rows) > 1 and n != spec.bearing_directions:
@@ -218,7 +228,7 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
         modes[r.mode] = entry
     if not all(math.isfinite(v) for m in modes.values() for k, v in m.items() if k.endswith("_mpa")):
         raise RuntimeError(f"step {spec.label}: non-finite peak")
-    mem = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 if isolate else None
+    mem = _peak_rss_mib() if isolate else None
     return {**dataclasses.asdict(spec), "modes": modes, "dofs": int(results[0].solution.model.mesh.ndof),
             "tets": int(len(results[0].mesh.tets)), "seconds": seconds, "cpu_seconds": cpu,
             "peak_rss_mib": mem, "base_rss_mib": rss0 if isolate else None, "load_avg": os.getloadavg()[0]}
