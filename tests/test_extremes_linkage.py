@@ -197,3 +197,27 @@ def test_lengths_in_metres_are_a_clear_error(build, field):
 def test_lengths_outside_10mm_10m_are_a_clear_error(b2, msg):
     with pytest.raises(InputError, match=msg):
         four_bar(b2, 840.0, 780.0, 1020.0)
+
+
+# ----------------------------------------------------------------------------- rail lengths
+RAILS_BUG = ("rigfem.mechanisms.four_bar/slider_crank never validate rails_mm (nor does rigfem.scene, which "
+             "passes tuple(float(x))): a negative rail gives a negative mass and is accepted, a NaN rail flags "
+             "the whole turn as a toggle instead of an input error, 0.7 (metres) is accepted, and a bar longer "
+             "than its guide rail (b2 = 1200 mm on the 700 mm crank rail) is checked as if it fitted")
+
+
+@pytest.mark.parametrize("rails, needle", [
+    pytest.param((-700.0, 1000.0, 1000.0), r"rails_mm.*-700", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
+    pytest.param((float("nan"), 1000.0, 1000.0), r"rails_mm.*nan", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
+    pytest.param((0.7, 1.0, 1.0), r"rails_mm.*looks like metres", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
+    pytest.param((700.0, 2000.0, 2000.0), r"b2 = 1200.*rails_mm.*700", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
+])
+def test_bad_rail_lengths_are_a_clear_error(rails, needle):
+    with pytest.raises(InputError, match=needle):
+        simulate(four_bar(1200.0, 1900.0, 1800.0, 2400.0, rails_mm=rails), samples=72)
+
+
+def test_valid_rails_give_finite_peaks():
+    """The counterpart of the xfails above: rails at least as long as their bars solve normally."""
+    pk = peaks(simulate(four_bar(1200.0, 1900.0, 1800.0, 2400.0, rails_mm=(1200.0, 2000.0, 2000.0)), samples=72))
+    assert all(np.isfinite(p["force_N"]) and p["force_N"] > 0 for n, p in pk.items() if n != "torque")
