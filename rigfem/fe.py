@@ -25,6 +25,7 @@ True
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,8 +53,20 @@ class Model:
     assembly_time: float
 
 
+#: Poisson's ratio from which linear tetrahedra lock (too stiff in near-incompressible strain)
+LOCKING_NU = 0.45
+
+
 def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
-    """Build the P1/P2 mesh of ``part`` and assemble its stiffness once."""
+    """Build the P1/P2 mesh of ``part`` and assemble its stiffness once.
+
+    Warns when linear elements meet a nearly incompressible material: they lock and
+    under-predict deflection and stress (use order 2).
+    """
+    if order == 1 and material.nu >= LOCKING_NU:
+        warnings.warn(f"material {material.name!r}: nu = {material.nu:g} >= {LOCKING_NU} with linear (P1) "
+                      f"tetrahedra: volumetric locking under-predicts deflection and stress; use order 2",
+                      UserWarning, stacklevel=2)
     t0 = time.perf_counter()
     fm = fe_mesh(part, order)
     K = stiffness(fm, material.E, material.nu)

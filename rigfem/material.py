@@ -62,7 +62,10 @@ def get_material(name: str) -> Material:
 
 
 def material_from_dict(d: dict) -> Material:
-    """User-defined material from ``{"name", "E", "nu", "sigma_u", "density"}``; validated.
+    """User-defined material of a scene, in mm–N–MPa–t: ``{"name", "E", "nu", "sigma_u", "density"}``.
+
+    The ranges catch values given in SI by mistake (E in Pa, density in kg/m³), which would
+    otherwise make every part pass.
 
     >>> material_from_dict({"name": "s355", "E": 210e3, "nu": 0.3, "sigma_u": 470, "density": 7.85e-9}).E
     210000.0
@@ -72,6 +75,6 @@ def material_from_dict(d: dict) -> Material:
     extra = [k for k in d if k not in keys]
     if missing or extra:
         raise InputError(f"material fields must be exactly {keys}; missing {missing}, unknown {extra}")
-    return Material(str(d["name"]), float(check_range("material E", d["E"])),
-                    check_range("material nu", d["nu"]), check_range("material sigma_u", d["sigma_u"]),
-                    check_range("material density", d["density"]))
+    return Material(str(d["name"]), check_range("material E", d["E"], 1.0, 1e7, "MPa"),
+                    check_range("material nu", d["nu"]), check_range("material sigma_u", d["sigma_u"], 0.01, 1e5, "MPa"),
+                    check_range("material density", d["density"], 0.0, 1e-7, "t/mm³"))

@@ -69,6 +69,18 @@ def _check_lengths(**lengths: float) -> None:
             raise InputError(f"{k} = {v:g} mm is outside the allowed range [10, 10000] mm")
 
 
+def _check_rails(rails_mm, bars: dict[str, float]) -> None:
+    """Each rail a valid length (mm), at least as long as the bar (joint to joint) it carries."""
+    if len(rails_mm) != len(bars):
+        raise InputError(f"rails_mm needs {len(bars)} lengths (mm), one per bar ({', '.join(bars)}); "
+                         f"got {len(rails_mm)}")
+    for i, ((name, b), L) in enumerate(zip(bars.items(), rails_mm)):
+        _check_lengths(**{f"rails_mm[{i}]": L})
+        if L < b:
+            raise InputError(f"{name} = {b:g} mm is longer than its rail: rails_mm[{i}] = {L:g} mm "
+                             f"(a rail must be at least as long as its bar)")
+
+
 def _ranges_text(deg: np.ndarray, bad: np.ndarray) -> str:
     rng = singular_ranges(deg, bad) or []
     return ", ".join(f"{a:.1f}-{b:.1f} deg" for a, b in rng)
@@ -98,6 +110,8 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
     crank-angle range where the loop cannot close.
     """
     _check_lengths(b2=b2, b3=b3, b4=b4, d=d)
+    if masses == "rig":
+        _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4})
     grid = np.linspace(0.0, 360.0, 3601)
     ok = fourbar_closes(b2, b3, b4, d, grid)
     if not ok.all():
@@ -168,6 +182,8 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
     ``slider_force(state) -> (n, 2)`` N is an external force on the slider (e.g. gas).
     """
     _check_lengths(b2=b2, b3=b3)
+    if masses == "rig":
+        _check_rails(rails_mm, {"b2": b2, "b3": b3})
     if not np.isfinite(offset) or abs(offset) > 10000:
         raise InputError(f"offset = {offset!r} mm is outside the allowed range [-10000, 10000] mm")
     grid = np.linspace(0.0, 360.0, 3601)

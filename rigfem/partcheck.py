@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from rigfem.fe import Model, build_model, load_matrix, solve
+from rigfem.fe import LOCKING_NU, Model, build_model, load_matrix, solve
 from rigfem.loadcases import PartCase, UnitLoad
 from rigfem.loads import BearingLoad, Inertia
 from rigfem.mesh import MeshSettings, PartMesh, mesh_part
@@ -246,6 +246,9 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "notes": list(res.case.notes),
     }
     out["notes"] += _profile_caveat(res)
+    if settings.order == 1 and mat.nu >= LOCKING_NU:
+        out["notes"].append(f"linear elements with nu = {mat.nu:g}: volumetric locking under-predicts stress; "
+                            f"use order 2")
     if res.imbalance > 1e-3:
         out["notes"].append(f"free-body loads were out of balance by up to {100 * res.imbalance:.1f} % "
                             f"(FE vs dynamics mass distribution); removed by inertia relief")

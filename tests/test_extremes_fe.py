@@ -158,9 +158,6 @@ def test_nu_above_049_is_a_clear_error():
         Material("rubber", 10.0, 0.5, 20.0, 1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="rigfem.fe.build_model (and the check's report notes) emit no warning "
-                                       "when linear (P1) elements are used with nu >= 0.45: volumetric locking "
-                                       "silently under-predicts deflection (x0.09 here) and stress")
 def test_p1_with_nu_near_half_warns_about_locking():
     with pytest.warns(UserWarning, match="locking"):
         build_model(box(200.0, 10.0, 10.0, 4, 1, 1), NEAR_INCOMPRESSIBLE, 1)
@@ -179,10 +176,6 @@ def test_every_solve_checks_its_backward_error():
 
 
 # ----------------------------------------------------------------------------- units in a scene
-@pytest.mark.xfail(strict=True, reason="rigfem.material.material_from_dict (the scene's [check] material "
-                                       "table, mm-N-MPa-t) silently accepts SI values E = 210e9, sigma_u = 750e6, "
-                                       "density = 7850: the check then compares MPa stresses with sigma_u/2 = 3.75e8 "
-                                       "(a pass for any load) and uses a density 1e12 too large for body forces")
 def test_si_material_in_a_mm_scene_is_a_clear_error():
     with pytest.raises(InputError, match=r"E = .*MPa"):
         material_from_dict({"name": "steel_si", "E": 210e9, "nu": 0.3, "sigma_u": 750e6, "density": 7850.0})

@@ -200,17 +200,12 @@ def test_lengths_outside_10mm_10m_are_a_clear_error(b2, msg):
 
 
 # ----------------------------------------------------------------------------- rail lengths
-RAILS_BUG = ("rigfem.mechanisms.four_bar/slider_crank never validate rails_mm (nor does rigfem.scene, which "
-             "passes tuple(float(x))): a negative rail gives a negative mass and is accepted, a NaN rail flags "
-             "the whole turn as a toggle instead of an input error, 0.7 (metres) is accepted, and a bar longer "
-             "than its guide rail (b2 = 1200 mm on the 700 mm crank rail) is checked as if it fitted")
-
 
 @pytest.mark.parametrize("rails, needle", [
-    pytest.param((-700.0, 1000.0, 1000.0), r"rails_mm.*-700", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
-    pytest.param((float("nan"), 1000.0, 1000.0), r"rails_mm.*nan", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
-    pytest.param((0.7, 1.0, 1.0), r"rails_mm.*looks like metres", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
-    pytest.param((700.0, 2000.0, 2000.0), r"b2 = 1200.*rails_mm.*700", marks=pytest.mark.xfail(strict=True, reason=RAILS_BUG)),
+    pytest.param((-700.0, 1000.0, 1000.0), r"rails_mm.*-700"),
+    pytest.param((float("nan"), 1000.0, 1000.0), r"rails_mm.*nan"),
+    pytest.param((0.7, 1.0, 1.0), r"rails_mm.*looks like metres"),
+    pytest.param((700.0, 2000.0, 2000.0), r"b2 = 1200.*rails_mm.*700"),
 ])
 def test_bad_rail_lengths_are_a_clear_error(rails, needle):
     with pytest.raises(InputError, match=needle):
