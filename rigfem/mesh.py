@@ -57,8 +57,8 @@ class PartMesh:
 
 #: bump when the meshing recipe changes, so cached meshes are not reused
 MESH_RECIPE = 3  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets
-#: machine memory the estimate is checked against, GiB
-MACHINE_GIB = 24.0
+#: machine memory the estimate is checked against, GiB: this machine's physical memory
+MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 #: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)
 TETS_PER_H3 = 8.4
 
