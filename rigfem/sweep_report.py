@@ -128,7 +128,7 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
              f"and both modes (the study's original load case and the real crank cycle).", "",
              f"- mountable configurations (lengths on the 60 mm grid within the rails): {len(t)}",
              f"- cannot be assembled over a full turn: {int((t['status'] == 'cannot assemble').sum())}",
-             f"- toggle (transmission angle within 5° of 0/180°, no number): {int((t['status'] == 'toggle').sum())}",
+             f"- toggle (dead point, or transmission angle within 5° of 0/180°; no number): {int((t['status'] == 'toggle').sum())}",
              f"- computed: {len(ok)}; pass: {int((ok['verdict'] == 'pass').sum())}, "
              f"fail: {int((ok['verdict'] == 'fail').sum())}",
              f"- comply with every rig rule (RIG.md §2): {n_rules}; of these computed "
