@@ -492,20 +492,16 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
 
 
 def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:
+    from contextlib import nullcontext
+
     from dask.distributed import Client, LocalCluster, as_completed
 
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address=None)
-    with Client(scheduler or cluster) as client:
-        try:
-            [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
-            futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
-            for fut in as_completed(futures):
-                i = futures[fut]
-                _write_chunk(work, i, fut.result())
-                bar.update(len(chunks[i]))
-        finally:
-            if cluster is not None:
-                cluster.close()
+    local = (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) if scheduler is None else nullcontext())
+    with local as cluster, Client(scheduler or cluster) as client:  # the client closes first
+        [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
+        futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
+        for fut in as_completed(futures):
+            i = futures.pop(fut)
+            _write_chunk(work, i, fut.result())
+            bar.update(len(chunks[i]))

@@ -177,3 +177,13 @@ def test_cli_bad_input(capsys):
     assert "speed_hz" in capsys.readouterr().err
     assert main(["sweep", "--scheduler", "localhost:8786", "--quiet"]) == 2
     assert "tcp://HOST:PORT" in capsys.readouterr().err
+
+
+@pytest.mark.heavy
+def test_default_local_cluster_equals_serial(params, bases, tmp_path):
+    """The CLI's default path: a LocalCluster of worker processes inside this process."""
+    serial = run_sweep(params, tmp_path / "serial", configs=CONFIGS, chunk_size=2, bases=bases,
+                       progress=False)
+    local = run_sweep(params, tmp_path / "local", configs=CONFIGS, chunk_size=2, bases=bases, workers=2,
+                      progress=False)
+    pd.testing.assert_frame_equal(serial, local)
