@@ -66,9 +66,10 @@ def main() -> None:
            "cpus": os.cpu_count(), "python": platform.python_version()}
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "sweep.json").write_text(json.dumps(res, indent=1))
+    cmd = f"python benchmarks/bench_sweep.py --every {a.every} --repeats {a.repeats}"
+    cmd += f" --full-seconds {a.full_seconds:.0f}" if a.full_seconds else ""
     md = [f"# Sweep timing (four-bar, {p.fidelity} fidelity, {p.samples} crank angles, rigid-body, 1 Hz)", "",
-          f"Command: `python benchmarks/bench_sweep.py --every {a.every} --repeats {a.repeats}`"
-          + (f" --full-seconds {a.full_seconds:.0f}" if a.full_seconds else "") + ".", "",
+          f"Command: `{cmd}` (OMP/OpenBLAS threads = 1).", "",
           f"- mountable four-bar configurations: {len(allc)}; assembling over a full turn: {len(closes)} "
           f"(enumeration + assembly test {t_enum:.1f} s)",
           f"- unit solutions (6 part geometry/support sets, one factorisation each): {t_bases:.0f} s",
