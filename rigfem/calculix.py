@@ -30,6 +30,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from rigfem.errors import InputError, check_range
+from rigfem.stress import von_mises
 
 #: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
 _FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}
@@ -516,10 +517,3 @@ def run_ccx(inp_path: str | os.PathLike, threads: int = 1, workdir: str | os.Pat
     m = re.search(r"Total CalculiX Time:\s*([0-9.eE+-]+)", log)
     return CcxResult(res.displacement, res.stress, wall, float(m.group(1)) if m else float("nan"), threads, log)
 
-
-def von_mises(stress: np.ndarray) -> np.ndarray:
-    """Von Mises stress of (..., 6) tensors ordered xx, yy, zz, xy, yz, zx (shear order irrelevant)."""
-    s = np.asarray(stress, dtype=float)
-    d = s[..., :3]
-    return np.sqrt(0.5 * ((d[..., 0] - d[..., 1]) ** 2 + (d[..., 1] - d[..., 2]) ** 2 + (d[..., 2] - d[..., 0]) ** 2)
-                   + 3.0 * np.sum(s[..., 3:] ** 2, axis=-1))

@@ -25,7 +25,6 @@ from rigfem.loads import BearingLoad, Inertia
 from rigfem.mesh import MeshSettings, PartMesh, mesh_part
 from rigfem.parts import load_part
 from rigfem.solution import Solution
-from rigfem.stress import von_mises
 from rigfem.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.verdict import goodman, half_ultimate
 
@@ -58,7 +57,8 @@ def supports_of(case: PartCase) -> list:
     return out
 
 
-def _fe_load(u: UnitLoad):
+def fe_load(u: UnitLoad):
+    """The rigfem.loads object of a unit load (bearing on a hole, or a unit inertia field)."""
     if u.kind == "bearing":
         return BearingLoad(u.group, u.direction)
     o = u.direction
@@ -162,7 +162,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
     for _, case in sup_cases:
         for u in case.loads:
             unique.setdefault(u, len(unique))
-    loads = [_fe_load(u) for u in unique]
+    loads = [fe_load(u) for u in unique]
     supports = supports_of(sup_cases[0][1])
     free = any(isinstance(s, FreeBody) for s in supports)
     R = scale = None
@@ -170,7 +170,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         loads, R, scale = relieved_cases(model, loads)
     sol = solve(model, supports, loads, solver=solver)
     t_solve = time.perf_counter() - t0
-    fe_mass = _volume(pm) * model.material.density * 1e3  # kg (density in t/mm³)
+    fe_mass = mesh_volume(pm) * model.material.density * 1e3  # kg (density in t/mm³)
     out = []
     for mode, case in sup_cases:
         t1 = time.perf_counter()
@@ -197,7 +197,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
     return out
 
 
-def _volume(pm: PartMesh) -> float:
+def mesh_volume(pm: PartMesh) -> float:
     """Volume (mm³) of a tetrahedral mesh."""
     p = pm.points[pm.tets]
     return float(np.abs(np.einsum("ij,ij->i", p[:, 1] - p[:, 0],
@@ -210,7 +210,7 @@ def _profile_caveat(res: CaseResult) -> list[str]:
     ref = part.reference.get("linear_mass_catalogue")
     if part.kind != "rail" or ref is None:
         return []
-    kg_m = _volume(res.mesh) * part.density * 1e-9 / (part["length"] / 1000.0)
+    kg_m = mesh_volume(res.mesh) * part.density * 1e-9 / (part["length"] / 1000.0)
     if kg_m <= 1.05 * ref.value:
         return []
     return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "

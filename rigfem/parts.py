@@ -30,6 +30,7 @@ of every cylindrical group so loads and supports attach by name.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -129,8 +130,14 @@ def load_part(name: str, overrides: dict[str, float] | None = None,
     """Load a known part by name (or a custom geometry file by path) and validate it.
 
     ``overrides`` replaces dimension values, e.g. ``{"length": 700}`` for a 700 mm rail.
+    Definitions are read once per process (a sweep asks for the same parts thousands of times).
     """
-    overrides = dict(overrides or {})
+    return _load_part(name, tuple(sorted((overrides or {}).items())), Path(geometry_dir))
+
+
+@functools.lru_cache(maxsize=512)
+def _load_part(name: str, override_items: tuple, geometry_dir: Path) -> PartDef:
+    overrides = dict(override_items)
     if Path(name).suffix.lower() in _CUSTOM_SUFFIXES:
         path = Path(name)
         if not path.is_file():

@@ -33,8 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigfem.errors import InputError, check_range
-from rigfem.loadcases import (Bar, Fitting, PartCase, RailLayout, UnitLoad, cycle_fitting,
-                              cycle_rail, directions, hole_name, original_fitting, original_rail)
+from rigfem.loadcases import PartCase, RailLayout, UnitLoad, directions, hole_name, part_cases
 from rigfem.mechanisms import MODELS, RIG_RAILS_MM, four_bar, simulate, slider_crank
 from rigfem.reactions import peaks
 from rigfem.rules import HOLE_PITCH_MM, MIN_GROUND_MM, fourbar_rules, slider_crank_rules
@@ -184,7 +183,7 @@ def _reference_cases(p: SweepParams, s: CheckSettings) -> list[tuple[str, PartCa
             continue
         pk = peaks(h)
         if not h.meta.get("singular") and not any(v.get("singular") for v in pk.values()):
-            return config_cases(h, pk, s)
+            return part_cases(h, pk, s)
     raise InputError(f"no {p.linkage_type} configuration of rails {list(p.rails)} mm can run")
 
 
@@ -216,7 +215,7 @@ def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase
 def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set."""
     from rigfem.fe import build_model, solve
-    from rigfem.partcheck import _fe_load, _volume, mesh_case, relieved_cases, supports_of
+    from rigfem.partcheck import fe_load, mesh_volume, mesh_case, relieved_cases, supports_of
     from rigfem.stress import von_mises
     from rigfem.supports import FreeBody
 
@@ -232,12 +231,12 @@ def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
             models[geo] = (pm, build_model(pm, s.material, s.order))
         pm, model = models[geo]
         supports = supports_of(case)
-        fe_loads = [_fe_load(u) for u in loads]
+        fe_loads = [fe_load(u) for u in loads]
         if any(isinstance(x, FreeBody) for x in supports):
             fe_loads = relieved_cases(model, fe_loads)[0]
         sol = solve(model, supports, fe_loads, solver=solver)
         out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
-                           _volume(pm) * s.material.density * 1e3)
+                           mesh_volume(pm) * s.material.density * 1e3)
     return out
 
 
@@ -323,37 +322,6 @@ def case_peak(b: UnitBasis, case: PartCase, exact: bool = False) -> tuple[float,
 
 # ----------------------------------------------------------------------------- one configuration
 @functools.lru_cache(maxsize=None)
-def _kind(part: str) -> str:
-    from rigfem.parts import load_part
-
-    return load_part(part).kind
-
-
-def config_cases(h, pk: dict, s: CheckSettings) -> list[tuple[str, PartCase]]:
-    """The (mode, PartCase) list of :func:`rigfem.loadcases.part_cases`, with rail layouts
-    cached (part_cases reads the part files on every call: too slow for a sweep)."""
-    spacing = _layout(1000.0).screw_spacing
-
-    def bar(name: str, spec: dict) -> Bar:
-        p, q = h.joints[spec["pivot"]].position_mm, h.joints[spec["far"]].position_mm
-        return Bar(name, spec["pivot"], spec["far"], spec["part"], float(spec["length"]),
-                   _layout(float(spec["length"])), float(np.hypot(*(q[0] - p[0]))), bool(spec.get("driven")))
-
-    out = []
-    for name, spec in s.parts.items():
-        for mode in s.modes:
-            if "length" in spec:
-                b = bar(name, spec)
-                case = (original_rail(h, pk, b, s.load_factor) if mode == "original"
-                        else cycle_rail(h, b, s.bearing_directions))
-            else:
-                fit = Fitting(name, spec["part"], _kind(spec["part"]), spec["joint"], bar(spec["on"], spec["rail"]))
-                case = (original_fitting(h, pk, fit, s.load_factor) if mode == "original"
-                        else cycle_fitting(h, fit, s.bearing_directions))
-            out.append((mode, case))
-    return out
-
-
 def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
              settings: CheckSettings | None = None) -> dict:
     """One table row: lengths, every rule, peak reactions and per-part utilisation and verdict.
@@ -391,7 +359,7 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
         return row
     limit = s.limit_factor * s.material.sigma_u
     worst = ("", 0.0)
-    for mode, case in config_cases(h, pk, s):
+    for mode, case in part_cases(h, pk, s):
         peak, deg = case_peak(bases[_case_key(case)], case)
         util = 100.0 * peak / limit
         row[f"{case.name}_{mode}_mpa"] = peak

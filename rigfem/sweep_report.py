@@ -199,8 +199,9 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
 def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float | None = None) -> list[str]:
     """Write the CSV, the maps and worst_<type>.md into ``out``; returns the file names."""
     out.mkdir(parents=True, exist_ok=True)
-    csv = f"sweep_{p.linkage_type}.csv"
-    table.to_csv(out / csv, index=False, float_format="%.6g", na_rep="")
+    csv = f"sweep_{p.linkage_type}.csv.gz"  # gzip: most rows are configurations that cannot assemble
+    table.to_csv(out / csv, index=False, float_format="%.6g", na_rep="",
+                 compression={"method": "gzip", "mtime": 0})
     files = [csv] + write_maps(table, p, out)
     md = f"worst_{p.linkage_type}.md"
     (out / md).write_text(worst_markdown(table, p, seconds))

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rigfem.errors import InputError, check_range
+from rigfem.stress import von_mises
 
 #: Marin surface factor k_a = a·Sut^b, Sut in MPa (Shigley Table 6-2)
 SURFACE = {"ground": (1.58, -0.085), "machined": (4.51, -0.265), "cold-drawn": (4.51, -0.265),
@@ -49,14 +50,6 @@ def half_ultimate(peak_mpa: float, sigma_u_mpa: float, error_pct: float = 0.0,
     lo, hi = peak * (1 - err / 100), peak * (1 + err / 100)
     verdict = "pass" if hi < limit else "fail" if lo >= limit else "undecided"
     return Verdict(peak, limit, 100.0 * peak / limit, err, verdict)
-
-
-def von_mises(s: np.ndarray) -> np.ndarray:
-    """Von Mises stress of tensors in Voigt order (xx, yy, zz, xy, yz, xz), shape (..., 6)."""
-    s = np.asarray(s, dtype=float)
-    xx, yy, zz, xy, yz, xz = np.moveaxis(s, -1, 0)
-    return np.sqrt(0.5 * ((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2)
-                   + 3.0 * (xy ** 2 + yz ** 2 + xz ** 2))
 
 
 def marin_endurance(sigma_u_mpa: float, surface: str = "machined", size_mm: float = 19.0,

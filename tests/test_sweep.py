@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import gzip
 
 import numpy as np
 import pandas as pd
@@ -14,7 +15,7 @@ from rigfem.mechanisms import four_bar, simulate
 from rigfem.partcheck import solve_cases
 from rigfem.reactions import peaks
 from rigfem.rules import fourbar_rules
-from rigfem.sweep import (SweepParams, _case_key, build_bases, case_peak, config_cases, enumerate_configs,
+from rigfem.sweep import (SweepParams, _case_key, build_bases, case_peak, enumerate_configs,
                           evaluate, run_sweep)
 
 #: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
@@ -80,10 +81,7 @@ def test_superposition_equals_full_solve(params, bases, cfg):
     s = params.settings()
     h = simulate(four_bar(**cfg))
     pk = peaks(h)
-    mine = config_cases(h, pk, s)
     ref = part_cases(h, pk, s)
-    for (m1, a), (m2, b) in zip(mine, ref):
-        assert m1 == m2 and a.loads == b.loads and np.array_equal(a.coef, b.coef)
     # same mesh as the sweep: refine every hole the basis refines
     refine = {k[:2]: c.refine for k, c in ((k, _spec_case(params, k)) for k in bases)}
     cases = [(m, dataclasses.replace(c, refine=refine[_case_key(c)[:2]])) for m, c in ref]
@@ -163,8 +161,8 @@ def test_report_files(params, bases, tmp_path):
 
     table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
     files = write_report(table, params, tmp_path / "out")
-    assert files == ["sweep_four-bar.csv", "map_four-bar_d_b3.png", "map_four-bar_b4_b3.png", "worst_four-bar.md"]
-    text = (tmp_path / "out" / "sweep_four-bar.csv").read_text().lower()
+    assert files == ["sweep_four-bar.csv.gz", "map_four-bar_d_b3.png", "map_four-bar_b4_b3.png", "worst_four-bar.md"]
+    text = gzip.decompress((tmp_path / "out" / "sweep_four-bar.csv.gz").read_bytes()).decode().lower()
     assert "nan" not in text and "inf" not in text
     md = (tmp_path / "out" / "worst_four-bar.md").read_text()
     assert "worst configurations" in md and "2013 study" in md and "computed: 3" in md
