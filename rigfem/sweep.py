@@ -321,7 +321,6 @@ def case_peak(b: UnitBasis, case: PartCase, exact: bool = False) -> tuple[float,
 
 
 # ----------------------------------------------------------------------------- one configuration
-@functools.lru_cache(maxsize=None)
 def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
              settings: CheckSettings | None = None) -> dict:
     """One table row: lengths, every rule, peak reactions and per-part utilisation and verdict.
