@@ -244,27 +244,14 @@ def _springs(springs: tuple[np.ndarray, np.ndarray, np.ndarray], n: int, first: 
 def _shaft_terms(fm: Any, hole: Any, s: Any, E: float) -> tuple[np.ndarray, ...]:
     """Rank-one terms c·(g·u)² of rigfem's ShaftInHole foundation, one per quadrature point and direction.
 
-    Mirrors :func:`rigfem.supports.shaft_springs`; :func:`export_model` checks that the terms
-    sum to rigfem's spring matrix.  Returns points (P, 3), c (P, 3) for the radial,
-    tangential and axial directions, g (P, 3, nloc, 3) and the surface nodes (P, nloc).
+    From :func:`rigfem.supports.shaft_terms`; :func:`export_model` checks that the terms sum
+    to rigfem's spring matrix.  Returns points (P, 3), c (P, 3) for the radial, tangential and
+    axial directions, g (P, 3, nloc, 3) and the surface nodes (P, nloc).
     """
-    from rigfem.supports import surface_quadrature
+    from rigfem.supports import shaft_terms
 
-    kr = E / hole.radius if s.k_radial is None else s.k_radial
-    kt = 1e-3 * kr if s.k_tangential is None else s.k_tangential
-    ka = 1e-3 * kr if s.k_axial is None else s.k_axial
-    pts, w, N, tri = surface_quadrature(fm, s.hole, 4)
-    a = np.asarray(hole.axis, float) / np.linalg.norm(hole.axis)
-    d = pts - np.asarray(hole.center, float)
-    rad = d - (d @ a)[..., None] * a
-    n = rad / np.linalg.norm(rad, axis=-1, keepdims=True)
-    t = np.cross(a, n)
-    krq = np.full(w.shape, kr)
-    if s.direction is not None:
-        dirn = np.asarray(s.direction, float)
-        krq = np.where(n @ (dirn - (dirn @ a) * a) > 0, kr, 0.0)
-    c = np.stack([krq * w, kt * w, ka * w], -1)  # (K, nq, 3)
-    dirs = np.stack([n, t, np.broadcast_to(a, n.shape)], -2)  # (K, nq, 3 dirs, 3)
+    pts, k, dirs, w, N, tri = shaft_terms(fm, hole, s, E)
+    c = k * w[..., None]  # (K, nq, 3)
     g = np.einsum("qa,kqdj->kqdaj", N, dirs)
     nodes = np.broadcast_to(tri[:, None, :], (*w.shape, tri.shape[1]))
     return pts.reshape(-1, 3), c.reshape(-1, 3), g.reshape(-1, 3, *g.shape[3:]), nodes.reshape(-1, tri.shape[1])

@@ -110,8 +110,14 @@ def _plane_axis(fm: FEMesh, name: str) -> int:
     return ax
 
 
-def shaft_springs(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> sp.csr_matrix:
-    """Stiffness of the elastic foundation of a shaft in a hole."""
+def shaft_terms(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> tuple[np.ndarray, ...]:
+    """The elastic foundation of a shaft in a hole at each quadrature point of the wall.
+
+    Returns points (K, nq, 3), spring moduli (K, nq, 3) in the radial, tangential and axial
+    directions, those directions (K, nq, 3, 3), weights·area (K, nq), shape values (nq, nloc)
+    and the wall's nodes (K, nloc).  :func:`shaft_springs` assembles them; the CalculiX export
+    writes the same terms as springs.
+    """
     kr = E / hole.radius if s.k_radial is None else s.k_radial
     kt = 1e-3 * kr if s.k_tangential is None else s.k_tangential
     ka = 1e-3 * kr if s.k_axial is None else s.k_axial
@@ -131,11 +137,18 @@ def shaft_springs(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> sp.csr_ma
         if np.linalg.norm(dirn) == 0:
             raise InputError(f"ShaftInHole({s.hole!r}).direction must not be parallel to the hole axis")
         krq = np.where(n @ dirn > 0, kr, 0.0)
-    S = (krq[..., None, None] * n[..., :, None] * n[..., None, :] + kt * t[..., :, None] * t[..., None, :]
-         + ka * np.outer(a, a))
+    k = np.stack([krq, np.full(w.shape, kt), np.full(w.shape, ka)], -1)
+    dirs = np.stack([n, t, np.broadcast_to(a, n.shape)], -2)
+    return pts, k, dirs, w, N, tri
+
+
+def shaft_springs(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> sp.csr_matrix:
+    """Stiffness of the elastic foundation of a shaft in a hole."""
+    _, k, dirs, w, N, tri = shaft_terms(fm, hole, s, E)
+    S = np.einsum("kqd,kqdi,kqdj->kqij", k, dirs, dirs)
     Ke = np.einsum("kq,qa,qb,kqij->kaibj", w, N, N, S, optimize=True)
-    k = Ke.shape[1] * 3
-    return _scatter(element_dofs(tri), Ke.reshape(-1, k, k), fm.ndof)
+    n = Ke.shape[1] * 3
+    return _scatter(element_dofs(tri), Ke.reshape(-1, n, n), fm.ndof)
 
 
 def three_two_one(x: np.ndarray) -> np.ndarray:
