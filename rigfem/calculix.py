@@ -388,18 +388,11 @@ def verify_scene(name: str | os.PathLike, overrides: dict | None = None, threads
     One entry per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
     :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.
     """
-    from rigfem.check import load_check_scene
-    from rigfem.loadcases import part_cases
-    from rigfem.mechanisms import simulate
-    from rigfem.partcheck import solve_cases, supports_of
-    from rigfem.reactions import peaks
+    from rigfem.check import load_check_scene, solve_scene
+    from rigfem.partcheck import supports_of
 
-    cs = load_check_scene(name, overrides)
-    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
-    if h.meta.get("singular"):
-        return []
     out = []
-    for r in solve_cases(part_cases(h, peaks(h), cs.settings), cs.settings, solver=solver):
+    for r in solve_scene(load_check_scene(name, overrides), solver)[1]:
         (c,) = cross_check(r.solution.model, supports_of(r.case), solution=r.solution, coef=r.coef[[r.row]],
                            threads=threads)
         out.append({"part": r.case.name, "mode": r.mode, "dof": int(r.solution.model.mesh.ndof),

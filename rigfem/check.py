@@ -20,8 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from rigfem import __version__
-from rigfem.cli.reactions import plot as plot_reactions
-from rigfem.cli.reactions import result_dict
 from rigfem.errors import InputError, check_range
 from rigfem.linkage import solve
 from rigfem.loadcases import part_cases
@@ -29,8 +27,8 @@ from rigfem.mechanisms import MODELS, simulate
 from rigfem.output import atomic_dir, check_writable
 from rigfem.calculix import export_model
 from rigfem.partcheck import CaseResult, solve_cases, supports_of, verdict_of
-from rigfem.reactions import JointHistory, ReactionHistory, peaks, read_csv, spline_evaluator
-from rigfem.render import field_picture
+from rigfem.reactions import JointHistory, ReactionHistory, peaks, read_csv, spline_evaluator, summary
+from rigfem.render import field_picture, reactions_plot
 from rigfem.report import overall, render_markdown, write_json
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.settings import CheckSettings, check_settings
@@ -211,6 +209,20 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
     return files
 
 
+def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
+                ) -> tuple[ReactionHistory, list[CaseResult]]:
+    """The scene's reaction history (its dynamics, or an imported CSV) and every part case
+    solved; no cases at a toggle, where the reactions are unbounded."""
+    h = (imported_history(cs) if cs.reactions_csv else
+         simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
+    if h.meta.get("singular"):
+        return h, []
+    cases = part_cases(h, peaks(h), cs.settings)
+    bar, step = _progress(len(cases), quiet)
+    with bar:
+        return h, solve_cases(cases, cs.settings, solver=solver, progress=step)
+
+
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
               overrides: dict | None = None, quiet: bool = False, solver: str = "auto",
               export_inp: bool = False) -> dict:
@@ -223,21 +235,15 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     s = cs.settings
     out = Path(out) if out is not None else Path("results") / cs.scene.name
     check_writable(out, force)
-    h = (imported_history(cs) if cs.reactions_csv else
-         simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
-    reactions = result_dict(h)
+    h, results = solve_scene(cs, solver, quiet)
+    reactions = summary(h)
     limit = s.limit_factor * s.material.sigma_u
-    results: list[CaseResult] = []
     if h.meta.get("singular"):
         parts = [{"name": p, "part": spec["part"], "mode": m, "verdict": "fail", "peak_mpa": None,
                   "notes": [f"toggle (singular) crank-angle ranges {h.meta['singular']}: reactions grow "
                             f"without bound; no stress can be computed"]}
                  for p, spec in s.parts.items() for m in s.modes]
     else:
-        cases = part_cases(h, peaks(h), s)
-        bar, step = _progress(len(cases), quiet)
-        with bar:
-            results = solve_cases(cases, s, solver=solver, progress=step)
         parts = [verdict_of(r, s) for r in results]
     report = {
         "scene": cs.scene.name, "description": cs.description, "rigfem_version": __version__,
@@ -254,7 +260,7 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
     with atomic_dir(out, force) as d:
-        plot_reactions(h, str(d / "reactions.png"))
+        reactions_plot(h, d / "reactions.png")
         files = ["report.json", "report.md", "reactions.png"]
         if results:
             _plot_peaks(results, limit, d / "peak_von_mises.png")

@@ -70,13 +70,8 @@ def fe_load(u: UnitLoad):
 def _resultants(x: np.ndarray, F: np.ndarray, about: np.ndarray) -> np.ndarray:
     """Force and moment about ``about`` (6, k) of nodal load columns F (3N, k)."""
     f = F.reshape(len(x), 3, -1)
-    r = x - about
-    return np.concatenate([f.sum(0), np.einsum("ijk,nj,nkc->ic", _LEVI, r, f)], axis=0)
-
-
-_LEVI = np.zeros((3, 3, 3))
-_LEVI[0, 1, 2] = _LEVI[1, 2, 0] = _LEVI[2, 0, 1] = 1
-_LEVI[0, 2, 1] = _LEVI[2, 1, 0] = _LEVI[1, 0, 2] = -1
+    moment = np.cross((x - about)[:, None, :], f.transpose(0, 2, 1)).sum(0).T
+    return np.concatenate([f.sum(0), moment], axis=0)
 
 
 def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndarray]:

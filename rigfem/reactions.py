@@ -23,6 +23,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from rigfem.errors import InputError
+from rigfem.rules import rules_for
 
 
 @dataclass
@@ -336,3 +337,23 @@ def read_csv(path: str | Path) -> ReactionHistory:
                         singular_mask=sing if sing.any() else None)
     h.meta["singular"] = singular_ranges(deg, h.singular_mask)
     return h
+
+
+def summary(h: ReactionHistory) -> dict:
+    """The JSON result: rules, transmission angle, peaks, torque, singular ranges (finite only)."""
+    p = peaks(h)
+    tq = p.pop("torque")
+    mu = h.meta.get("mu_deg")
+    unit = h.meta.get("driver_unit", "N·m")
+    return {
+        "linkage": h.meta.get("type"), "lengths_mm": h.meta.get("lengths_mm"), "model": h.meta.get("model"),
+        "speed_hz": h.meta.get("speed_hz"), "samples": int(h.crank_deg.size),
+        "rules": [{k: r.as_dict()[k] for k in ("name", "value", "limit", "ok", "relation", "unit")}
+                  for r in rules_for(h.meta)],
+        "transmission_angle_deg": None if mu is None else {"min": mu["min"], "max": mu["max"]},
+        "peaks": p,
+        "torque_Nm" if unit == "N·m" else "driver_force_N": {"peak": tq["peak"], "crank_deg": tq["crank_deg"],
+                                                             "singular": tq["singular"]},
+        "singular": h.meta.get("singular"),
+        "warnings": h.meta.get("warnings", []),
+    }

@@ -55,3 +55,23 @@ def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def reactions_plot(h, path: str | Path) -> None:
+    """Reaction magnitudes and driver torque against crank angle (singular samples masked)."""
+    mask = h.singular_mask if h.singular_mask is not None else np.zeros(h.crank_deg.size, bool)
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
+    for name, j in h.joints.items():
+        a1.plot(h.crank_deg, np.ma.masked_where(mask, np.hypot(*j.force_N.T)), label=name)
+    a1.set_ylabel("|reaction| (N)")
+    a1.legend(ncol=4, fontsize="small")
+    a2.plot(h.crank_deg, np.ma.masked_where(mask, h.torque_Nm), color="k")
+    a2.set_ylabel("driver torque (N·m)" if h.meta.get("driver_unit", "N·m") == "N·m" else "driver force (N)")
+    a2.set_xlabel("crank angle (deg)")
+    for a, b in h.meta.get("singular") or []:
+        for ax in (a1, a2):
+            ax.axvspan(a, b, color="r", alpha=0.2)
+    a1.set_title(f"{h.meta.get('type')} {h.meta.get('lengths_mm')} ({h.meta.get('model')})", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -10,12 +10,10 @@ import argparse
 import json
 import math
 
-import numpy as np
-
 from rigfem.errors import InputError, check_range
 from rigfem.mechanisms import MODELS, four_bar, simulate, slider_crank
-from rigfem.reactions import ReactionHistory, peaks, write_csv
-from rigfem.rules import rules_for
+from rigfem.reactions import summary, write_csv
+from rigfem.render import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
 REFERENCE = (540.0, 840.0, 780.0, 1020.0)
@@ -64,26 +62,6 @@ def _build(args) -> tuple[object, float]:
     return lk, (1.0 if speed is None else speed)
 
 
-def result_dict(h: ReactionHistory) -> dict:
-    """The JSON result: rules, transmission angle, peaks, torque, singular ranges (finite only)."""
-    p = peaks(h)
-    tq = p.pop("torque")
-    mu = h.meta.get("mu_deg")
-    unit = h.meta.get("driver_unit", "N·m")
-    return {
-        "linkage": h.meta.get("type"), "lengths_mm": h.meta.get("lengths_mm"), "model": h.meta.get("model"),
-        "speed_hz": h.meta.get("speed_hz"), "samples": int(h.crank_deg.size),
-        "rules": [{k: r.as_dict()[k] for k in ("name", "value", "limit", "ok", "relation", "unit")}
-                  for r in rules_for(h.meta)],
-        "transmission_angle_deg": None if mu is None else {"min": mu["min"], "max": mu["max"]},
-        "peaks": p,
-        "torque_Nm" if unit == "N·m" else "driver_force_N": {"peak": tq["peak"], "crank_deg": tq["crank_deg"],
-                                                             "singular": tq["singular"]},
-        "singular": h.meta.get("singular"),
-        "warnings": h.meta.get("warnings", []),
-    }
-
-
 def format_table(res: dict) -> str:
     """Readable table of a result dict."""
     out = []
@@ -124,31 +102,6 @@ def format_table(res: dict) -> str:
     return "\n".join(out)
 
 
-def plot(h: ReactionHistory, path: str) -> None:
-    """Reaction magnitudes and driver torque against crank angle (singular samples masked)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    mask = h.singular_mask if h.singular_mask is not None else np.zeros(h.crank_deg.size, bool)
-    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
-    for name, j in h.joints.items():
-        a1.plot(h.crank_deg, np.ma.masked_where(mask, np.hypot(*j.force_N.T)), label=name)
-    a1.set_ylabel("|reaction| (N)")
-    a1.legend(ncol=4, fontsize="small")
-    a2.plot(h.crank_deg, np.ma.masked_where(mask, h.torque_Nm), color="k")
-    a2.set_ylabel("driver torque (N·m)" if h.meta.get("driver_unit", "N·m") == "N·m" else "driver force (N)")
-    a2.set_xlabel("crank angle (deg)")
-    for a, b in h.meta.get("singular") or []:
-        for ax in (a1, a2):
-            ax.axvspan(a, b, color="r", alpha=0.2)
-    a1.set_title(f"{h.meta.get('type')} {h.meta.get('lengths_mm')} ({h.meta.get('model')})", fontsize="small")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
 def run(args) -> int:
     if args.model not in MODELS:
         raise InputError(f"--model = {args.model!r} must be one of {', '.join(MODELS)}")
@@ -159,7 +112,7 @@ def run(args) -> int:
         raise InputError(f"--plot = {args.plot!r} must be a .png path")
     lk, speed = _build(args)
     h = simulate(lk, samples=int(samples), speed_hz=speed, model=args.model)
-    res = result_dict(h)
+    res = summary(h)
     if args.csv:
         try:
             write_csv(h, args.csv)
@@ -167,7 +120,7 @@ def run(args) -> int:
             raise InputError(f"--csv {args.csv!r}: cannot write ({exc.strerror})") from None
     if args.plot:
         try:
-            plot(h, args.plot)
+            reactions_plot(h, args.plot)
         except OSError as exc:
             raise InputError(f"--plot {args.plot!r}: cannot write ({exc.strerror})") from None
     if args.json:
