@@ -3,8 +3,9 @@
 For a part case of a scene (both modes share one mesh per step) :func:`study` runs
 
 * an **h sequence**: order 2 (or 1), global and local mesh size scaled together by ``ratio`` per level,
-  the finest level being ``finest`` (default the ``fine`` preset's sizes);
-* the **presets** ``draft`` and ``standard`` (the finest h level *is* ``fine`` by default);
+  ending at ``finest`` (default the ``fine`` preset's sizes), plus finer levels while the peak is
+  not converging (at most ``extend``);
+* the **presets** ``draft`` and ``standard`` (the h sequence passes ``fine``'s sizes by default);
 * a **p step**: order 1 on the ``standard`` mesh, beside order 2 on the same mesh.
 
 Every step reports, per mode, the check's peak (max over the crank cycle of the superposed
@@ -24,6 +25,11 @@ shrinking differences (``oscillating``: the limit lies between the last two leve
 whose last two changes are both below :data:`NOISE` of the value and do not grow
 (``noise-limited``: unstructured remeshing moves the peak node by more than the discretisation
 error left).  A peak that keeps rising level after level is never noise-limited.
+
+A peak that is not converging at the finest preset may be singular or only pre-asymptotic (a
+small fillet resolved by a few elements at the presets' sizes).  :func:`study` then adds up to
+``extend`` finer levels (same ratio, within ``max_gib``): a singular peak keeps rising, a smooth
+one settles.
 """
 
 from __future__ import annotations
@@ -54,9 +60,11 @@ H_DIRECTIONS = FIDELITY["fine"]["bearing_directions"]
 TARGETS = {"draft": 0.10, "standard": 0.03, "fine": 0.01}
 #: relative change between the finest levels below which a non-growing peak is remeshing noise
 NOISE = 0.01
-#: radius (mm) around the I-profile's sharp web-flange corners and clamped base edge excluded
-#: from the second quantity ("peak away from the singular edges")
+#: radius (mm) around the sharp web-flange corners of an unfilleted I-profile (fillet_radius = 0)
+#: excluded from the second quantity ("peak away from the singular edges")
 AWAY_MM = 4.0
+#: finer h levels added beyond the finest while a peak is not converging (memory permitting)
+EXTEND = 1
 
 
 @dataclasses.dataclass
@@ -160,16 +168,17 @@ class StepSpec:
 def away_from_singular_edges(part_name: str, params: dict | None, nodes: np.ndarray,
                              away_mm: float = AWAY_MM) -> np.ndarray | None:
     """Mask of points (n, 3) farther than ``away_mm`` from the sharp re-entrant web-flange corners
-    and the clamped base of an I-profile (None for other parts: they have no such edge)."""
+    of an I-profile without root fillets; None for any other part, a filleted I-profile included
+    (no singular edge: its base rests on a normal-only support, which a mirror image of the part
+    continues smoothly, and its bolts are elastic foundations)."""
     from rigfem.parts import load_part
 
     part = load_part(part_name, params or None)
-    if part.kind != "iprofile":
+    if part.kind != "iprofile" or part["fillet_radius"] > 0:
         return None
     tw, tf, h = part["web_thickness"], part["flange_thickness"], part["height"]
     y, z = np.abs(nodes[:, 1]) - tw / 2, nodes[:, 2]
-    d = np.minimum(np.hypot(y, z - tf), np.hypot(y, z - (h - tf)))
-    return (d > away_mm) & (z > away_mm)
+    return np.minimum(np.hypot(y, z - tf), np.hypot(y, z - (h - tf))) > away_mm
 
 
 def _peak_rss_mib() -> float:
@@ -276,11 +285,12 @@ def _predicted_gib(prev: dict | None, spec: StepSpec) -> float:
 def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: float = RATIO,
           modes: Sequence[str] | None = None, max_gib: float = 12.0, isolate: bool = True,
           presets: bool = True, progress=None, finest: tuple[float, float] | None = None, order: int = 2,
-          on_step: Callable[[dict], None] | None = None) -> dict:
+          on_step: Callable[[dict], None] | None = None, extend: int = EXTEND) -> dict:
     """Convergence study of one part: ``cases_for(n_dir)`` gives its [(mode, PartCase)] with
     ``n_dir`` bearing directions (see :func:`scene_cases`).  ``on_step(partial result)`` after
     every step (to save progress).  A step whose process dies (e.g. killed out of memory) ends
-    the h sequence and is listed in ``refused``."""
+    the h sequence and is listed in ``refused``.  While a peak is not converging, up to
+    ``extend`` finer levels are added (:func:`needs_finer`)."""
     check_range("--max-gib", max_gib, 0.5, 1024.0, "GiB")
     first = [(m, c) for m, c in cases_for(H_DIRECTIONS) if modes is None or m in modes]
     if not first:
@@ -305,7 +315,15 @@ def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: fl
             on_step(analyse(out) if len([s for s in steps if s["kind"] == "h"]) else out)
         return True
 
-    for spec in h_levels(levels, ratio, finest, order):
+    specs = h_levels(levels, ratio, finest, order)
+    for k in range(len(specs) + max(int(extend), 0)):
+        if k >= len(specs):
+            if len(steps) < len(specs) or not needs_finer(analyse(out)):
+                break
+            last = specs[-1]
+            specs.append(dataclasses.replace(last, label=f"h{k}", size_mm=last.size_mm / ratio,
+                                             local_size_mm=last.local_size_mm / ratio))
+        spec = specs[k]
         need = _predicted_gib(steps[-1] if steps else None, spec)
         if need > max_gib:
             refused.append(f"{spec.label}: about {need:.3g} GiB predicted > --max-gib {max_gib:g}")
@@ -318,6 +336,20 @@ def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: fl
     if not [s for s in steps if s["kind"] == "h"]:
         raise InputError(f"{name}: no h level could be solved ({'; '.join(refused)})")
     return analyse(out)
+
+
+def needs_finer(res: dict) -> bool:
+    """True when an analysed study's peak is not converging in some mode (a finer level tells a
+    singular peak, which keeps rising, from a pre-asymptotic one)."""
+    exs = [m.get("peak_mpa", {}).get("extrapolation") for m in res.get("modes", {}).values()]
+    return any(ex is not None and not ex["converging"] for ex in exs)
+
+
+def fine_step(hs: list[dict]) -> dict | None:
+    """The h level at the ``fine`` preset's sizes (P2), if the sequence has one."""
+    f = FIDELITY["fine"]
+    return next((s for s in hs if s["order"] == f["order"] and math.isclose(s["size_mm"], f["size_mm"])
+                 and math.isclose(s["local_size_mm"], f["local_size_mm"])), None)
 
 
 def analyse(res: dict) -> dict:
@@ -344,9 +376,9 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
         away = None if part is None else away_from_singular_edges(part[0], part[1], np.array([fin["xyz"]]))
         if qty == "peak_mpa" and ex.converging and away is not None and not away[0]:
             ex = Extrapolation(False, None, None, ex.orders, False, None, "not converging",
-                               f"the peak sits within {AWAY_MM:g} mm of a sharp re-entrant web-flange corner "
-                               "or the clamped base edge, a geometric singularity (σ ~ r^-0.46 at a 90° "
-                               "re-entrant corner): the finite sequence's apparent trend is pre-asymptotic")
+                               f"the peak sits within {AWAY_MM:g} mm of a sharp re-entrant web-flange corner, "
+                               "a geometric singularity (σ ~ r^-0.46 at a 90° re-entrant corner): the "
+                               "finite sequence's apparent trend is pre-asymptotic")
         errors, presets = {}, {}
         # oscillating: the reference *is* the finest level, whose own error is only known as ± gci
         own = ex.status in ("oscillating", "noise-limited")
@@ -355,8 +387,8 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
             ok = ex.converging and ex.limit and not (own and s is hs[-1])
             errors[s["label"]] = (q - ex.limit) / ex.limit if ok else None
         named = {s["label"]: s for s in steps if s["kind"] == "preset"}
-        if fine_is_finest:
-            named["fine"] = hs[-1]
+        if fine_is_finest and fine_step(hs) is not None:
+            named["fine"] = fine_step(hs)
         for p, tol in TARGETS.items():
             if p in named:
                 e = errors[named[p]["label"]]

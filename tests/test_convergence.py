@@ -7,7 +7,10 @@ import math
 import pytest
 
 from rigfem.cli import main
-from rigfem.convergence import StepSpec, richardson, run_step, scene_cases, study, to_json
+import numpy as np
+
+from rigfem.convergence import (StepSpec, analyse, away_from_singular_edges, fine_step, needs_finer, richardson,
+                                run_step, scene_cases, study, to_json)
 from rigfem.errors import InputError
 
 
@@ -128,3 +131,33 @@ def test_render_tables_plot_and_summary(tmp_path, capsys):
     assert f"| {std:.2f} | {100 * (std / 100 - 1):+.2f} % | **no** |" in summary  # -11.5 %: misses 3 %
     assert (tmp_path / "crank_rail.png").stat().st_size > 10_000
     assert "nan" not in (tmp_path / "crank_rail.json").read_text().lower()
+
+
+def test_away_mask_only_for_sharp_web_flange_corners():
+    """The filleted post has no singular edge (None); with fillet_radius = 0 only points near the
+    four re-entrant corners are excluded, not the base (a normal-only support is not singular)."""
+    pts = np.array([[20.0, 3.5, 8.5], [20.0, -3.5, 51.5], [20.0, 0.0, 1.0], [20.0, 20.0, 4.0], [20.0, 0.0, 30.0]])
+    assert away_from_singular_edges("PF_4b_003_v2", {}, pts) is None
+    mask = away_from_singular_edges("PF_4b_003_v2", {"fillet_radius": 0.0}, pts)
+    assert mask.tolist() == [False, False, True, True, True]
+    assert away_from_singular_edges("PF_4b_006", {}, pts) is None
+
+
+def test_a_finer_level_is_asked_for_only_while_not_converging():
+    h = [1.7, 1.2, 0.85, 0.6]
+    assert not needs_finer(analyse(_synthetic_study({"original": [100 - 8 * x ** 2 for x in h]})))
+    assert needs_finer(analyse(_synthetic_study({"original": [100 - 8 * x ** 2 for x in h],
+                                                 "cycle": [50 * x ** -0.45 for x in h]})))
+
+
+def test_fine_preset_error_is_measured_against_an_extended_sequence():
+    """With a fifth level beyond `fine`, the fine preset is the 4.0/0.6 mm level, not the finest,
+    and its error is taken against the extrapolated limit."""
+    h = [1.7, 1.2, 0.85, 0.6, 0.6 / 2 ** 0.5]
+    res = _synthetic_study({"original": [100 - 8 * x ** 2 for x in h[:4]]})
+    extra = dict(res["steps"][3], label="h4", size_mm=4.0 / 2 ** 0.5, local_size_mm=h[4],
+                 modes={"original": dict(res["steps"][3]["modes"]["original"], peak_mpa=100 - 8 * h[4] ** 2)})
+    res["steps"].insert(4, extra)
+    assert fine_step([s for s in res["steps"] if s["kind"] == "h"])["label"] == "h3"
+    fine = analyse(res)["modes"]["original"]["peak_mpa"]["presets"]["fine"]
+    assert fine["step"] == "h3" and fine["error"] == pytest.approx(-8 * 0.36 / 100, rel=1e-6)
