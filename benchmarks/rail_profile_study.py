@@ -33,14 +33,15 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "rail_profile"
 SCENE = "final-cm"
 #: variant -> (dimension overrides of rail_size25, what it stands for)
 VARIANTS: dict[str, tuple[dict[str, float], str]] = {
-    "rectangle": ({}, "default: full 23 x 24 rectangle"),
-    "grooves r2.5": ({"groove_radius": 2.5}, "four simplified raceway grooves r = 2.5 mm at z = 8 and 18"),
+    "rectangle": ({"groove_radius": 0.0}, "full 23 x 24 rectangle (the default until 2026-11-21)"),
+    "grooves r2.5": ({"groove_radius": 2.5, "groove_z_lower": 8.0, "groove_z_upper": 18.0},
+                     "four simplified raceway grooves r = 2.5 mm at z = 8 and 18"),
     "grooves r4.6 (catalogue mass)": (
         {"groove_radius": 4.6, "groove_z_lower": 7.0, "groove_z_upper": 18.0},
-        "assumed: grooves r = 4.6 mm at z = 7 and 18, sized so the 1000 mm rail weighs the "
-        "catalogue's 3.1 kg/m (upper groove leaves a 1.4 mm wall to the counterbore)"),
+        "the default profile: grooves r = 4.6 mm at z = 7 and 18, sized so the 1000 mm rail weighs "
+        "the catalogue's 3.1 kg/m (upper groove leaves a 1.4 mm wall to the counterbore)"),
     "waist 11.95 (catalogue mass)": (
-        {"waist_width": 11.95},
+        {"groove_radius": 0.0, "waist_width": 11.95},
         "assumed: the rail narrowed to 11.95 mm between z = 2 and 14 (below the counterbore "
         "floor), sized for the catalogue's 3.1 kg/m with the material taken lower down"),
 }
@@ -135,7 +136,7 @@ def write_md(runs: dict, fidelities: list[str]) -> None:
     """results/rail_profile/study.md: one table per fidelity, the case and the command."""
     rows0, notes, _ = next(iter(runs.values()))
     lines = [
-        "# Rail profile study: how non-conservative is the 23 × 24 rectangle?",
+        "# Rail profile study: how much the unknown rail profile matters",
         "",
         f"Command: `python benchmarks/rail_profile_study.py --fidelity {' '.join(fidelities)}`",
         "",
@@ -167,8 +168,9 @@ def write_md(runs: dict, fidelities: list[str]) -> None:
               "(the peak is in-plane bending at the outer fibre beside the pivot coupling's outer "
               "screw hole_02, not a hole-bearing peak), so it depends on where the real profile lacks "
               "material, which is unknown; a profile as light as the study's 2.7 kg/m would raise it "
-              "further.  Read rail utilisations "
-              f"computed with the rectangle as under-estimated by up to ×{max(cat):.1f}."]
+              "further.  This is why the default profile is the weaker catalogue-mass variant, the "
+              "grooves r4.6 (geometry/rail_size25.toml); the rectangle, the default before, "
+              f"under-estimated the rail's peak by up to ×{max(cat):.1f}."]
     lines += ["", "Variants:", *[f"- **{r['variant']}**: {r['what']}; overrides {r['dims'] or 'none'}"
                                  for r in rows0], ""]
     (OUT / "study.md").write_text("\n".join(lines))

@@ -8,10 +8,12 @@ computed; lengths below 10 mm are rejected as probable metres.
 :class:`rigfem.reactions.ReactionHistory` over one crank turn; it is what the
 stress checker calls.
 
-Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar over
-its full guide length L_i with its pivot at the guide's end (centre of mass L_i/2 from
-the bar's first joint, I_G = m L_i²/12), carriages, plates and couplings as particles at
-their joints; ``"original"`` — the 2013 program (four-bar only, ``rigfem.original``).
+Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar of the
+catalogue's linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind
+the bar's first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from
+that joint, I_G = m L_i²/12), carriages, plates and couplings as particles at their joints;
+``"original"`` — the 2013 program (four-bar only, ``rigfem.original``), with the study's
+rail mass and its pivot at the guide's end.
 """
 
 from __future__ import annotations
@@ -29,9 +31,18 @@ from rigfem.reactions import BodyHistory, JointHistory, ReactionHistory, merge_r
 
 @dataclass(frozen=True)
 class RigMasses:
-    """The rig's mass catalogue (RIG.md §3): rail kg/m, carriage, plate, coupling (kg)."""
+    """The rig's mass catalogue (RIG.md §3): rails, carriage, plate, coupling (kg).
 
-    rail_kg_m: float = 2.7
+    ``rail_kg_m`` is the catalogue's linear mass (geometry/rail_size25.toml), used by the
+    rigid-body model; ``study_rail_kg_m`` the 2013 study's, used by the original model.
+    ``rail_behind_mm``: rail length behind a bar's first joint — the first hole's end distance
+    (20 mm) plus half the coupling's screw spacing (60 mm), where the meshed rail's pivot sits
+    (``rigfem.loadcases.RailLayout.pivot_x``; a test keeps the two equal).
+    """
+
+    rail_kg_m: float = 3.1
+    study_rail_kg_m: float = 2.7
+    rail_behind_mm: float = 80.0
     carriage: float = 0.68
     plate: float = 1.155
     coupling: float = 0.577
@@ -48,9 +59,10 @@ MODELS = ("rigid-body", "original")
 
 
 def _rail(name: str, length_mm: float, cat: RigMasses, points: list) -> Body:
-    """A guide rail as a uniform bar from its first joint (frame origin) along +x."""
+    """A guide rail as a uniform bar along +x, ``rail_behind_mm`` of it behind its first joint
+    (the frame origin)."""
     m = cat.rail_kg_m * length_mm / 1000
-    return Body(name, m, (length_mm / 2, 0.0), m * length_mm**2 / 12, points)
+    return Body(name, m, (length_mm / 2 - cat.rail_behind_mm, 0.0), m * length_mm**2 / 12, points)
 
 
 def _massless(name: str, overrides: dict | None) -> Body:
@@ -69,16 +81,18 @@ def _check_lengths(**lengths: float) -> None:
             raise InputError(f"{k} = {v:g} mm is outside the allowed range [10, 10000] mm")
 
 
-def _check_rails(rails_mm, bars: dict[str, float]) -> None:
-    """Each rail a valid length (mm), at least as long as the bar (joint to joint) it carries."""
+def _check_rails(rails_mm, bars: dict[str, float], behind_mm: float) -> None:
+    """Each rail a valid length (mm) that reaches the far joint of its bar from ``behind_mm``
+    behind the first."""
     if len(rails_mm) != len(bars):
         raise InputError(f"rails_mm needs {len(bars)} lengths (mm), one per bar ({', '.join(bars)}); "
                          f"got {len(rails_mm)}")
     for i, ((name, b), L) in enumerate(zip(bars.items(), rails_mm)):
         _check_lengths(**{f"rails_mm[{i}]": L})
-        if L < b:
-            raise InputError(f"{name} = {b:g} mm is longer than its rail: rails_mm[{i}] = {L:g} mm "
-                             f"(a rail must be at least as long as its bar)")
+        if L - behind_mm < b:
+            raise InputError(f"{name} = {b:g} mm does not fit on its rail: rails_mm[{i}] = {L:g} mm "
+                             f"reaches {L - behind_mm:g} mm past the pivot ({behind_mm:g} mm of it "
+                             f"lies behind); allowed {name} <= {L - behind_mm:g} mm")
 
 
 def _ranges_text(deg: np.ndarray, bad: np.ndarray) -> str:
@@ -111,7 +125,7 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
     """
     _check_lengths(b2=b2, b3=b3, b4=b4, d=d)
     if masses == "rig":
-        _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4})
+        _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4}, catalogue.rail_behind_mm)
     grid = np.linspace(0.0, 360.0, 3601)
     ok = fourbar_closes(b2, b3, b4, d, grid)
     if not ok.all():
@@ -183,7 +197,7 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
     """
     _check_lengths(b2=b2, b3=b3)
     if masses == "rig":
-        _check_rails(rails_mm, {"b2": b2, "b3": b3})
+        _check_rails(rails_mm, {"b2": b2, "b3": b3}, catalogue.rail_behind_mm)
     if not np.isfinite(offset) or abs(offset) > 10000:
         raise InputError(f"offset = {offset!r} mm is outside the allowed range [-10000, 10000] mm")
     grid = np.linspace(0.0, 360.0, 3601)

@@ -56,11 +56,15 @@ class PartMesh:
 #  module importable by the FE code without building any geometry)
 
 #: bump when the meshing recipe changes, so cached meshes are not reused
-MESH_RECIPE = 3  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets
+MESH_RECIPE = 4  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
+#                  4: curvature sizing with the global size, concentrators at half the refined size
 #: machine memory the estimate is checked against, GiB: this machine's physical memory
 MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 #: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)
 TETS_PER_H3 = 8.4
+#: curved surfaces get CURVATURE_MM / size elements per 2*pi (gmsh Mesh.MeshSizeFromCurvature):
+#: 6 at the draft 8 mm, 8 at the standard 6 mm, 12 at the fine 4 mm
+CURVATURE_MM = 48.0
 
 
 @dataclass(frozen=True)
@@ -72,6 +76,7 @@ class MeshSettings:
     refine_size: float | None = None  #: mm, size on the refined surfaces (default size/4)
     refine_dist: float | None = None  #: mm, distance over which the size grows back (default 2*size)
     min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
+    concentrate: tuple[str, ...] = ()  #: refined groups that raise stress (fillets): half the refined size
 
     @property
     def size_near(self) -> float:
@@ -83,7 +88,14 @@ class MeshSettings:
 
     def key(self) -> dict:
         return {"size": self.size, "refine": sorted(self.refine), "refine_size": self.size_near,
-                "refine_dist": self.dist, "min_quality": self.min_quality}
+                "refine_dist": self.dist, "min_quality": self.min_quality,
+                "concentrate": sorted(self.concentrate)}
+
+    @property
+    def curvature_n(self) -> int:
+        """Elements per 2*pi on a curved surface: CURVATURE_MM / size (at least 6), so curved
+        faces (rail grooves, holes) get finer with the global size and a size sequence converges."""
+        return max(6, round(CURVATURE_MM / self.size))
 
 
 #: default global element size per part kind, mm (rail: about 4 elements across its 23 x 24 section)
@@ -103,19 +115,22 @@ class Estimate:
         return max(self.gmsh_bytes, self.solve_bytes) / 2**30
 
 
-def estimate_tets(volume: float, refined_area: float, s: MeshSettings) -> int:
+def estimate_tets(volume: float, refined_area: float, s: MeshSettings, concentrated_area: float = 0.0) -> int:
     """Tetrahedra gmsh will make: volume/h^3 plus a graded layer over the refined surfaces.
 
-    The size grows linearly from ``size_near`` at a refined surface to ``size`` at ``dist``;
-    a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3) over 0..dist extra tets
-    (at most the whole volume at the refined size).
+    The size grows linearly from ``size_near`` (half that on concentrators) at a refined surface
+    to ``size`` at ``dist``; a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3)
+    over 0..dist extra tets (at most the whole volume at the refined size).
     """
-    h, hn, D = s.size, min(s.size_near, s.size), s.dist
-    if h - hn > 1e-12:
-        layer = D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3
-    else:
-        layer = 0.0
-    return int(TETS_PER_H3 * min(volume / h**3 + refined_area * layer, volume / hn**3))
+    h, D = s.size, s.dist
+
+    def layer(hn: float) -> float:
+        hn = min(hn, h)
+        return D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3 if h - hn > 1e-12 else 0.0
+
+    hn = min(s.size_near, h)
+    extra = refined_area * layer(hn) + concentrated_area * layer(hn / 2)
+    return int(TETS_PER_H3 * min(volume / h**3 + extra, volume / (hn / 2 if concentrated_area else hn)**3))
 
 
 def estimate(tets: int) -> Estimate:
@@ -234,30 +249,45 @@ def _extract() -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarra
     return points, tets, surfaces, quality
 
 
-def _set_fields(refine_tags: list[int], s: MeshSettings) -> None:
+def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> None:
     import gmsh
 
     gmsh.option.setNumber("Mesh.MeshSizeMax", s.size)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 6)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", s.curvature_n)
     gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
     if not refine_tags:
         return
     f = gmsh.model.mesh.field
+    plain = [t for t in refine_tags if t not in conc_tags]
+    ths = [_threshold(tags, size, s) for tags, size in ((plain, s.size_near), (conc_tags, s.size_near / 2))
+           if tags]
+    if len(ths) > 1:
+        both = f.add("Min")
+        f.setNumbers(both, "FieldsList", ths)
+        ths = [both]
+    f.setAsBackgroundMesh(ths[0])
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+
+
+def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
+    """A gmsh Threshold field: ``size_near`` on the surfaces ``tags``, growing to ``s.size`` at ``s.dist``."""
+    import gmsh
+
+    f = gmsh.model.mesh.field
     dist = f.add("Distance")
-    f.setNumbers(dist, "SurfacesList", refine_tags)
+    f.setNumbers(dist, "SurfacesList", tags)
     extent = max(float(np.ptp(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3), axis=0).max())
-                 for t in refine_tags)
+                 for t in tags)
     # sample points on each surface about half a refined element apart (within 20..500 per direction)
-    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / s.size_near), 20, 500)))
+    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / size_near), 20, 500)))
     th = f.add("Threshold")
     f.setNumber(th, "InField", dist)
-    f.setNumber(th, "SizeMin", min(s.size_near, s.size))
+    f.setNumber(th, "SizeMin", min(size_near, s.size))
     f.setNumber(th, "SizeMax", s.size)
     f.setNumber(th, "DistMin", 0.0)
     f.setNumber(th, "DistMax", s.dist)
-    f.setAsBackgroundMesh(th)
-    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    return th
 
 
 def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
@@ -293,19 +323,19 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         gmsh.option.setNumber("General.NumThreads", 1)
         holes = build(part)
         groups = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups(2)}
-        unknown = [g for g in settings.refine if g not in groups]
+        unknown = [g for g in settings.refine + settings.concentrate if g not in groups]
         if unknown:
             raise InputError(f"refine: {', '.join(unknown)} not a surface group of {part.name}; "
                              f"groups: {', '.join(sorted(groups))}")
-        refine_tags = sorted({t for g in settings.refine
-                              for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
-        est = _estimate_model(refine_tags, settings)
+        refine_tags, conc_tags = (sorted({t for g in names for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
+                                  for names in (settings.refine + settings.concentrate, settings.concentrate))
+        est = _estimate_model(refine_tags, conc_tags, settings)
         if est.gib > machine_gib:
             raise InputError(f"size = {settings.size:g} mm (refine_size = {settings.size_near:g} mm) "
                              f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
                              f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
                              f"more than the machine's {machine_gib:g} GiB: increase --size")
-        _set_fields(refine_tags, settings)
+        _set_fields(refine_tags, conc_tags, settings)
         gmsh.model.mesh.generate(3)
         points, tets, surfaces, q = _extract()
         if len(q) and q.min() < settings.min_quality:
@@ -335,20 +365,40 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     return pm
 
 
-def _estimate_model(refine_tags: list[int], s: MeshSettings) -> Estimate:
-    """Estimate from the current gmsh model's volume and the area of the refined surfaces."""
+def _estimate_model(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> Estimate:
+    """Estimate from the current gmsh model's volume, the area of the refined surfaces and the
+    curved surfaces that curvature-based sizing meshes finer than ``s.size``."""
     import gmsh
 
     occ_vols = gmsh.model.occ.getEntities(3)
     if occ_vols:
         volume = sum(gmsh.model.occ.getMass(3, t) for _, t in occ_vols)
-        area = sum(gmsh.model.occ.getMass(2, t) for t in refine_tags)
+        area = sum(gmsh.model.occ.getMass(2, t) for t in refine_tags if t not in conc_tags)
+        conc = sum(gmsh.model.occ.getMass(2, t) for t in conc_tags)
+        curved = [(gmsh.model.occ.getMass(2, t), _curvature_size(t, s.curvature_n)) for _, t in gmsh.model.getEntities(2)
+                  if t not in refine_tags]
     else:  # built-in kernel: bounding box as an upper bound
         lo, hi = np.array(gmsh.model.getBoundingBox(-1, -1)).reshape(2, 3)
         volume = float(np.prod(hi - lo))
         area = sum(float(np.prod(np.sort(np.diff(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3),
                                                          axis=0)[0])[1:])) for t in refine_tags)
-    return estimate(estimate_tets(volume, area, s))
+        curved, conc = [], 0.0
+    tets = estimate_tets(volume, area, s, conc)
+    # a layer one curvature size hc thick over a curved surface: A*hc/hc^3 tets instead of A*hc/h^3
+    tets += int(TETS_PER_H3 * sum(a * (1 / hc**2 - hc / s.size**3) for a, hc in curved if hc < s.size))
+    return estimate(tets)
+
+
+def _curvature_size(tag: int, n: int) -> float:
+    """Element size gmsh's curvature sizing gives a surface: 2*pi/(k*n), k its largest principal
+    curvature on a 3 x 3 grid of parametric points (inf for a flat surface)."""
+    import gmsh
+
+    lo, hi = gmsh.model.getParametrizationBounds(2, tag)
+    uv = np.stack(np.meshgrid(*[np.linspace(a + 0.1 * (b - a), b - 0.1 * (b - a), 3) for a, b in zip(lo, hi)]),
+                  -1).reshape(-1)
+    kmax = np.abs(np.concatenate(gmsh.model.getPrincipalCurvatures(tag, uv)[:2])).max()
+    return 2 * np.pi / (kmax * n) if kmax > 1e-9 else np.inf
 
 
 TET10_EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])  #: VTK/meshio tetra10 order

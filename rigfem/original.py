@@ -76,7 +76,7 @@ def original_reactions(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, th
     L2, L3, L4 = (x / 1000.0 for x in rails_mm)
     w2 = 2 * np.pi * speed_hz
     k = fourbar_kinematics(b2, b3, b4, d, theta2, w2, branch)
-    mr = masses.rail_kg_m
+    mr = masses.study_rail_kg_m
     m2, m3, m4 = mr * L2, mr * L3, mr * L4
     mp2 = masses.plate + masses.carriage        # at A on bar 2
     mA3 = masses.coupling                       # at A on bar 3

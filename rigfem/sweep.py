@@ -37,7 +37,7 @@ from rigfem.loadcases import PartCase, RailLayout, UnitLoad, directions, hole_na
 from rigfem.mechanisms import MODELS, RIG_RAILS_MM, four_bar, simulate, slider_crank
 from rigfem.reactions import peaks
 from rigfem.rules import HOLE_PITCH_MM, MIN_GROUND_MM, fourbar_rules, slider_crank_rules
-from rigfem.settings import FIDELITY, PLATE, CheckSettings, check_settings
+from rigfem.settings import FIDELITY, PARTS, PLATE, CheckSettings, check_settings
 
 TYPES = ("four-bar", "slider-crank")
 #: ground rail length (mm), RIG.md §3
@@ -93,8 +93,17 @@ class SweepParams:
                               list(self.rails))
 
     def key(self) -> str:
-        """Short hash of the parameters (and the code-relevant constants)."""
-        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=2)
+        """Short hash of the parameters and of everything else a stored chunk depends on: the
+        part files, the mass catalogue and the meshing recipe (a change to any of them must not
+        resume from chunks computed before it)."""
+        from rigfem.mechanisms import RIG_MASSES
+        from rigfem.mesh import CURVATURE_MM, MESH_RECIPE
+        from rigfem.parts import load_part
+
+        parts = sorted({spec["part"] for spec in PARTS[self.linkage_type].values()})
+        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=3,
+                   parts={n: load_part(n).content_hash() for n in parts},
+                   masses=dataclasses.asdict(RIG_MASSES), mesh=[MESH_RECIPE, CURVATURE_MM])
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
 
 

@@ -79,7 +79,8 @@ def test_rigid_body_reactions_satisfy_newton_euler(body):
 def test_rigid_body_equals_original_where_quirks_vanish():
     """No point masses and rails as long as the bars: the 2013 equations are exact rigid-body
     dynamics, so both models must agree (an independent hand-written equation set)."""
-    cat = RigMasses(carriage=0.0, plate=0.0, coupling=0.0)
+    cat = RigMasses(rail_kg_m=2.7, study_rail_kg_m=2.7, rail_behind_mm=0.0, carriage=0.0, plate=0.0,
+                    coupling=0.0)
     b2, b3, b4, d = REF
     lk = four_bar(b2, b3, b4, d, rails_mm=(b2, b3, b4), catalogue=cat)
     h = simulate(lk, samples=90)

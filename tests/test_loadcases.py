@@ -59,11 +59,11 @@ def _rig_bars():
 def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
     """Every free rail's loads (couplings, driver couple, own inertia) are in equilibrium.
 
-    Independent truth: Newton–Euler of the rail alone, whose mass distribution in the
-    dynamics model is a uniform bar from the pivot joint over the rail length.
+    Independent truth: Newton–Euler of the rail alone, a uniform bar over the meshed rail
+    (0..L, pivot joint at ``layout.pivot_x``) with the catalogue's linear mass.
     """
     from rigfem.loadcases import bar_body, cycle_rail
-    from rigfem.mechanisms import four_bar, simulate
+    from rigfem.mechanisms import RIG_MASSES, four_bar, simulate
 
     h = simulate(four_bar(480, 840, 780, 1020), samples=72, speed_hz=speed_hz)
     for bar in _rig_bars():
@@ -81,7 +81,7 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
         a0 = case.coef[:, [case.loads.index(l) for l in case.loads if l.component in ("a0x", "a0y")]]
         alpha = case.coef[:, [l.component for l in case.loads].index("alpha")]
         w2 = case.coef[:, [l.component for l in case.loads].index("omega2")]
-        m, rc = case.mass_kg, np.array([bar.length_mm / 2, 0.0])
+        m, rc = case.mass_kg, np.array([bar.length_mm / 2 - bar.layout.pivot_x, 0.0])
         i_pivot = m * bar.length_mm ** 2 / 12 + m * rc @ rc
         acc_c = a0 + alpha[:, None] * np.array([-rc[1], rc[0]]) - w2[:, None] * rc
         force -= m * acc_c / 1000.0
@@ -89,4 +89,24 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
         scale = np.abs(case.coef[:, :-4]).sum(axis=1).max()
         assert np.abs(force).max() < 1e-9 * scale, bar.name
         assert np.abs(moment).max() < 1e-9 * scale * bar.length_mm, bar.name
-        assert body.mass_kg == pytest.approx(2.7 * bar.length_mm / 1000)
+        assert body.mass_kg == pytest.approx(RIG_MASSES.rail_kg_m * bar.length_mm / 1000)
+
+
+def test_dynamics_rail_matches_the_meshed_rail():
+    """The dynamics' rail (mass, reach behind the pivot) is the meshed rail: catalogue kg/m
+    equals the part file's, and ``rail_behind_mm`` equals the mesh layout's pivot position."""
+    from rigfem.loadcases import _bar
+    from rigfem.mechanisms import RIG_MASSES, four_bar, simulate
+    from rigfem.parts import load_part
+    from rigfem.settings import PLATE
+
+    h = simulate(four_bar(540, 840, 780, 1020), samples=8)
+    spacing = load_part(PLATE)["screw_spacing"]
+    bar = _bar("crank_rail", {"part": "rail_size25", "length": 700.0, "pivot": "O2", "far": "A"},
+               h, spacing)
+    assert bar.layout.pivot_x == RIG_MASSES.rail_behind_mm
+    cat = load_part("rail_size25").reference["linear_mass_catalogue"].value
+    assert RIG_MASSES.rail_kg_m == cat
+    crank = h.bodies["crank"]  # the rail's own mass and centre (point masses apart)
+    assert crank.com_local_mm[0] == pytest.approx(350.0 - bar.layout.pivot_x)
+    assert crank.mass_kg == pytest.approx(0.7 * cat)

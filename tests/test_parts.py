@@ -11,9 +11,11 @@ from rigfem.parts import known_parts, load_part, mass_kg, rail_hole_x, volume_mm
 RHO = 7850e-9  # kg/mm^3
 
 
-def rail_volume_hand(L: float, n_holes: int) -> float:
-    """23 x 24 bar minus n holes: Ø7 bore 24-9 = 15 mm deep plus Ø11 counterbore 9 mm deep."""
-    return L * 23 * 24 - n_holes * (math.pi / 4 * 7**2 * 15 + math.pi / 4 * 11**2 * 9)
+def rail_volume_hand(L: float, n_holes: int, groove_r: float = 4.6) -> float:
+    """23 x 24 bar minus four half-disc grooves of radius ``groove_r`` on the side faces (clear of
+    the holes) minus n holes: Ø7 bore 24-9 = 15 mm deep plus Ø11 counterbore 9 mm deep."""
+    section = 23 * 24 - 4 * math.pi * groove_r**2 / 2
+    return L * section - n_holes * (math.pi / 4 * 7**2 * 15 + math.pi / 4 * 11**2 * 9)
 
 
 @pytest.mark.parametrize("L, n", [(700, 12), (1000, 17), (1200, 20)])
@@ -26,23 +28,23 @@ def test_rail_volume_and_mass_against_hand_calculation(L, n):
 
 
 def test_rail_linear_mass_against_study_and_catalogue():
-    """1000 mm rail: (552000 - 17*1432.6) mm^3 * 7.85e-6 kg/mm^3 = 4.142 kg, i.e. 4.142 kg/m.
-
-    The rectangular 23 x 24 profile is 34 % heavier than the catalogue's 3.1 kg/m and 53 %
-    heavier than the study's 2.7 kg/m: the real profile (raceway grooves, relief) is unknown.
-    """
+    """1000 mm rail, default profile (grooves r 4.6): (552 - 2 pi 4.6^2) * 1000 - 17 * 1432.6 mm^3
+    * 7.85e-6 kg/mm^3 = 3.098 kg/m, the catalogue's 3.1 kg/m; the full 23 x 24 rectangle weighs
+    4.142 kg/m, 34 % more.  The study's 2.7 kg/m is lighter still (the real profile is unknown)."""
     part = load_part("rail_size25")
     per_m = mass_kg(part) / part["length"] * 1000
-    assert per_m == pytest.approx(4.142, abs=1e-3)
+    assert per_m == pytest.approx(rail_volume_hand(1000, 17) * RHO, rel=1e-6)
     cat, study = part.reference["linear_mass_catalogue"].value, part.reference["linear_mass_study"].value
     assert (cat, study) == (3.1, 2.7)
-    assert per_m / cat - 1 == pytest.approx(0.336, abs=1e-3)
-    assert per_m / study - 1 == pytest.approx(0.534, abs=1e-3)
+    assert per_m == pytest.approx(cat, rel=1e-3)
+    rect = mass_kg(load_part("rail_size25", {"groove_radius": 0}))
+    assert rect == pytest.approx(rail_volume_hand(1000, 17, 0.0) * RHO, rel=1e-6)
+    assert rect == pytest.approx(4.142, abs=1e-3)
 
 
 def test_rail_grooves_remove_four_half_discs():
     """Grooves of radius r centred on the side faces: 4 half discs pi r^2 / 2 along the length."""
-    plain = load_part("rail_size25", {"length": 700})
+    plain = load_part("rail_size25", {"length": 700, "groove_radius": 0})
     grooved = load_part("rail_size25", {"length": 700, "groove_radius": 2.5})
     removed = 4 * math.pi * 2.5**2 / 2 * 700
     assert volume_mm3(plain) - volume_mm3(grooved) == pytest.approx(removed, rel=1e-6)
@@ -51,11 +53,11 @@ def test_rail_grooves_remove_four_half_discs():
 def test_rail_waist_removes_two_strips_and_matches_catalogue_mass():
     """Waist 11.95 mm wide from z = 2 to 14: (23 - 11.95) * 12 mm^2 off the section (clear of the
     Ø7 bores); 1000 mm rail: (552 - 132.6) * 1000 - 17 * 1432.6 mm^3 -> 3.101 kg/m (catalogue 3.1)."""
-    plain = load_part("rail_size25", {"length": 700})
-    waisted = load_part("rail_size25", {"length": 700, "waist_width": 11.95})
+    plain = load_part("rail_size25", {"length": 700, "groove_radius": 0})
+    waisted = load_part("rail_size25", {"length": 700, "groove_radius": 0, "waist_width": 11.95})
     assert plain["waist_width"] == 0  # default off
     assert volume_mm3(plain) - volume_mm3(waisted) == pytest.approx((23 - 11.95) * 12 * 700, rel=1e-6)
-    per_m = mass_kg(load_part("rail_size25", {"waist_width": 11.95}))
+    per_m = mass_kg(load_part("rail_size25", {"groove_radius": 0, "waist_width": 11.95}))
     assert per_m == pytest.approx(((552 - 11.05 * 12) * 1000 - 17 * 1432.6) * RHO, rel=1e-4)
     assert per_m == pytest.approx(3.1, abs=2e-3)
 
@@ -149,9 +151,9 @@ def test_every_dimension_has_unit_and_source():
     ("rail_size25", {"cbore_depth": 30}, "cbore_depth"),
     ("rail_size25", {"length": 30}, "length"),
     ("rail_size25", {"groove_radius": 8}, "groove_radius"),
-    ("rail_size25", {"waist_width": 8}, "waist_width"),          # into the Ø7 bores
-    ("rail_size25", {"waist_width": 12, "waist_z_upper": 20}, "waist_width"),  # into the counterbore
-    ("rail_size25", {"waist_width": 12, "waist_z_lower": 15}, "waist_z_upper"),
+    ("rail_size25", {"groove_radius": 0, "waist_width": 8}, "waist_width"),  # into the Ø7 bores
+    ("rail_size25", {"groove_radius": 0, "waist_width": 12, "waist_z_upper": 20}, "waist_width"),
+    ("rail_size25", {"groove_radius": 0, "waist_width": 12, "waist_z_lower": 15}, "waist_z_upper"),
     ("rail_size25", {"waist_width": 12, "groove_radius": 2.5}, "waist_width"),
     ("PF_4b_006", {"thickness": -10}, "thickness"),              # negative thickness
     ("PF_4b_006", {"thickness": 0}, "thickness"),
@@ -191,5 +193,5 @@ def test_cli_parts_lists_every_part_with_mass(capsys):
     out = capsys.readouterr().out
     for name in ("rail_size25", "PF_4b_006", "PF_4b_001_v2", "PF_4b_003_v2"):
         assert name in out
-    assert "4.142 kg/m" in out and "+33.6 %" in out  # rail 1000 mm vs catalogue 3.1 kg/m
+    assert "3.098 kg/m (catalogue 3.1: -0.1 %" in out  # rail 1000 mm, default profile
     assert "mass 1.151 (study 1.155: -0.3 %)" in out

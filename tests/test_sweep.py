@@ -185,3 +185,24 @@ def test_default_local_cluster_equals_serial(params, bases, tmp_path):
     local = run_sweep(params, tmp_path / "local", configs=CONFIGS, chunk_size=2, bases=bases, workers=2,
                       progress=False)
     pd.testing.assert_frame_equal(serial, local)
+
+
+def test_stored_chunks_are_keyed_by_geometry_masses_and_mesh_recipe(monkeypatch):
+    """A sweep resumed after a change to a part file, the mass catalogue or the meshing recipe
+    must not reuse chunks computed before it."""
+    import rigfem.mechanisms
+    import rigfem.mesh
+    from rigfem.parts import PartDef
+
+    p = SweepParams()
+    k0 = p.key()
+    assert SweepParams().key() == k0
+    with monkeypatch.context() as m:
+        m.setattr(rigfem.mesh, "MESH_RECIPE", rigfem.mesh.MESH_RECIPE + 1)
+        assert p.key() != k0
+    with monkeypatch.context() as m:
+        m.setattr(rigfem.mechanisms, "RIG_MASSES", dataclasses.replace(rigfem.mechanisms.RIG_MASSES, rail_kg_m=2.7))
+        assert p.key() != k0
+    with monkeypatch.context() as m:
+        m.setattr(PartDef, "content_hash", lambda self: "edited")
+        assert p.key() != k0

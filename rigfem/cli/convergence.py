@@ -59,12 +59,12 @@ def table(res: dict) -> str:
             err = res["modes"][m][q].get("errors", {}).get(s["label"])
             row += f" {s['modes'][m][q]:.2f} | {_pct(err)} |"
         lines.append(row)
-    lines += ["", "'away': peak away from the I-profile's sharp web-flange corners and clamped base "
+    lines += ["", "'away': peak away from the I-profile's sharp web-flange corners (fillet_radius = 0 only) "
               f"(nodes farther than {AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
     for m in res["modes"]:
         for qty, a in res["modes"][m].items():
             ex = a.get("extrapolation")
-            what = "peak" if qty == "peak_mpa" else "peak away from the web-flange corners and clamped base"
+            what = "peak" if qty == "peak_mpa" else "peak away from the sharp web-flange corners"
             if ex is None:
                 lines.append(f"- **{m}**, {what}: {a['note']}")
                 continue
