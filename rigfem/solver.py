@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 import time
+import weakref
 
 import numpy as np
 import scipy.sparse as sp
@@ -78,6 +79,9 @@ class LinearSolver:
         t0 = time.perf_counter()
         if self.method == "pardiso":
             self._ps = pypardiso.PyPardisoSolver(mtype=2)  # real SPD, upper triangle
+            # MKL keeps the factors outside Python: release them with this solver, or a long run
+            # (a sweep, a convergence study, the test suite) accumulates every factorisation
+            weakref.finalize(self, self._ps.free_memory, True)
             self._ps.set_iparm(11, 0)  # no scaling needed for SPD
             self._upper = sp.triu(self.A, format="csr")
             self._upper.sort_indices()
