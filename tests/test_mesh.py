@@ -255,3 +255,24 @@ def test_custom_brep_wrapped_in_geo_and_unnamed_brep_rejected(tmp_path):
     pm = mesh_part(load_part(str(geo)), MeshSettings(4.0, ("bore",)), use_cache=False)
     assert tet_volumes(pm).sum() == pytest.approx(30 * 30 * 8 - math.pi * 25 * 8, rel=5e-3)
     assert pm.holes["bore"].radius == pytest.approx(5, abs=1e-6)
+
+
+def test_concentrators_meshed_at_half_the_refined_size():
+    """The post's root fillets as concentrators: their triangles' edges are about half as long
+    as with the fillets merely refined, and the estimate still tracks the mesh."""
+    post = load_part("PF_4b_003_v2")
+
+    def fillet_edge(pm):
+        p = pm.points[pm.surfaces["fillets"]]
+        return np.median(np.linalg.norm(p[:, 1] - p[:, 0], axis=1))
+
+    loaded = ("screw_3", "screw_4")
+    plain = mesh_part(post, MeshSettings(6.0, loaded + ("fillets",), 1.2), use_cache=False)
+    conc = mesh_part(post, MeshSettings(6.0, loaded, 1.2, concentrate=("fillets",)), use_cache=False)
+    assert 0.35 < fillet_edge(conc) / fillet_edge(plain) < 0.7
+    assert 0.5 < conc.meta["estimate_tets"] / len(conc.tets) < 2
+
+
+def test_curved_surfaces_refine_with_the_global_size():
+    """Curvature sizing follows the global size (48 mm / size elements per 2 pi, at least 6)."""
+    assert [MeshSettings(s).curvature_n for s in (11.3, 8.0, 6.0, 4.0, 2.0)] == [6, 6, 8, 12, 24]
