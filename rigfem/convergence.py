@@ -254,15 +254,16 @@ def run_step(cases: list, settings, spec: StepSpec, isolate: bool = True) -> dic
 # ----------------------------------------------------------------------------- a study
 
 def h_levels(levels: int, ratio: float = RATIO, finest: tuple[float, float] | None = None,
-             order: int = 2) -> list[StepSpec]:
-    """The h sequence coarse → fine: (global, local) size × ratio^k, ending at ``finest``."""
+             order: int = 2, beyond: int = 0) -> list[StepSpec]:
+    """The h sequence coarse → fine: (global, local) size × ratio^k, level ``levels - 1`` at
+    ``finest``, then ``beyond`` finer levels (run only while a peak is not converging)."""
     levels = int(check_range("--levels", levels, 3, 8))
     ratio = check_range("--ratio", ratio, 1.1, 2.0)
     g, loc = finest or (FIDELITY["fine"]["size_mm"], FIDELITY["fine"]["local_size_mm"])
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
     return [StepSpec(f"h{k}", "h", order, g * ratio ** (levels - 1 - k), loc * ratio ** (levels - 1 - k),
-                     H_DIRECTIONS) for k in range(levels)]
+                     H_DIRECTIONS) for k in range(levels + max(int(beyond), 0))]
 
 
 def preset_steps() -> list[StepSpec]:
@@ -315,15 +316,9 @@ def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: fl
             on_step(analyse(out) if len([s for s in steps if s["kind"] == "h"]) else out)
         return True
 
-    specs = h_levels(levels, ratio, finest, order)
-    for k in range(len(specs) + max(int(extend), 0)):
-        if k >= len(specs):
-            if len(steps) < len(specs) or not needs_finer(analyse(out)):
-                break
-            last = specs[-1]
-            specs.append(dataclasses.replace(last, label=f"h{k}", size_mm=last.size_mm / ratio,
-                                             local_size_mm=last.local_size_mm / ratio))
-        spec = specs[k]
+    for k, spec in enumerate(h_levels(levels, ratio, finest, order, beyond=extend)):
+        if k >= int(levels) and not needs_finer(analyse(out)):
+            break
         need = _predicted_gib(steps[-1] if steps else None, spec)
         if need > max_gib:
             refused.append(f"{spec.label}: about {need:.3g} GiB predicted > --max-gib {max_gib:g}")
@@ -387,8 +382,9 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
             ok = ex.converging and ex.limit and not (own and s is hs[-1])
             errors[s["label"]] = (q - ex.limit) / ex.limit if ok else None
         named = {s["label"]: s for s in steps if s["kind"] == "preset"}
-        if fine_is_finest and fine_step(hs) is not None:
-            named["fine"] = fine_step(hs)
+        fine = fine_step(hs) if fine_is_finest else None
+        if fine is not None:
+            named["fine"] = fine
         for p, tol in TARGETS.items():
             if p in named:
                 e = errors[named[p]["label"]]

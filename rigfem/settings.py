@@ -28,7 +28,7 @@ from rigfem.errors import InputError, check_range
 from rigfem.material import Material, get_material, material_from_dict
 
 #: fidelity presets: element order, global and local mesh size (mm), bearing directions
-#: (8 directions are within 0.3 % of 48 on the reference parts: results/convergence/sampling.md;
+#: (8 directions are within 0.7 % of 48 on the reference parts: results/convergence/sampling.md;
 #: errors against the extrapolated peaks per part: results/convergence/summary.md — plate and
 #: post within 5 / 1.7 / 0.9 %, rails up to 13 / 8 / 5 % low where a groove or hole facets)
 FIDELITY: dict[str, dict] = {

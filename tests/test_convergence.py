@@ -161,3 +161,14 @@ def test_fine_preset_error_is_measured_against_an_extended_sequence():
     assert fine_step([s for s in res["steps"] if s["kind"] == "h"])["label"] == "h3"
     fine = analyse(res)["modes"]["original"]["peak_mpa"]["presets"]["fine"]
     assert fine["step"] == "h3" and fine["error"] == pytest.approx(-8 * 0.36 / 100, rel=1e-6)
+
+
+def test_levels_beyond_the_finest_continue_the_ratio():
+    """The levels a non-converging study may add are the sequence continued past ``finest``."""
+    from rigfem.convergence import h_levels
+
+    base = h_levels(4, 2 ** 0.5, (4.0, 0.6))
+    more = h_levels(4, 2 ** 0.5, (4.0, 0.6), beyond=1)
+    assert more[:4] == base and more[3].size_mm == pytest.approx(4.0)
+    assert (more[4].label, more[4].size_mm, more[4].local_size_mm) == ("h4", pytest.approx(4.0 / 2 ** 0.5),
+                                                                       pytest.approx(0.6 / 2 ** 0.5))
