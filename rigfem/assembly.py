@@ -1,8 +1,14 @@
 """Quadratic/linear tetrahedral meshes and a fast vectorised elasticity stiffness.
 
-The P2 mesh adds one node at the midpoint of every (straight) edge.  Element
-node order is CalculiX C3D10 / VTK ``tetra10`` (0-based): corners 0-3, then
-edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.  Global DOF ``3*node + c`` (c = x, y, z).
+The P2 mesh adds one node per edge (:func:`rigfem.mesh.quadratic`): where gmsh's second-order
+mesh puts it for the curved edges (on the geometry at grooves, holes and fillets, moved
+elastically beside them), at the midpoint elsewhere.  Elements with such a node are *curved*
+(isoparametric): their Jacobian varies inside, so gradients and volume weights are
+computed per quadrature point; all others are affine.  A curved element whose Jacobian falls
+below :data:`MIN_JACOBIAN` of its straight shape anywhere is straightened (mid-nodes back to
+the chords) rather than left distorted.  Element node order is CalculiX C3D10 / VTK
+``tetra10`` (0-based): corners 0-3, then edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.  Global DOF
+``3*node + c`` (c = x, y, z).
 
 >>> import numpy as np
 >>> from skfem import MeshTet
@@ -16,7 +22,8 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -25,10 +32,15 @@ from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTet, RefTri
 
 from rigfem.errors import InputError
-from rigfem.mesh import PartMesh
+from rigfem.mesh import PartMesh, quadratic
 
 TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
 TRI_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+#: barycentric coordinates of the 10 nodes of a P2 tetrahedron
+NODE_BARY = np.vstack([np.eye(4), 0.5 * (np.eye(4)[TET_EDGES[:, 0]] + np.eye(4)[TET_EDGES[:, 1]])])
+#: smallest det J of a curved element, relative to its straight shape, at its nodes and
+#: quadrature points; below it the element is straightened
+MIN_JACOBIAN = 0.2
 
 
 @dataclass
@@ -40,18 +52,17 @@ class FEMesh:
     surfaces: dict[str, np.ndarray]  #: name -> (K, 3) or (K, 6)
     order: int
     n_vertices: int
+    curved: np.ndarray | None = None  #: (M,) bool, elements with a mid-node off its chord (P2)
+    straightened: int = 0  #: curved elements straightened for a distorted Jacobian
+    cache: dict = field(default_factory=dict, repr=False)  #: derived arrays reused across loads
 
     @property
     def ndof(self) -> int:
         return 3 * len(self.nodes)
 
 
-def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
-    return np.minimum(pairs[..., 0], pairs[..., 1]).astype(np.int64) * n + np.maximum(pairs[..., 0], pairs[..., 1])
-
-
 def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
-    """P1 or P2 mesh of ``mesh`` (mid-edge nodes on straight edges)."""
+    """P1 or P2 mesh of ``mesh``; P2 follows the curved boundary edges of the PartMesh."""
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
     p = np.asarray(mesh.points, dtype=float)
@@ -69,19 +80,40 @@ def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
     surfaces = {k: np.asarray(v, dtype=np.int64) for k, v in mesh.surfaces.items()}
     if order == 1:
         return FEMesh(p, t, surfaces, 1, len(p))
-    n = len(p)
-    keys = _edge_keys(t[:, TET_EDGES], n)  # (M, 6)
-    ukeys, inv = np.unique(keys, return_inverse=True)
-    mid = 0.5 * (p[ukeys // n] + p[ukeys % n])
-    elements = np.hstack([t, n + inv.reshape(t.shape[0], 6)])
-    surf2 = {}
-    for name, tri in surfaces.items():
-        k = _edge_keys(tri[:, TRI_EDGES], n)
-        pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
-        if not (ukeys[pos] == k).all():
-            raise InputError(f"surface {name!r} has triangles whose edges are not tet edges of the mesh")
-        surf2[name] = np.hstack([tri, n + pos])
-    return FEMesh(np.vstack([p, mid]), elements, surf2, 2, n)
+    nodes, elements, surf2 = quadratic(dataclasses.replace(mesh, points=p, tets=t, surfaces=surfaces))
+    fm = FEMesh(nodes, elements, surf2, 2, len(p))
+    fm.straightened = _straighten_distorted(fm)
+    return fm
+
+
+def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
+    """Offsets (m, 6, 3) of the mid-edge nodes of ``elems`` from their edges' midpoints."""
+    el = fm.elements[elems]
+    x = fm.nodes
+    return x[el[:, 4:]] - 0.5 * (x[el[:, TET_EDGES[:, 0]]] + x[el[:, TET_EDGES[:, 1]]])
+
+
+def _straighten_distorted(fm: FEMesh) -> int:
+    """Mark curved elements; move the mid-nodes of distorted ones back to their chords.
+
+    Checks det J at the 10 nodes and the 11 points of the degree-4 rule against the straight
+    element's; repeats while straightening an edge distorts a neighbour.  Returns the count.
+    """
+    L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
+    done = 0
+    for _ in range(10):
+        idx = np.flatnonzero(np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0)
+        if not len(idx):
+            break
+        _, det0 = bary_gradients(_subset(fm, idx))
+        bad = idx[(_curved_J(fm, L, idx)[1].min(1) < MIN_JACOBIAN * det0)]
+        if not len(bad):
+            break
+        el = fm.elements[bad]
+        fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
+        done += len(bad)
+    fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+    return done
 
 
 def tet_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
@@ -104,35 +136,74 @@ def shape_values(L: np.ndarray, order: int) -> np.ndarray:
     return np.hstack([L * (2 * L - 1), 4 * L[:, edges[:, 0]] * L[:, edges[:, 1]]])
 
 
-def _shape_dL(L: np.ndarray, order: int) -> np.ndarray:
-    """dN_a/dL_k (nq, nloc, 4) at barycentric points of a tet."""
-    nq = len(L)
+def shape_dL(L: np.ndarray, order: int) -> np.ndarray:
+    """dN_a/dL_k (nq, nloc, nv) at barycentric points L (nq, nv) of a triangle (nv 3) or tet (nv 4)."""
+    nq, nv = L.shape
     if order == 1:
-        return np.broadcast_to(np.eye(4), (nq, 4, 4))
-    C = np.zeros((nq, 10, 4))
-    C[:, np.arange(4), np.arange(4)] = 4 * L - 1
-    for a, (i, j) in enumerate(TET_EDGES):
-        C[:, 4 + a, i] = 4 * L[:, j]
-        C[:, 4 + a, j] = 4 * L[:, i]
+        return np.broadcast_to(np.eye(nv), (nq, nv, nv))
+    edges = TET_EDGES if nv == 4 else TRI_EDGES
+    C = np.zeros((nq, nv + len(edges), nv))
+    C[:, np.arange(nv), np.arange(nv)] = 4 * L - 1
+    for a, (i, j) in enumerate(edges):
+        C[:, nv + a, i] = 4 * L[:, j]
+        C[:, nv + a, j] = 4 * L[:, i]
     return C
 
 
 def bary_gradients(fm: FEMesh) -> tuple[np.ndarray, np.ndarray]:
-    """Gradients of the barycentric coordinates (M, 4, 3) and det J = 6·volume (M,)."""
+    """Gradients of the barycentric coordinates (M, 4, 3) and det J = 6·volume (M,) of the
+    straight (corner) tetrahedra."""
     x = fm.nodes[fm.elements[:, :4]]
     J = np.swapaxes(x[:, 1:] - x[:, :1], 1, 2)  # columns = edge vectors
     Ji = np.linalg.inv(J)  # rows = grad L1..L3
     return np.concatenate([-Ji.sum(1, keepdims=True), Ji], axis=1), np.linalg.det(J)
 
 
+def _curved_J(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) and det J (m, nq) of P2 elements."""
+    dL = shape_dL(L, 2)
+    dxi = dL[..., 1:] - dL[..., :1]  # ∂N_a/∂ξ_k with L0 = 1 - ξ1 - ξ2 - ξ3
+    J = np.einsum("qak,mad->mqkd", dxi, fm.nodes[fm.elements[elems]], optimize=True)
+    return J, np.linalg.det(J)
+
+
+def geometry(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None),
+             grads: bool = True) -> tuple[np.ndarray | None, np.ndarray]:
+    """Physical shape-function gradients (m, nq, nloc, 3) (None unless ``grads``) and det J
+    (m, nq) at barycentric points L (nq, 4): affine per element, per point on curved elements."""
+    sub = _subset(fm, elems)
+    G, det0 = bary_gradients(sub)
+    det = np.repeat(det0[:, None], len(L), axis=1)
+    dN = np.einsum("qak,ekd->eqad", shape_dL(L, fm.order), G, optimize=True) if grads else None
+    curved = np.flatnonzero(fm.curved[elems]) if fm.curved is not None else np.zeros(0, int)
+    if len(curved):
+        J, det[curved] = _curved_J(sub, L, curved)
+        if grads:
+            dL = shape_dL(L, 2)
+            dN[curved] = np.einsum("qak,mqdk->mqad", dL[..., 1:] - dL[..., :1], np.linalg.inv(J), optimize=True)
+    return dN, det
+
+
 def shape_grads(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
     """Physical shape-function gradients (m, nq, nloc, 3) at barycentric points L (nq, 4)."""
-    G, _ = bary_gradients(_subset(fm, elems))
-    return np.einsum("qak,ekd->eqad", _shape_dL(L, fm.order), G, optimize=True)
+    return geometry(fm, L, elems)[0]
+
+
+def points_at(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """Physical coordinates (m, nq, 3) of barycentric points L (nq, 4) (on curved elements too)."""
+    return np.einsum("qa,mad->mqd", shape_values(L, fm.order), fm.nodes[fm.elements[elems]], optimize=True)
+
+
+def volume(fm: FEMesh) -> float:
+    """Volume of the mesh (mm³ in mm), curved elements included."""
+    L, W = tet_quadrature(2)
+    return float(sum((geometry(fm, L, slice(s, s + 65536), grads=False)[1] @ W).sum()
+                     for s in range(0, len(fm.elements), 65536)))
 
 
 def _subset(fm: FEMesh, elems) -> FEMesh:
-    return FEMesh(fm.nodes, fm.elements[elems], {}, fm.order, fm.n_vertices)
+    curved = None if fm.curved is None else fm.curved[elems]
+    return FEMesh(fm.nodes, fm.elements[elems], {}, fm.order, fm.n_vertices, curved)
 
 
 def element_dofs(elements: np.ndarray) -> np.ndarray:
@@ -153,9 +224,8 @@ def stiffness(fm: FEMesh, E: float, nu: float, chunk: int = 8192) -> sp.csr_matr
     data = np.zeros((len(indices), 3, 3))
     for s in range(0, len(fm.elements), chunk):
         sl = slice(s, s + chunk)
-        _, det = bary_gradients(_subset(fm, sl))
-        w = np.abs(det)[:, None] * W[None, :]
-        _add_elastic_blocks(shape_grads(fm, L, sl), w, lam, mu, pos[sl], data)
+        dN, det = geometry(fm, L, sl)
+        _add_elastic_blocks(dN, det * W[None, :], lam, mu, pos[sl], data)
     return sp.bsr_matrix((data, indices, indptr), shape=(fm.ndof, fm.ndof)).tocsr()
 
 

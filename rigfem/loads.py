@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigfem.assembly import FEMesh, shape_values, tet_quadrature
+from rigfem.assembly import FEMesh, geometry, points_at, shape_values, tet_quadrature
 from rigfem.errors import InputError
 from rigfem.mesh import Hole
 from rigfem.supports import surface_quadrature
@@ -112,9 +112,11 @@ def _assemble_surface(fm: FEMesh, name: str, traction, degree: int) -> np.ndarra
     return f
 
 
-def outward_normals(fm: FEMesh, name: str) -> np.ndarray:
-    """Unit outward normals (K, 3) of the triangles of a named surface."""
-    tri = surface_quadrature(fm, name, 1)[3][:, :3]
+def outward_normals(fm: FEMesh, name: str, degree: int = 1) -> np.ndarray:
+    """Unit outward normals (K, nq, 3) of a named surface at the points of the degree's rule
+    (of the curved surface where its triangles are curved)."""
+    *_, tri, normals = surface_quadrature(fm, name, degree, normals=True)
+    tri = tri[:, :3]
     t = fm.elements[:, :4]
     n = np.int64(len(fm.nodes))
     faces = np.sort(np.concatenate([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]]), 1)
@@ -127,9 +129,7 @@ def outward_normals(fm: FEMesh, name: str) -> np.ndarray:
         raise InputError(f"surface {name!r} has triangles that are not faces of the mesh")
     opposite = fm.nodes[t[pos % len(t), pos // len(t)]]  # vertex not on the face
     x = fm.nodes[tri]
-    nv = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-    nv *= np.sign(np.einsum("kd,kd->k", nv, x[:, 0] - opposite))[:, None]
-    return nv / np.linalg.norm(nv, axis=1, keepdims=True)
+    return normals * np.sign(np.einsum("kqd,kd->kq", normals, x[:, 0] - opposite))[..., None]
 
 
 def _resultant(fm: FEMesh, f: np.ndarray, about: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -215,14 +215,12 @@ def torque_vector(fm: FEMesh, holes: dict[str, Hole], name: str, torque: float) 
 
 def body_vector(fm: FEMesh, density: float, accel) -> np.ndarray:
     """∫ N ρ b dV for a body acceleration field accel(points (M, nq, 3)) -> (M, nq, 3)."""
-    L, W = tet_quadrature(3)
-    x = fm.nodes[fm.elements[:, :4]]
-    det = np.abs(np.linalg.det(x[:, 1:] - x[:, :1]))
-    pts = np.einsum("qa,mad->mqd", L, x)
-    fe = np.einsum("m,q,qa,mqi->mai", density * det, W, shape_values(L, fm.order), accel(pts))
-    f = np.zeros(fm.ndof)
-    np.add.at(f, (3 * fm.elements[:, :, None] + np.arange(3)).ravel(), fe.ravel())
-    return f
+    if "body" not in fm.cache:  # the same quadrature for every body load of a mesh
+        L, W = tet_quadrature(3)
+        fm.cache["body"] = (geometry(fm, L, grads=False)[1] * W, shape_values(L, fm.order), points_at(fm, L))
+    dw, N, pts = fm.cache["body"]
+    fe = np.einsum("mq,qa,mqi->mai", density * dw, N, accel(pts), optimize=True)
+    return np.bincount((3 * fm.elements[:, :, None] + np.arange(3)).ravel(), fe.ravel(), minlength=fm.ndof)
 
 
 def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.ndarray:
@@ -235,8 +233,8 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
         p = float(load.p)
         if not np.isfinite(p):
             raise InputError(f"Pressure({load.surface!r}).p = {load.p!r} must be finite")
-        n = outward_normals(fm, load.surface)
-        return _assemble_surface(fm, load.surface, lambda x: -p * np.broadcast_to(n[:, None, :], x.shape), 2)
+        n = outward_normals(fm, load.surface, 2)
+        return _assemble_surface(fm, load.surface, lambda x: -p * n, 2)
     if isinstance(load, BearingLoad):
         return bearing_vector(fm, holes, load.hole, load.force)
     if isinstance(load, Torque):

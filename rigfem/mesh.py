@@ -1,9 +1,12 @@
 """The mesh of one part: the one data type shared by meshing, the FE solver and the reports.
 
 Units: mm.  A :class:`PartMesh` is what gmsh produced for a part, reduced to plain
-arrays (like meshio's ``Mesh``): linear tetrahedra, the named interface surfaces as
-triangles, and the geometry of every cylindrical interface (holes, bearing seat) so
-loads and supports can attach by name.
+arrays (like meshio's ``Mesh``): the tetrahedra's vertices, the named interface surfaces as
+triangles, the geometry of every cylindrical interface (holes, bearing seat) so loads and
+supports can attach by name, and the curved edges: the mid-edge nodes of gmsh's second-order
+mesh that are off their chords (on the grooves, holes and fillets, and the interior nodes
+gmsh moved to keep the elements next to them valid), so P2 elements follow the geometry
+instead of faceting it (:func:`quadratic`).
 
 :func:`mesh_part` meshes a part of :mod:`rigfem.parts` in gmsh (OpenCASCADE geometry, HXT
 linear tets, one thread so identical input gives an identical mesh): a global ``size`` and a
@@ -11,9 +14,11 @@ Distance/Threshold field that grades down to ``refine_size`` at the surface grou
 load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates the element count
 and the memory of the mesh and of a direct P2 solve on it and refuses requests above the
 machine (24 GiB); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
-refuses a mesh below ``min_quality``.  Results are cached as .npz under $RIGFEM_CACHE or
+refuses a mesh below ``min_quality``; then makes the mesh second order (:func:`second_order`).
+Results are cached as .npz under $RIGFEM_CACHE or
 ~/.cache/rigfem, keyed by a hash of the part definition, the settings and the gmsh version.
-The FE solver builds P2 itself; :func:`write_mesh` exports .vtu/.msh (tetra or tetra10).
+The FE solver builds P2 from :func:`quadratic`; :func:`write_mesh` exports .vtu/.msh (tetra or
+tetra10).
 """
 
 from __future__ import annotations
@@ -49,6 +54,9 @@ class PartMesh:
     holes: dict[str, Hole] = field(default_factory=dict)  #: group name -> cylinder geometry
     quality: dict[str, float] = field(default_factory=dict)  #: e.g. {"min": .., "p01": .., "median": ..}
     meta: dict = field(default_factory=dict)  #: part parameters, mesh settings, content hash
+    #: boundary edges on curved surfaces: vertex pairs (E, 2) and their mid-edge points on the surface (E, 3)
+    curved_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 # ----------------------------------------------------------------------------- meshing
@@ -56,8 +64,9 @@ class PartMesh:
 #  module importable by the FE code without building any geometry)
 
 #: bump when the meshing recipe changes, so cached meshes are not reused
-MESH_RECIPE = 4  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
-#                  4: curvature sizing with the global size, concentrators at half the refined size
+MESH_RECIPE = 5  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
+#                  4: curvature sizing with the global size, concentrators at half the refined size;
+#                  5: mid-edge points of curved boundary edges
 #: machine memory the estimate is checked against, GiB: this machine's physical memory
 MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 #: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)
@@ -157,7 +166,8 @@ def cache_dir() -> Path:
 
 def save_npz(pm: PartMesh, path: Path) -> None:
     """Store a PartMesh as .npz (atomic: written to a temporary name, then renamed)."""
-    arrays = {"points": pm.points, "tets": pm.tets}
+    arrays = {"points": pm.points, "tets": pm.tets, "curved_edges": pm.curved_edges,
+              "curved_points": pm.curved_points}
     arrays |= {f"surf:{k}": v for k, v in pm.surfaces.items()}
     arrays |= {f"hole:{k}": np.concatenate([h.center, h.axis, [h.radius, h.depth]])
                for k, h in pm.holes.items()}
@@ -175,7 +185,8 @@ def load_npz(path: Path) -> PartMesh:
         surfaces = {k[5:]: z[k] for k in z.files if k.startswith("surf:")}
         holes = {k[5:]: Hole(z[k][:3].copy(), z[k][3:6].copy(), float(z[k][6]), float(z[k][7]))
                  for k in z.files if k.startswith("hole:")}
-        return PartMesh(info["name"], z["points"], z["tets"], surfaces, holes, info["quality"], info["meta"])
+        return PartMesh(info["name"], z["points"], z["tets"], surfaces, holes, info["quality"], info["meta"],
+                        z["curved_edges"], z["curved_points"])
 
 
 def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Hole | None:
@@ -220,33 +231,48 @@ def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Ho
     return Hole(c + a * (t.min() + t.max()) / 2, a, r, float(t.max() - t.min()))
 
 
-def _extract() -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray]:
-    """Points, positively oriented tets, named triangle groups and minSICN from gmsh's model."""
+def _quality() -> np.ndarray:
+    """gmsh's minSICN of every linear tetrahedron of the current mesh."""
     import gmsh
 
+    return np.asarray(gmsh.model.mesh.getElementQualities(gmsh.model.mesh.getElementsByType(4)[0], "minSICN"))
+
+
+def second_order(groups: dict[str, list[int]], rtol: float = 1e-3):
+    """Make gmsh's current linear tet mesh second order and read it back.
+
+    gmsh puts every boundary mid-edge node on the geometry (grooves, holes, fillets) and then
+    moves the interior nodes by an elastic analogy (``HighOrderElastic``) so the elements next
+    to a curved wall stay valid; that can shift vertices slightly, so the whole mesh is read
+    again.  ``groups`` maps surface names to gmsh surface tags.  Returns points (N, 3),
+    positively oriented tets (M, 4), the groups' triangles, and the curved edges: vertex pairs
+    (E, 2) and mid-edge points (E, 3) of the edges whose node is off the straight midpoint by
+    more than ``rtol`` times the edge length.
+    """
+    import gmsh
+
+    gmsh.model.mesh.setOrder(2)
+    gmsh.model.mesh.optimize("HighOrderElastic")
     tags, coords, _ = gmsh.model.mesh.getNodes()
-    index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
-    order = np.argsort(tags)
-    index[tags[order]] = np.arange(len(tags))
-    points = coords.reshape(-1, 3)[order]
-    etags, enodes = gmsh.model.mesh.getElementsByType(4)
-    tets = index[enodes.astype(np.int64)].reshape(-1, 4)
-    quality = np.asarray(gmsh.model.mesh.getElementQualities(etags, "minSICN"))
-    d = points[tets[:, 1:]] - points[tets[:, :1]]
-    neg = np.linalg.det(d) < 0
+    xyz = np.zeros((int(tags.max()) + 1, 3))
+    xyz[tags.astype(np.int64)] = coords.reshape(-1, 3)
+    el = gmsh.model.mesh.getElementsByType(11)[1].astype(np.int64).reshape(-1, 10)
+    vert = np.unique(el[:, :4])
+    index = np.full(len(xyz), -1, np.int64)
+    index[vert] = np.arange(len(vert))
+    points, tets = xyz[vert], index[el[:, :4]]
+    neg = np.linalg.det(points[tets[:, 1:]] - points[tets[:, :1]]) < 0
     tets[neg, 1:3] = tets[neg, 2:0:-1]
-    surfaces = {}
-    for dim, ptag in gmsh.model.getPhysicalGroups(2):
-        tris = [gmsh.model.mesh.getElementsByType(2, ent)[1] for ent in
-                gmsh.model.getEntitiesForPhysicalGroup(dim, ptag)]
-        surfaces[gmsh.model.getPhysicalName(dim, ptag)] = index[np.concatenate(tris).astype(np.int64)].reshape(-1, 3)
-    used = np.zeros(len(points), bool)
-    used[tets] = True
-    if not used.all():  # drop nodes no tet uses (e.g. of lower-dimensional leftovers)
-        new = np.cumsum(used) - 1
-        points, tets = points[used], new[tets]
-        surfaces = {k: new[v] for k, v in surfaces.items()}
-    return points, tets, surfaces, quality
+    surfaces = {name: index[np.concatenate([gmsh.model.mesh.getElementsByType(9, t)[1] for t in ents]
+                                           ).astype(np.int64).reshape(-1, 6)[:, :3]]
+                for name, ents in groups.items()}
+    ref = np.asarray(gmsh.model.mesh.getElementProperties(11)[4]).reshape(10, 3)
+    bary = np.c_[1 - ref.sum(1), ref]  # the two corners each of gmsh's mid-edge nodes lies between
+    mids, first = np.unique(el[:, 4:].ravel(), return_index=True)
+    pairs = el[:, np.array([np.flatnonzero(b > 0.25) for b in bary[4:]])].reshape(-1, 2)[first]
+    a, b, m = xyz[pairs[:, 0]], xyz[pairs[:, 1]], xyz[mids]
+    off = np.linalg.norm(m - 0.5 * (a + b), axis=1) > rtol * np.linalg.norm(b - a, axis=1)
+    return points, tets, surfaces, index[pairs[off]], m[off]
 
 
 def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> None:
@@ -337,14 +363,17 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
                              f"more than the machine's {machine_gib:g} GiB: increase --size")
         _set_fields(refine_tags, conc_tags, settings)
         gmsh.model.mesh.generate(3)
-        points, tets, surfaces, q = _extract()
+        q = _quality()
         if len(q) and q.min() < settings.min_quality:
             # HXT can leave a flat tet across a thin wall whose two faces carry mirrored surface
             # meshes (the filleted I-profile web); gmsh's Delaunay inserts points and recovers
             gmsh.model.mesh.clear()
             gmsh.option.setNumber("Mesh.Algorithm3D", 1)
             gmsh.model.mesh.generate(3)
-            points, tets, surfaces, q = _extract()
+            q = _quality()
+        named = {gmsh.model.getPhysicalName(2, t): list(gmsh.model.getEntitiesForPhysicalGroup(2, t))
+                 for _, t in gmsh.model.getPhysicalGroups(2)}
+        points, tets, surfaces, edges, mids = second_order(named)
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
@@ -358,8 +387,9 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
                          f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
     meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
             "density": part.density, "settings": settings.key(), "hash": key,
-            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
-    pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta)
+            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss",
+            "curved_edges": len(edges)}
+    pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     if use_cache:
         save_npz(pm, path)
     return pm
@@ -405,11 +435,42 @@ TET10_EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])  #: VTK
 TRI6_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
 
 
+def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
+    return np.minimum(pairs[..., 0], pairs[..., 1]).astype(np.int64) * n + np.maximum(pairs[..., 0], pairs[..., 1])
+
+
+def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """P2 nodes, tetra10 elements (M, 10) and triangle6 groups of a mesh (VTK / C3D10 order).
+
+    Nodes are the vertices, then one node per edge: on the geometry for the curved boundary edges
+    of ``pm.curved_edges``, at the straight midpoint elsewhere.
+    """
+    from rigfem.errors import InputError
+
+    points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
+    n = len(points)
+    ukeys, inv = np.unique(_edge_keys(tets[:, TET10_EDGES], n), return_inverse=True)
+    mid = 0.5 * (points[ukeys // n] + points[ukeys % n])
+
+    def lookup(pairs: np.ndarray, what: str) -> np.ndarray:
+        k = _edge_keys(pairs, n)
+        pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
+        if not (ukeys[pos] == k).all():
+            raise InputError(f"{what} has edges that are not tet edges of the mesh")
+        return pos
+
+    if len(pm.curved_edges):
+        mid[lookup(np.asarray(pm.curved_edges, np.int64), "curved_edges")] = pm.curved_points
+    surfaces = {name: np.hstack([tri, n + lookup(np.asarray(tri, np.int64)[:, TRI6_EDGES], f"surface {name!r}")])
+                for name, tri in pm.surfaces.items()}
+    return np.vstack([points, mid]), np.hstack([tets, n + inv.reshape(-1, 6)]), surfaces
+
+
 def to_meshio(pm: PartMesh, order: int = 1):
     """meshio.Mesh of the part: tets plus one triangle block per named surface.
 
-    ``order=2`` adds mid-edge nodes (tetra10/triangle6); those on a cylindrical group of
-    ``pm.holes`` are moved onto the cylinder, others stay on the straight edge.
+    ``order=2`` writes tetra10/triangle6 with the mid-edge nodes of :func:`quadratic` (on the
+    geometry where the boundary is curved).
     """
     import meshio
 
@@ -417,26 +478,11 @@ def to_meshio(pm: PartMesh, order: int = 1):
 
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
-    points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
-    surfaces = {k: np.asarray(v, np.int64) for k, v in pm.surfaces.items()}
     if order == 2:
-        n = len(points)
-        keys = np.sort(tets[:, TET10_EDGES], axis=2)
-        keys = keys[..., 0] * n + keys[..., 1]
-        ukeys, inv = np.unique(keys, return_inverse=True)
-        mid = 0.5 * (points[ukeys // n] + points[ukeys % n])
-        tets = np.hstack([tets, n + inv.reshape(-1, 6)])
-        for name, tri in surfaces.items():
-            k = np.sort(tri[:, TRI6_EDGES], axis=2)
-            pos = np.searchsorted(ukeys, k[..., 0] * n + k[..., 1])
-            surfaces[name] = np.hstack([tri, n + pos])
-            if name in pm.holes:
-                h = pm.holes[name]
-                m = mid[np.unique(pos)] - h.center
-                axial = np.outer(m @ h.axis, h.axis)
-                radial = m - axial
-                mid[np.unique(pos)] = h.center + axial + h.radius * radial / np.linalg.norm(radial, axis=1)[:, None]
-        points = np.vstack([points, mid])
+        points, tets, surfaces = quadratic(pm)
+    else:
+        points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
+        surfaces = {k: np.asarray(v, np.int64) for k, v in pm.surfaces.items()}
     tet_t, tri_t = ("tetra", "triangle") if order == 1 else ("tetra10", "triangle6")
     names = sorted(surfaces)
     cells = [(tet_t, tets)] + [(tri_t, surfaces[k]) for k in names]

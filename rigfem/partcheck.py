@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from rigfem.assembly import volume
 from rigfem.fe import LOCKING_NU, Model, build_model, load_matrix, solve
 from rigfem.loadcases import PartCase, UnitLoad
 from rigfem.loads import BearingLoad, Inertia
@@ -170,7 +171,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         loads, R, scale = relieved_cases(model, loads)
     sol = solve(model, supports, loads, solver=solver)
     t_solve = time.perf_counter() - t0
-    fe_mass = mesh_volume(pm) * model.material.density * 1e3  # kg (density in t/mm³)
+    fe_mass = volume(model.mesh) * model.material.density * 1e3  # kg (density in t/mm³)
     out = []
     for mode, case in sup_cases:
         t1 = time.perf_counter()
@@ -197,20 +198,13 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
     return out
 
 
-def mesh_volume(pm: PartMesh) -> float:
-    """Volume (mm³) of a tetrahedral mesh."""
-    p = pm.points[pm.tets]
-    return float(np.abs(np.einsum("ij,ij->i", p[:, 1] - p[:, 0],
-                                  np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))).sum() / 6.0)
-
-
 def _profile_caveat(res: CaseResult) -> list[str]:
     """A rail whose section is heavier than the catalogue's is stiffer and stronger than the real one."""
     part = load_part(res.case.part, res.case.params or None)
     ref = part.reference.get("linear_mass_catalogue")
     if part.kind != "rail" or ref is None:
         return []
-    kg_m = mesh_volume(res.mesh) * part.density * 1e-9 / (part["length"] / 1000.0)
+    kg_m = volume(res.solution.model.mesh) * part.density * 1e-9 / (part["length"] / 1000.0)
     if kg_m <= 1.05 * ref.value:
         return []
     return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "
@@ -237,6 +231,8 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "mesh": {"nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
                  "dofs": int(sol.model.mesh.ndof), "order": settings.order,
                  "quality_min": float(res.mesh.quality.get("min", 0.0)),
+                 "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
+                 "straightened": int(sol.model.mesh.straightened),
                  "cache": res.mesh.meta.get("cache", "")},
         "solve": {"method": sol.method, "load_cases": int(sol.U.shape[1]),
                   "rows": int(len(res.case.rows)),

@@ -2,7 +2,8 @@
 
 Tensor components in Voigt order ``xx, yy, zz, xy, yz, xz`` (ParaView's order for
 6-component symmetric tensors).  Nodal stresses are recovered by averaging the
-element stress fields evaluated at each node over the elements sharing it; the
+element stress fields, extrapolated to each node from the quadrature points, over the
+elements sharing it; the
 error estimate of a nodal value is the Zienkiewicz–Zhu-type discrepancy between
 the recovered and the raw element stresses on the patch of elements around
 it: ``max_{e ∋ node, j ∈ e} vm(σ_e(x_j) − σ*(x_j)) / vm(σ*(node))``.
@@ -12,9 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.assembly import TET_EDGES, FEMesh, element_dofs, shape_grads, tet_quadrature
-
-NODE_BARY = np.vstack([np.eye(4), 0.5 * (np.eye(4)[TET_EDGES[:, 0]] + np.eye(4)[TET_EDGES[:, 1]])])
+from rigfem.assembly import NODE_BARY, FEMesh, element_dofs, points_at, shape_grads, tet_quadrature
 
 
 def _stress_at(fm: FEMesh, E: float, nu: float, U: np.ndarray, L: np.ndarray, elems) -> np.ndarray:
@@ -36,13 +35,17 @@ def quadrature_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray) -> tuple[n
     """Stress (M, nq, k, 6) at the stiffness quadrature points and their coordinates (M, nq, 3)."""
     U = U.reshape(fm.ndof, -1)
     L, _ = tet_quadrature(2 * (fm.order - 1))
-    x = np.einsum("qa,mad->mqd", L, fm.nodes[fm.elements[:, :4]])
-    return _stress_at(fm, E, nu, U, L, slice(None)), x
+    return _stress_at(fm, E, nu, U, L, slice(None)), points_at(fm, L)
 
 
 def element_node_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, elems=slice(None)) -> np.ndarray:
-    """Raw element stresses (m, nloc, k, 6) evaluated at each element's own nodes."""
-    return _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), NODE_BARY[: fm.elements.shape[1]], elems)
+    """Raw element stresses (m, nloc, k, 6) at each element's own nodes, extrapolated linearly
+    from the stiffness's quadrature points (as CalculiX does for C3D10).  Exact on straight P2
+    elements, whose stress is linear; on curved ones it is the robust choice (no evaluation at
+    a corner where the mapping is most distorted)."""
+    L, _ = tet_quadrature(2 * (fm.order - 1))
+    X = NODE_BARY[: fm.elements.shape[1]] @ np.linalg.pinv(L)  # (nloc, nq): linear fit through the points
+    return np.einsum("aq,mqkc->makc", X, _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), L, elems), optimize=True)
 
 
 def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 2048) -> np.ndarray:
@@ -52,10 +55,10 @@ def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 20
     acc = np.zeros((len(fm.nodes), k * 6))
     for s in range(0, len(fm.elements), chunk):
         sl = slice(s, s + chunk)
-        Se = element_node_stress(fm, E, nu, U, sl)
         idx = fm.elements[sl].ravel()
+        Se = np.ascontiguousarray(element_node_stress(fm, E, nu, U, sl)).reshape(len(idx), k * 6)
         for c in range(k * 6):
-            acc[:, c] += np.bincount(idx, Se.reshape(len(idx), k * 6)[:, c], minlength=len(fm.nodes))
+            acc[:, c] += np.bincount(idx, Se[:, c], minlength=len(fm.nodes))
     count = np.bincount(fm.elements.ravel(), minlength=len(fm.nodes))
     # contiguous (k, N, 6): every superposition over the cases reads it whole
     return np.ascontiguousarray((acc / count[:, None]).reshape(len(fm.nodes), k, 6).transpose(1, 0, 2))

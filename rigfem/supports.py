@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from rigfem.assembly import FEMesh, _scatter, element_dofs, shape_values, tri_quadrature
+from rigfem.assembly import FEMesh, _scatter, element_dofs, shape_dL, shape_values, tri_quadrature
 from rigfem.errors import InputError
 from rigfem.mesh import Hole
 
@@ -63,18 +63,27 @@ class FreeBody:
 Support = Fixed | Symmetry | ShaftInHole | FreeBody
 
 
-def surface_quadrature(fm: FEMesh, name: str, degree: int):
-    """Points (K, nq, 3), weights·area (K, nq), shape values (nq, nloc), nodes (K, nloc) of a surface."""
+def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False):
+    """Points (K, nq, 3), weights·area (K, nq), shape values (nq, nloc), nodes (K, nloc) of a
+    surface, and with ``normals`` unit normals (K, nq, 3) (orientation: (x1−x0)×(x2−x0)).
+
+    6-node triangles are mapped isoparametrically, so a curved triangle's points, area and
+    normals are those of its curved shape.
+    """
     if name not in fm.surfaces:
         raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
     tri = fm.surfaces[name]
     if len(tri) == 0:
         raise InputError(f"surface {name!r} is empty")
     L, W = tri_quadrature(degree)
-    x = fm.nodes[tri[:, :3]]
-    area2 = np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
-    pts = np.einsum("qa,kad->kqd", L, x)
-    return pts, area2[:, None] * W[None, :], shape_values(L, fm.order), tri
+    x = fm.nodes[tri]
+    N = shape_values(L, fm.order)
+    dL = shape_dL(L, fm.order)
+    t = np.einsum("qak,Kad->Kqkd", dL[..., 1:] - dL[..., :1], x)  # tangents ∂x/∂ξ1, ∂x/∂ξ2
+    nv = np.cross(t[:, :, 0], t[:, :, 1])
+    area2 = np.linalg.norm(nv, axis=-1)
+    out = (np.einsum("qa,kad->kqd", N, x), area2 * W[None, :], N, tri)
+    return out + (nv / area2[..., None],) if normals else out
 
 
 def surface_nodes(fm: FEMesh, name: str) -> np.ndarray:

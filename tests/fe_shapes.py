@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from skfem import MeshTet
 
-from rigfem.mesh import Hole, PartMesh
+from rigfem.mesh import Hole, PartMesh, second_order
 
 FACES = {"xmin": (0, 0), "xmax": (0, 1), "ymin": (1, 0), "ymax": (1, 1), "zmin": (2, 0), "zmax": (2, 1)}
 
@@ -27,7 +27,8 @@ def box(lx: float, ly: float, lz: float, nx: int, ny: int, nz: int, jitter: floa
 
 
 def gmsh_part(build, size: float, refine: dict | None = None, name: str = "part") -> PartMesh:
-    """Mesh an OCC model made by ``build(occ) -> dict[name -> (dim, tags)] or hole spec`` with gmsh.
+    """Mesh an OCC model made by ``build(occ) -> dict[name -> (dim, tags)] or hole spec`` with gmsh
+    (second order as rigfem's own meshes: curved walls followed by P2).
 
     ``build`` returns {surface_name: [surface tags]} and {hole_name: Hole}; ``refine`` maps
     surface names to a local mesh size.
@@ -57,20 +58,8 @@ def gmsh_part(build, size: float, refine: dict | None = None, name: str = "part"
             gmsh.model.mesh.field.setAsBackgroundMesh(mn)
             gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.model.mesh.generate(3)
-        tags, xyz, _ = gmsh.model.mesh.getNodes()
-        index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
-        index[tags.astype(np.int64)] = np.arange(len(tags))
-        pts = xyz.reshape(-1, 3)
-        _, ntags = gmsh.model.mesh.getElementsByType(4)
-        tets = index[ntags.astype(np.int64)].reshape(-1, 4)
-        surfaces = {}
-        for nm, stags in groups.items():
-            tri = [gmsh.model.mesh.getElementsByType(2, s)[1] for s in stags]
-            surfaces[nm] = index[np.concatenate(tri).astype(np.int64)].reshape(-1, 3)
-        used = np.unique(tets)
-        remap = -np.ones(len(pts), dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        return PartMesh(name, pts[used], remap[tets], {k: remap[v] for k, v in surfaces.items()}, holes)
+        pts, tets, surfaces, edges, mids = second_order(groups)
+        return PartMesh(name, pts, tets, surfaces, holes, curved_edges=edges, curved_points=mids)
     finally:
         gmsh.finalize()
 

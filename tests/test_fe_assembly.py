@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 from fe_shapes import box
-from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet, asm
+from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet, MeshTet2, asm
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from rigfem.assembly import fe_mesh, stiffness
+from rigfem.assembly import _chords, fe_mesh, stiffness
 from rigfem.errors import InputError
 from rigfem.mesh import PartMesh
 from rigfem.supports import rigid_modes
@@ -30,6 +30,55 @@ def test_stiffness_equals_skfem_generic(order):
             perm[b.edge_dofs[c]] = 3 * (n + np.searchsorted(np.unique(key), key)) + c
             assert np.allclose(fm.nodes[n + np.searchsorted(np.unique(key), key)], b.mesh.p[:, e].mean(1).T)
     assert abs(K[perm][:, perm] - Ks).max() <= 1e-13 * abs(Ks).max()
+
+
+def test_curved_stiffness_equals_skfem_isoparametric():
+    """Every mid-edge node moved off its chord: the per-quadrature-point Jacobian path against
+    scikit-fem's quadratic-geometry mesh (MeshTet2) with the same 4-point rule."""
+    fm = fe_mesh(box(3, 2, 1, 3, 2, 2, jitter=0.2), 2)
+    n = fm.n_vertices
+    fm.nodes[n:] += 0.04 * np.random.default_rng(1).uniform(-1, 1, fm.nodes[n:].shape)
+    fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+    assert fm.curved.all()
+    K = stiffness(fm, 210e3, 0.3)
+    m1 = MeshTet(fm.nodes[:n].T, fm.elements[:, :4].T)
+    e = np.sort(m1.edges, 0)
+    key = e[0].astype(np.int64) * n + e[1]
+    mid = n + np.searchsorted(np.unique(key), key)
+    b = Basis(MeshTet2(np.vstack([fm.nodes[:n], fm.nodes[mid]]).T, fm.elements[:, :4].T),
+              ElementVector(ElementTetP2()), intorder=2)
+    Ks = asm(linear_elasticity(*lame_parameters(210e3, 0.3)), b)
+    perm = np.empty(b.N, dtype=np.int64)
+    for c in range(3):
+        perm[b.nodal_dofs[c]] = 3 * np.arange(n) + c
+        perm[b.edge_dofs[c]] = 3 * mid + c
+    assert abs(K[perm][:, perm] - Ks).max() <= 1e-13 * abs(Ks).max()
+
+
+def test_curved_path_equals_affine_on_straight_elements():
+    fm = fe_mesh(box(2, 1, 1, 4, 2, 2, jitter=0.2), 2)
+    assert not fm.curved.any()
+    K0 = stiffness(fm, 210e3, 0.3)
+    fm.curved[:] = True
+    assert abs(stiffness(fm, 210e3, 0.3) - K0).max() <= 1e-12 * abs(K0).max()
+
+
+def test_distorted_curved_element_is_straightened():
+    """A mid-edge node pushed past the opposite face inverts the element: it goes back to its chord."""
+    part = box(1, 1, 1, 1, 1, 1)
+    fm0 = fe_mesh(part, 2)
+    t = fm0.elements[0]
+    a, b = t[0], t[1]
+    far = fm0.nodes[t[2:4]].mean(0)  # beyond the element's other edge
+    mid = 0.5 * (fm0.nodes[a] + fm0.nodes[b])
+    part.curved_edges = np.array([[a, b]])
+    part.curved_points = (mid + 1.5 * (far - mid))[None]
+    fm = fe_mesh(part, 2)
+    assert fm.straightened >= 1 and not fm.curved.any()
+    assert np.allclose(fm.nodes, fm0.nodes)
+    part.curved_points = (mid + 0.05 * (far - mid))[None]  # mildly curved: kept
+    fm = fe_mesh(part, 2)
+    assert fm.straightened == 0 and fm.curved.sum() >= 1
 
 
 @pytest.mark.parametrize("order", [1, 2])

@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     how = "cache hit (meshed earlier in" if m["cache"] == "hit" else "meshed (cache miss) in"
     print(f"estimate {m['estimate_tets']} tets, {m['estimate_gib']:.3g} GiB; {how} {m['seconds']:.2f} s"
           f"{')' if m['cache'] == 'hit' else ''}")
+    print(f"curved boundary: {len(pm.curved_edges)} edges whose P2 node lies on the geometry")
     print(f"groups: {', '.join(sorted(pm.surfaces))}")
     print(f"wrote {args.out} (order {args.order})")
     return 0
