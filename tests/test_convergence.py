@@ -94,6 +94,8 @@ def test_isolated_step_measures_time_memory_and_a_finite_peak():
     (["plate_A", "--mode", "static"], "--mode"),
     (["plate_A", "--ratio", "5"], "--ratio"),
     (["plate_A", "--max-gib", "nan"], "--max-gib"),
+    (["plate_A", "--extra-levels", "4"], "--extra-levels"),
+    (["plate_A", "--extra-levels", "0.5"], "--extra-levels"),
     (["no-such-scene"], "no-such-scene"),
 ])
 def test_cli_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path):

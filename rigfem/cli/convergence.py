@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE
-from rigfem.convergence import AWAY_MM, RATIO, TARGETS, analyse, scene_cases, study, to_json
+from rigfem.convergence import AWAY_MM, EXTEND, RATIO, TARGETS, analyse, scene_cases, study, to_json
 from rigfem.errors import InputError, check_range
 from rigfem.settings import FIDELITY, MODES, PARTS
 
@@ -29,6 +29,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--levels", default="4", help="h levels, 3..8 (default 4)")
     p.add_argument("--ratio", default=str(RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
     p.add_argument("--max-gib", default="12", help="refuse an h level predicted above this memory (GiB)")
+    p.add_argument("--extra-levels", default=str(EXTEND),
+                   help=f"finer h levels added while a peak is not converging, 0..3 (default {EXTEND})")
     p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
     p.add_argument("--out", default="results/convergence", help="folder (default results/convergence)")
     p.add_argument("--render", action="store_true",
@@ -242,7 +244,8 @@ def _targets(target: str) -> tuple[str, list[str] | None]:
 def _command(a: argparse.Namespace) -> str:
     opts = [f"--mode {a.mode}" if a.mode else "", f"--levels {a.levels}" if a.levels != "4" else "",
             f"--ratio {a.ratio}" if a.ratio != str(RATIO) else "", "--no-presets" if a.no_presets else "",
-            f"--max-gib {a.max_gib}" if a.max_gib != "12" else ""]
+            f"--max-gib {a.max_gib}" if a.max_gib != "12" else "",
+            f"--extra-levels {a.extra_levels}" if a.extra_levels != str(EXTEND) else ""]
     return " ".join(["rigfem convergence", a.target, *[o for o in opts if o]])
 
 
@@ -254,6 +257,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--levels = {args.levels!r} must be a whole number in [3, 8]")
     ratio = check_range("--ratio", args.ratio, 1.1, 2.0)
     max_gib = check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB")
+    n_extra = check_range("--extra-levels", args.extra_levels, 0, 3)
+    if n_extra != int(n_extra):
+        raise InputError(f"--extra-levels = {args.extra_levels!r} must be a whole number in [0, 3]")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} exists and is not a folder")
@@ -276,7 +282,7 @@ def run(args: argparse.Namespace) -> int:
                 (out / f"{stem}.json").write_text(to_json({**partial, **extra, "partial": True}))
 
             res = study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
-                        max_gib=max_gib, presets=not args.no_presets, on_step=save,
+                        max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
                         progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
             print(_write({**res, **extra}, out, stem))
     studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
