@@ -209,7 +209,7 @@ def _profile_caveat(res: CaseResult) -> list[str]:
         return []
     return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "
             f"is stiffer and stronger than the real one, so this stress is likely low (a 3.1 kg/m profile "
-            f"carried 1.8-2.0x the rectangle's peak: results/rail_profile/study.md)"]
+            f"carried 1.8-2.1x the rectangle's peak: results/rail_profile/study.md)"]
 
 
 def verdict_of(res: CaseResult, settings) -> dict:
