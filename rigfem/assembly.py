@@ -102,13 +102,12 @@ def _straighten_distorted(fm: FEMesh) -> int:
     L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
     done = 0
     for _ in range(10):
-        idx = np.flatnonzero(np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0)
-        if not len(idx):
-            break
+        fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+        idx = np.flatnonzero(fm.curved)
         _, det0 = bary_gradients(_subset(fm, idx))
         bad = idx[(_curved_J(fm, L, idx)[1].min(1) < MIN_JACOBIAN * det0)]
         if not len(bad):
-            break
+            return done
         el = fm.elements[bad]
         fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
         done += len(bad)
@@ -159,11 +158,15 @@ def bary_gradients(fm: FEMesh) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([-Ji.sum(1, keepdims=True), Ji], axis=1), np.linalg.det(J)
 
 
+def _ref_grads(L: np.ndarray) -> np.ndarray:
+    """∂N_a/∂ξ_k (nq, 10, 3) of P2 at barycentric points L, with L0 = 1 − ξ1 − ξ2 − ξ3."""
+    dL = shape_dL(L, 2)
+    return dL[..., 1:] - dL[..., :1]
+
+
 def _curved_J(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) and det J (m, nq) of P2 elements."""
-    dL = shape_dL(L, 2)
-    dxi = dL[..., 1:] - dL[..., :1]  # ∂N_a/∂ξ_k with L0 = 1 - ξ1 - ξ2 - ξ3
-    J = np.einsum("qak,mad->mqkd", dxi, fm.nodes[fm.elements[elems]], optimize=True)
+    J = np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
     return J, np.linalg.det(J)
 
 
@@ -175,18 +178,12 @@ def geometry(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None),
     G, det0 = bary_gradients(sub)
     det = np.repeat(det0[:, None], len(L), axis=1)
     dN = np.einsum("qak,ekd->eqad", shape_dL(L, fm.order), G, optimize=True) if grads else None
-    curved = np.flatnonzero(fm.curved[elems]) if fm.curved is not None else np.zeros(0, int)
+    curved = np.flatnonzero(sub.curved) if sub.curved is not None else np.zeros(0, int)
     if len(curved):
         J, det[curved] = _curved_J(sub, L, curved)
         if grads:
-            dL = shape_dL(L, 2)
-            dN[curved] = np.einsum("qak,mqdk->mqad", dL[..., 1:] - dL[..., :1], np.linalg.inv(J), optimize=True)
+            dN[curved] = np.einsum("qak,mqdk->mqad", _ref_grads(L), np.linalg.inv(J), optimize=True)
     return dN, det
-
-
-def shape_grads(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
-    """Physical shape-function gradients (m, nq, nloc, 3) at barycentric points L (nq, 4)."""
-    return geometry(fm, L, elems)[0]
 
 
 def points_at(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
@@ -195,8 +192,9 @@ def points_at(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)
 
 
 def volume(fm: FEMesh) -> float:
-    """Volume of the mesh (mm³ in mm), curved elements included."""
-    L, W = tet_quadrature(2)
+    """Volume of the mesh (mm³ in mm), curved elements included (det J of a P2 map is cubic:
+    the degree-3 rule is exact)."""
+    L, W = tet_quadrature(3)
     return float(sum((geometry(fm, L, slice(s, s + 65536), grads=False)[1] @ W).sum()
                      for s in range(0, len(fm.elements), 65536)))
 

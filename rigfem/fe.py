@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from rigfem.assembly import FEMesh, fe_mesh, stiffness
+from rigfem.assembly import FEMesh, fe_mesh, stiffness, volume
 from rigfem.errors import InputError
 from rigfem.loads import load_vector
 from rigfem.material import Material
@@ -51,6 +51,7 @@ class Model:
     mesh: FEMesh
     K: sp.csr_matrix
     assembly_time: float
+    volume: float  #: of the (curved) mesh, mm³: the part's FE mass is volume × density
 
 
 #: Poisson's ratio from which linear tetrahedra lock (too stiff in near-incompressible strain)
@@ -70,7 +71,7 @@ def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
     t0 = time.perf_counter()
     fm = fe_mesh(part, order)
     K = stiffness(fm, material.E, material.nu)
-    return Model(part, material, fm, K, time.perf_counter() - t0)
+    return Model(part, material, fm, K, time.perf_counter() - t0, volume(fm))
 
 
 def load_matrix(model: Model, cases: list) -> np.ndarray:

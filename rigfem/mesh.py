@@ -54,7 +54,7 @@ class PartMesh:
     holes: dict[str, Hole] = field(default_factory=dict)  #: group name -> cylinder geometry
     quality: dict[str, float] = field(default_factory=dict)  #: e.g. {"min": .., "p01": .., "median": ..}
     meta: dict = field(default_factory=dict)  #: part parameters, mesh settings, content hash
-    #: boundary edges on curved surfaces: vertex pairs (E, 2) and their mid-edge points on the surface (E, 3)
+    #: edges whose P2 node is off its chord (:func:`second_order`): vertex pairs (E, 2), nodes (E, 3)
     curved_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
     curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
@@ -371,24 +371,22 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
             gmsh.option.setNumber("Mesh.Algorithm3D", 1)
             gmsh.model.mesh.generate(3)
             q = _quality()
-        named = {gmsh.model.getPhysicalName(2, t): list(gmsh.model.getEntitiesForPhysicalGroup(2, t))
-                 for _, t in gmsh.model.getPhysicalGroups(2)}
-        points, tets, surfaces, edges, mids = second_order(named)
+        if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
+            raise InputError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
+                             f"min_quality = {settings.min_quality:g}; change size = {settings.size:g} mm "
+                             f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
+        points, tets, surfaces, edges, mids = second_order(
+            {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()})
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
         raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size = {settings.size:g} mm")
     if not holes:  # custom part: cylinders fitted to the meshed surfaces
         holes = {k: h for k, v in surfaces.items() if (h := fit_cylinder(points, v)) is not None}
-    quality = quality_summary(q)
-    if quality["min"] < settings.min_quality:
-        raise InputError(f"part {part.name}: mesh quality minSICN min = {quality['min']:.3f} is below "
-                         f"min_quality = {settings.min_quality:g}; change size = {settings.size:g} mm "
-                         f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
+    quality = quality_summary(q)  # of the linear mesh, before gmsh curved it
     meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
             "density": part.density, "settings": settings.key(), "hash": key,
-            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss",
-            "curved_edges": len(edges)}
+            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     if use_cache:
         save_npz(pm, path)
@@ -442,8 +440,8 @@ def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
 def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """P2 nodes, tetra10 elements (M, 10) and triangle6 groups of a mesh (VTK / C3D10 order).
 
-    Nodes are the vertices, then one node per edge: on the geometry for the curved boundary edges
-    of ``pm.curved_edges``, at the straight midpoint elsewhere.
+    Nodes are the vertices, then one node per edge: at ``pm.curved_points`` for the edges of
+    ``pm.curved_edges``, at the straight midpoint elsewhere.
     """
     from rigfem.errors import InputError
 

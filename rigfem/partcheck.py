@@ -19,7 +19,6 @@ import time
 
 import numpy as np
 
-from rigfem.assembly import volume
 from rigfem.fe import LOCKING_NU, Model, build_model, load_matrix, solve
 from rigfem.loadcases import PartCase, UnitLoad
 from rigfem.loads import BearingLoad, Inertia
@@ -171,7 +170,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         loads, R, scale = relieved_cases(model, loads)
     sol = solve(model, supports, loads, solver=solver)
     t_solve = time.perf_counter() - t0
-    fe_mass = volume(model.mesh) * model.material.density * 1e3  # kg (density in t/mm³)
+    fe_mass = model.volume * model.material.density * 1e3  # kg (density in t/mm³)
     out = []
     for mode, case in sup_cases:
         t1 = time.perf_counter()
@@ -204,7 +203,7 @@ def _profile_caveat(res: CaseResult) -> list[str]:
     ref = part.reference.get("linear_mass_catalogue")
     if part.kind != "rail" or ref is None:
         return []
-    kg_m = volume(res.solution.model.mesh) * part.density * 1e-9 / (part["length"] / 1000.0)
+    kg_m = res.solution.model.volume * part.density * 1e-9 / (part["length"] / 1000.0)
     if kg_m <= 1.05 * ref.value:
         return []
     return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "

@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.assembly import NODE_BARY, FEMesh, element_dofs, points_at, shape_grads, tet_quadrature
+from rigfem.assembly import NODE_BARY, FEMesh, element_dofs, geometry, points_at, tet_quadrature
 
 
 def _stress_at(fm: FEMesh, E: float, nu: float, U: np.ndarray, L: np.ndarray, elems) -> np.ndarray:
     """Stress (m, nq, k, 6) at barycentric points L (nq, 4) of elements ``elems`` for U (ndof, k)."""
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
     mu = E / (2 * (1 + nu))
-    dN = shape_grads(fm, L, elems)
+    dN, _ = geometry(fm, L, elems)
     el = fm.elements[elems]
     Ue = U[element_dofs(el)].reshape(len(el), el.shape[1], 3, -1)
     H = np.einsum("maik,mqaj->mqkij", Ue, dN, optimize=True)

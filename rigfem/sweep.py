@@ -224,7 +224,6 @@ def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase
 def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set."""
     from rigfem.fe import build_model, solve
-    from rigfem.assembly import volume
     from rigfem.partcheck import fe_load, mesh_case, relieved_cases, supports_of
     from rigfem.stress import von_mises
     from rigfem.supports import FreeBody
@@ -246,7 +245,7 @@ def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
             fe_loads = relieved_cases(model, fe_loads)[0]
         sol = solve(model, supports, fe_loads, solver=solver)
         out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
-                           volume(model.mesh) * s.material.density * 1e3)
+                           model.volume * s.material.density * 1e3)
     return out
 
 
