@@ -37,6 +37,7 @@ import math
 import tomllib
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Iterator
 
@@ -46,8 +47,8 @@ import numpy as np
 from rigfem.errors import InputError, check_range
 from rigfem.mesh import Hole
 
-#: folder with the part definition files (repository root / geometry)
-GEOMETRY_DIR = Path(__file__).resolve().parents[1] / "geometry"
+#: folder with the part definition files: the top-level geometry/, installed as rigfem.geometry
+GEOMETRY_DIR = Path(str(resources.files("rigfem.geometry")))
 #: allowed prefixes of a dimension's source
 SOURCES = ("catalogue", "2013 study", "assumed")
 #: smallest wall left between a hole and an edge or another hole, mm

@@ -330,6 +330,27 @@ def case_peak(b: UnitBasis, case: PartCase, exact: bool = False) -> tuple[float,
 
 
 # ----------------------------------------------------------------------------- one configuration
+def _dead_point(linkage_type: str, cfg: dict, rtol: float = 1e-9) -> str:
+    """Why a loop that closes locks on the way round (a change-point linkage), or ''.
+
+    A four-bar with b2 + d = b3 + b4 (or |d - b2| = |b3 - b4|) and a slider-crank with
+    b2 + |offset| = b3 pass through a position where two links align; whether a sampled solve stops
+    there is a float knife edge, so it is decided here on the lengths.
+    """
+    if linkage_type == "four-bar":
+        b2, b3, b4, d = (cfg[k] for k in ("b2", "b3", "b4", "d"))
+        tol = rtol * (b2 + b3 + b4 + d)
+        if abs(b2 + d - b3 - b4) <= tol:
+            return f"b2 + d = b3 + b4 = {b3 + b4:g} mm (coupler and rocker align)"
+        if abs(abs(d - b2) - abs(b3 - b4)) <= tol:
+            return f"|d - b2| = |b3 - b4| = {abs(b3 - b4):g} mm (coupler and rocker fold)"
+    elif linkage_type == "slider-crank":
+        b2, b3, e = cfg["b2"], cfg["b3"], abs(cfg.get("offset", 0.0))
+        if abs(b2 + e - b3) <= rtol * (b2 + b3 + e):
+            return f"b2 + |offset| = b3 = {b3:g} mm (rod and crank align)"
+    return ""
+
+
 def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
              settings: CheckSettings | None = None) -> dict:
     """One table row: lengths, every rule, peak reactions and per-part utilisation and verdict.
@@ -347,6 +368,9 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
                   else slider_crank(**cfg, rails_mm=p.rails))
         except AssemblyError:
             return {**row, "status": "cannot assemble"}
+        dead = _dead_point(p.linkage_type, cfg)
+        if dead:  # decided on the lengths, not on whether the solver's floats reach the lock
+            return {**row, "status": "toggle", "note": f"dead point: {dead}"}
         try:
             h = simulate(lk, samples=p.samples, speed_hz=p.speed_hz, model=p.model)
         except AssemblyError as exc:  # the loop just closes: it locks at a dead point on the way

@@ -58,9 +58,11 @@ def test_rows_without_stress(params):
     assert evaluate(NO_LOOP, params, None)["status"] == "cannot assemble"
     toggle = evaluate(TOGGLE, params, None)
     assert toggle["status"] == "toggle" and not any(k.startswith("peak_") for k in toggle)
-    # b2 + d == b3 + b4: the loop closes on the grid but locks at a dead point (solver stops there)
-    dead = evaluate(dict(b2=60.0, b3=60.0, b4=660.0, d=660.0), params, None)
-    assert dead["status"] == "toggle" and dead["note"].startswith("dead point")
+    # b2 + d == b3 + b4: the loop closes on the grid but locks at a dead point; decided on the
+    # lengths (within 1e-9 of their sum), so a float landing on either side cannot flip it
+    for b4 in (660.0, 660.0 * (1 + 1e-12), 660.0 * (1 - 1e-12)):
+        dead = evaluate(dict(b2=60.0, b3=60.0, b4=b4, d=660.0), params, None)
+        assert dead["status"] == "toggle" and dead["note"].startswith("dead point: b2 + d = b3 + b4")
 
 
 def test_bad_input():
