@@ -32,13 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.calculix import export_model, run_ccx, von_mises
-from rigfem.fe import build_model, solve
-from rigfem.loads import BearingLoad
+from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve, von_mises
+from rigfem.io import export_model, run_ccx
 from rigfem.material import get_material
 from rigfem.mesh import MeshSettings, mesh_part
-from rigfem.parts import load_part
-from rigfem.supports import ShaftInHole
+from rigfem.rig import load_part
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 HOLES = ("hole_00", "hole_01", "hole_10", "hole_11")

@@ -20,12 +20,10 @@ import json
 import time
 from pathlib import Path
 
-
 from rigfem.check import load_check_scene
-from rigfem.loadcases import part_cases
-from rigfem.mechanisms import simulate
-from rigfem.partcheck import solve_cases
-from rigfem.reactions import peaks
+from rigfem.dynamics import peaks, simulate
+from rigfem.fe import solve_cases
+from rigfem.loads import part_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = "final-cm"
@@ -49,8 +47,8 @@ def cycle_stress(part: str) -> list[dict]:
 
 def directions(part: str) -> list[dict]:
     """Cycle-mode peak vs bearing directions on the draft mesh (mesh held fixed)."""
-    from rigfem.convergence import StepSpec, run_step, scene_cases
     from rigfem.settings import FIDELITY
+    from rigfem.studies import StepSpec, run_step, scene_cases
 
     settings, by = scene_cases(SCENE, [part], {"modes": ["cycle"]})
     rows = []

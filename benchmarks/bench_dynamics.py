@@ -18,9 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.mechanisms import RIG_MASSES, four_bar, simulate
-from rigfem.original import original_program
-from rigfem.reactions import peaks
+from rigfem.dynamics import four_bar, original_program, peaks, simulate
+from rigfem.rig import RIG_MASSES
 
 ROOT = Path(__file__).resolve().parents[1]
 REF = (540.0, 840.0, 780.0, 1020.0)

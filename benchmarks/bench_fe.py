@@ -20,14 +20,20 @@ import numpy as np
 from skfem import Basis, ElementTetP2, ElementVector, MeshTet, asm
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from rigfem.assembly import fe_mesh, stiffness
-from rigfem.fe import StaticProblem, build_model, load_matrix
-from rigfem.loads import Gravity, SurfaceForce
+from rigfem.fe import (
+    Fixed,
+    Gravity,
+    SolverError,
+    StaticProblem,
+    SurfaceForce,
+    build_model,
+    fe_mesh,
+    load_matrix,
+    nodal_stress,
+    stiffness,
+)
 from rigfem.material import get_material
 from rigfem.mesh import PartMesh
-from rigfem.solver import SolverError
-from rigfem.stress import nodal_stress
-from rigfem.supports import Fixed
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 

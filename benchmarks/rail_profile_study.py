@@ -23,11 +23,12 @@ from pathlib import Path
 import gmsh
 
 from rigfem.check import load_check_scene
-from rigfem.loadcases import part_cases
-from rigfem.mechanisms import simulate
-from rigfem.partcheck import solve_cases, verdict_of
-from rigfem.parts import gmsh_session, load_part, mass_kg
-from rigfem.reactions import peaks
+from rigfem.dynamics import peaks, simulate
+from rigfem.fe import solve_cases
+from rigfem.loads import part_cases
+from rigfem.mesh import gmsh_session, mass_kg
+from rigfem.rig import load_part
+from rigfem.verdict import verdict_of
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "rail_profile"
 SCENE = "final-cm"

@@ -20,22 +20,33 @@ from pathlib import Path
 import numpy as np
 
 from rigfem import __version__
+from rigfem.dynamics.history import (
+    JointHistory,
+    ReactionHistory,
+    peaks,
+    spline_evaluator,
+    summary,
+)
+from rigfem.dynamics.mechanisms import MODELS, simulate
+from rigfem.dynamics.solver import solve
 from rigfem.errors import InputError, check_range
-from rigfem.linkage import solve
-from rigfem.loadcases import part_cases
-from rigfem.mechanisms import MODELS, simulate
-from rigfem.output import atomic_dir, check_writable
-from rigfem.calculix import export_model
-from rigfem.partcheck import CaseResult, solve_cases, supports_of, verdict_of
-from rigfem.reactions import JointHistory, ReactionHistory, peaks, read_csv, spline_evaluator, summary
-from rigfem.render import field_picture, reactions_plot
-from rigfem.report import overall, render_markdown, write_json
+from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
+from rigfem.io.calculix import export_model
+from rigfem.io.reactions_csv import read_csv
+from rigfem.loads.cases import part_cases
+from rigfem.report.document import render_markdown, write_json
+from rigfem.report.folder import atomic_dir, check_writable
+from rigfem.report.pictures import _plot_peaks, field_picture, reactions_plot
+from rigfem.report.vtu import write_vtu
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.settings import CheckSettings, check_settings
-from rigfem.vtk import write_vtu
+from rigfem.verdict.criterion import allowable_stress, overall
+from rigfem.verdict.part import verdict_of
 
 #: the built-in reference scene ``rigfem check`` runs with no argument
 REFERENCE_SCENE = "final-cm"
+
+
 #: [check] fields about the dynamics and outputs (the rest is rigfem.settings)
 _DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None}
 
@@ -156,23 +167,6 @@ def _differences(parts: list[dict]) -> list[str]:
     return out
 
 
-def _plot_peaks(results: list[CaseResult], limit: float, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for r in results:
-        if r.mode == "cycle":
-            ax.plot(r.case.rows, r.vm_rows, label=r.case.name)
-    ax.axhline(limit, color="r", ls="--", label=f"limit {limit:.0f} MPa")
-    ax.set_xlabel("crank angle (deg)"), ax.set_ylabel("peak von Mises (MPa)")
-    ax.set_yscale("log")
-    ax.legend(fontsize="small", ncol=3)
-    ax.set_title("peak von Mises stress per part over the crank cycle (cycle mode)", fontsize="small")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
 def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int,
                    export_inp: bool) -> list[str]:
     files = []
@@ -237,7 +231,7 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     check_writable(out, force)
     h, results = solve_scene(cs, solver, quiet)
     reactions = summary(h)
-    limit = s.limit_factor * s.material.sigma_u
+    limit = allowable_stress(s.material.sigma_u, s.limit_factor)
     if h.meta.get("singular"):
         parts = [{"name": p, "part": spec["part"], "mode": m, "verdict": "fail", "peak_mpa": None,
                   "notes": [f"toggle (singular) crank-angle ranges {h.meta['singular']}: reactions grow "

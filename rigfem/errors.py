@@ -1,13 +1,22 @@
-"""The one exception for bad input: the CLI prints it as one line and exits 2."""
+"""The two kinds of failure: bad input (the user can fix it) and could-not-compute (rigfem could not).
+
+The CLI maps them to exit codes 2 and 3; nothing below the CLI knows about exit codes.
+"""
 
 
 class InputError(ValueError):
-    """Bad user input: the message names the field and the allowed range."""
+    """Bad user input: the message names the field, the value and the allowed range."""
+
+
+class ComputeError(RuntimeError):
+    """Valid input that rigfem could not compute (mesher, solver, external program)."""
 
 
 def check_range(name: str, value: float, lo: float | None = None, hi: float | None = None,
                 unit: str = "", lo_open: bool = False) -> float:
     """Return ``value`` as float if finite and inside [lo, hi]; raise InputError naming ``name``."""
+    if isinstance(value, bool):
+        raise InputError(f"{name} must be a number, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):

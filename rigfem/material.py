@@ -4,10 +4,12 @@ Values are in the rig's unit system mm–N–MPa–t (density in t/mm³), but a
 :class:`Material` is unit-agnostic: give E in Pa and density in kg/m³ for an
 m–N–Pa–kg model.
 
->>> from rigfem.material import get_material
+>>> from rigfem.material import get_material, lame
 >>> steel = get_material("rig_steel")
->>> steel.E, steel.nu, steel.allowable
-(210000.0, 0.3, 375.0)
+>>> steel.E, steel.nu, steel.sigma_u
+(210000.0, 0.3, 750.0)
+>>> lame(210000.0, 0.3)
+(121153.84615384616, 80769.23076923077)
 """
 
 from __future__ import annotations
@@ -15,6 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rigfem.errors import InputError, check_range
+
+
+def lame(E: float, nu: float) -> tuple[float, float]:
+    """Lamé parameters (λ, μ) of an isotropic material: the one place they are computed."""
+    return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
 
 
 @dataclass(frozen=True)
@@ -36,13 +43,7 @@ class Material:
     @property
     def lame(self) -> tuple[float, float]:
         """Lamé parameters (λ, μ)."""
-        lam = self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
-        return lam, self.E / (2 * (1 + self.nu))
-
-    @property
-    def allowable(self) -> float:
-        """The rig's fatigue limit σu/2 (RIG.md §5)."""
-        return self.sigma_u / 2
+        return lame(self.E, self.nu)
 
 
 MATERIALS: dict[str, Material] = {

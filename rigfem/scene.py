@@ -27,12 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.dynamics.linkage import Linkage
+from rigfem.dynamics.mechanisms import BUILDERS, compressor_gas_force
 from rigfem.errors import InputError, check_range
-from rigfem.linkage import Linkage
-from rigfem.mechanisms import BUILDERS, compressor_gas_force
 
 _SPEED_KEYS = ("speed_hz", "rpm", "omega_rad_s")
+
+
 _INFO_KEYS = ("type", "title", "notes", "masses", "bodies", "gas", "instant_deg") + _SPEED_KEYS
+
+
 _BODY_KEYS = ("mass_kg", "com_local_mm", "inertia_com_kg_mm2", "point_masses")
 
 

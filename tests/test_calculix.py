@@ -7,11 +7,22 @@ import shutil
 import numpy as np
 import pytest
 from scipy.sparse import csr_matrix
-from skfem import Basis, ElementTetP2, ElementVector, FacetBasis, LinearForm, MeshTet, asm, condense, solve
+from skfem import (
+    Basis,
+    ElementTetP2,
+    ElementVector,
+    FacetBasis,
+    LinearForm,
+    MeshTet,
+    asm,
+    condense,
+    solve,
+)
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from rigfem.calculix import CalculixError, read_frd, run_ccx, von_mises, write_inp
 from rigfem.errors import InputError
+from rigfem.fe import von_mises
+from rigfem.io import CalculixError, read_frd, run_ccx, write_inp
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) not installed")
 
@@ -222,14 +233,12 @@ def test_equations_match_elimination(tmp_path):
 @needs_ccx
 def test_rail_rigfem_vs_calculix(tmp_path):
     """700 mm crank rail on two pins (ShaftInHole springs), screw bearing loads at the far end, 2 cases."""
-    from rigfem.fe import build_model, solve as fe_solve
-    from rigfem.loads import BearingLoad
+    from rigfem.fe import BearingLoad, ShaftInHole, build_model
+    from rigfem.fe import solve as fe_solve
+    from rigfem.io import export_model
     from rigfem.material import get_material
     from rigfem.mesh import MeshSettings, mesh_part
-    from rigfem.parts import load_part
-    from rigfem.supports import ShaftInHole
-
-    from rigfem.calculix import export_model
+    from rigfem.rig import load_part
 
     holes = ("hole_00", "hole_01", "hole_10", "hole_11")
     pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size=16.0, refine=holes, refine_size=5.0),
@@ -260,11 +269,9 @@ def test_cross_check_free_body(tmp_path):
     """Self-equilibrated loads on a free box: ccx's 3-2-1 rigid motion is removed before comparing."""
     from fe_shapes import box
 
-    from rigfem.calculix import cross_check
-    from rigfem.fe import build_model
-    from rigfem.loads import SurfaceForce
+    from rigfem.fe import FreeBody, SurfaceForce, build_model
     from rigfem.material import get_material
-    from rigfem.supports import FreeBody
+    from rigfem.studies import cross_check
 
     model = build_model(box(60.0, 10.0, 8.0, 12, 2, 2), get_material("rig_steel"), order=2)
     cases = [[SurfaceForce("xmin", (-500.0, 0.0, 0.0)), SurfaceForce("xmax", (500.0, 0.0, 0.0))],
@@ -288,7 +295,7 @@ def test_cross_check_free_body(tmp_path):
 @pytest.mark.heavy
 def test_reference_scene_against_calculix():
     """Every part case of `rigfem check final-cm` (draft): peak von Mises 1 %, displacement 0.5 %."""
-    from rigfem.calculix import verify_scene
+    from rigfem.studies import verify_scene
 
     rows = verify_scene("final-cm", {"fidelity": "draft"})
     assert len(rows) >= 6
@@ -301,10 +308,9 @@ def test_gravity_against_ccx_body_load(tmp_path):
     """rigfem's consistent gravity loads (P1 and P2) against ccx's own *DLOAD GRAV on the same mesh."""
     from fe_shapes import box
 
-    from rigfem.fe import build_model, solve as fe_solve
-    from rigfem.loads import Gravity
+    from rigfem.fe import Fixed, Gravity, build_model, constraints
+    from rigfem.fe import solve as fe_solve
     from rigfem.material import get_material
-    from rigfem.supports import Fixed, constraints
 
     for order in (1, 2):
         model = build_model(box(80.0, 8.0, 12.0, 10, 2, 2, jitter=0.2), get_material("rig_steel"), order=order)
@@ -325,10 +331,9 @@ def test_hole_pressure_against_ccx_face_load(tmp_path):
     """rigfem's Pressure on a curved hole wall (P2) against ccx's own *DLOAD face pressure."""
     from fe_shapes import plate_with_hole
 
-    from rigfem.fe import build_model, solve as fe_solve
-    from rigfem.loads import Pressure
+    from rigfem.fe import Pressure, Symmetry, build_model, constraints
+    from rigfem.fe import solve as fe_solve
     from rigfem.material import get_material
-    from rigfem.supports import Symmetry, constraints
 
     model = build_model(plate_with_hole(60.0, 40.0, 5.0, 6.0, 5.0, 1.5), get_material("rig_steel"), order=2)
     supports = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]

@@ -90,8 +90,8 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, args, message):
 def test_imported_csv_reproduces_the_dynamics(tmp_path):
     """A reaction CSV exported by rigfem and imported back gives the same verdict numbers."""
     from rigfem.check import load_check_scene
-    from rigfem.mechanisms import simulate
-    from rigfem.reactions import write_csv
+    from rigfem.dynamics import simulate
+    from rigfem.io import write_csv
 
     cs = load_check_scene("final-cm")
     write_csv(simulate(cs.scene.linkage, samples=360), tmp_path / "ext.csv")

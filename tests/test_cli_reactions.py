@@ -5,7 +5,7 @@ import json
 import pytest
 
 from rigfem.cli import main
-from rigfem.reactions import read_csv
+from rigfem.io import read_csv
 
 CAL = {"O2": 641.9099, "A": 578.8140, "B": 379.4016, "O4": 366.4701}
 

@@ -32,8 +32,9 @@ def test_verify_bad_input(args, message, capsys):
 @needs_ccx
 def test_export_inp_is_the_same_model(tmp_path):
     """The deck written by ``rigfem check --export-inp`` reproduces rigfem's peak in ccx."""
-    from rigfem.calculix import run_ccx, von_mises
     from rigfem.check import read_report
+    from rigfem.fe import von_mises
+    from rigfem.io import run_ccx
 
     out = tmp_path / "o"
     assert main(["check", "final-cm", "--out", str(out), "--parts", "plate_A", "--modes", "original",

@@ -4,14 +4,23 @@ a real coarse h sequence on the coupling plate, CLI refusals."""
 import json
 import math
 
+import numpy as np
 import pytest
 
 from rigfem.cli import main
-import numpy as np
-
-from rigfem.convergence import (StepSpec, analyse, away_from_singular_edges, fine_step, needs_finer, richardson,
-                                run_step, scene_cases, study, to_json)
 from rigfem.errors import InputError
+from rigfem.studies import (
+    StepSpec,
+    analyse,
+    away_from_singular_edges,
+    fine_step,
+    needs_finer,
+    richardson,
+    run_step,
+    scene_cases,
+    study,
+    to_json,
+)
 
 
 @pytest.mark.parametrize("h", [[1.6, 0.8, 0.4, 0.2], [2.4, 1.7, 1.2, 0.85, 0.6], [2.0, 1.3, 0.7]])
@@ -105,7 +114,7 @@ def test_cli_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path):
 
 
 def _synthetic_study(peaks: dict[str, list[float]]) -> dict:
-    """A study dict as rigfem.convergence.study writes it, from given h-sequence peaks per mode."""
+    """A study dict as rigfem.studies.convergence writes it, from given h-sequence peaks per mode."""
     sizes = [(11.3, 1.7), (8.0, 1.2), (5.66, 0.85), (4.0, 0.6)]
     steps = [{"label": f"h{k}", "kind": "h", "order": 2, "size_mm": g, "local_size_mm": loc,
               "bearing_directions": 24, "dofs": 10000 * 3 ** k, "tets": 1000 * 3 ** k, "seconds": 2.0 ** k,
@@ -167,7 +176,7 @@ def test_fine_preset_error_is_measured_against_an_extended_sequence():
 
 def test_levels_beyond_the_finest_continue_the_ratio():
     """The levels a non-converging study may add are the sequence continued past ``finest``."""
-    from rigfem.convergence import h_levels
+    from rigfem.studies import h_levels
 
     base = h_levels(4, 2 ** 0.5, (4.0, 0.6))
     more = h_levels(4, 2 ** 0.5, (4.0, 0.6), beyond=1)

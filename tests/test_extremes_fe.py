@@ -20,12 +20,9 @@ import pytest
 from fe_shapes import box
 
 from rigfem.errors import InputError
-from rigfem.fe import build_model, solve
-from rigfem.loads import SurfaceForce
+from rigfem.fe import Fixed, SolverError, SurfaceForce, Symmetry, build_model, solve
 from rigfem.material import Material, get_material, material_from_dict
 from rigfem.report import finite
-from rigfem.solver import SolverError
-from rigfem.supports import Fixed, Symmetry
 
 STEEL = get_material("rig_steel")
 
@@ -94,7 +91,7 @@ def test_memory_guard_names_the_parameter_and_acts_before_meshing(monkeypatch):
     import gmsh
 
     from rigfem.mesh import MeshSettings, mesh_part
-    from rigfem.parts import load_part
+    from rigfem.rig import load_part
 
     def no_meshing(*a, **k):
         raise AssertionError("gmsh meshing started before the memory guard refused")
@@ -207,7 +204,7 @@ def test_check_at_100_hz_scales_the_plate_peak_by_1e4_and_stays_finite(tmp_path)
 def test_rail_meshed_far_too_coarse_is_a_clear_error():
     """A 700 mm rail at size = 200 mm: gmsh's mesh is degenerate; refused naming size (~10 s)."""
     from rigfem.mesh import MeshSettings, mesh_part
-    from rigfem.parts import load_part
+    from rigfem.rig import load_part
 
     with pytest.raises(InputError, match=r"^part rail_size25: mesh quality .* change size = 200 mm") as e:
         mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(200.0), use_cache=False)

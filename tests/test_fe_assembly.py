@@ -3,13 +3,21 @@
 import numpy as np
 import pytest
 from fe_shapes import box
-from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet, MeshTet2, asm
+from skfem import (
+    Basis,
+    ElementTetP1,
+    ElementTetP2,
+    ElementVector,
+    MeshTet,
+    MeshTet2,
+    asm,
+)
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
-from rigfem.assembly import _chords, fe_mesh, stiffness
 from rigfem.errors import InputError
+from rigfem.fe import fe_mesh, rigid_modes, stiffness
+from rigfem.fe.assembly import _chords
 from rigfem.mesh import PartMesh
-from rigfem.supports import rigid_modes
 
 
 @pytest.mark.parametrize("order", [1, 2])

@@ -7,10 +7,8 @@ import pytest
 from fe_shapes import box
 
 from rigfem.errors import InputError
-from rigfem.fe import build_model, solve
-from rigfem.loads import SurfaceForce
+from rigfem.fe import Fixed, SurfaceForce, Symmetry, build_model, solve
 from rigfem.material import Material, get_material
-from rigfem.supports import Fixed, Symmetry
 
 L, B, H, F = 200.0, 10.0, 10.0, -100.0  # mm, N; L/H = 20
 

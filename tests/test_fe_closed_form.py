@@ -6,11 +6,16 @@ import numpy as np
 import pytest
 from fe_shapes import plate_with_hole, quarter_ring
 
-from rigfem.assembly import fe_mesh, volume
-from rigfem.fe import build_model, solve
-from rigfem.loads import Pressure, SurfaceForce
+from rigfem.fe import (
+    Pressure,
+    SurfaceForce,
+    Symmetry,
+    build_model,
+    fe_mesh,
+    solve,
+    volume,
+)
 from rigfem.material import get_material
-from rigfem.supports import Symmetry
 
 SYM = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
 

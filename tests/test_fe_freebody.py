@@ -4,10 +4,16 @@ import numpy as np
 import pytest
 from fe_shapes import bar_with_holes
 
-from rigfem.fe import build_model, load_matrix, solve
-from rigfem.loads import BearingLoad, Inertia
+from rigfem.fe import (
+    BearingLoad,
+    FreeBody,
+    Inertia,
+    build_model,
+    load_matrix,
+    rigid_modes,
+    solve,
+)
 from rigfem.material import get_material
-from rigfem.supports import FreeBody, rigid_modes
 
 A, B = np.array([20.0, 0, 5]), np.array([180.0, 0, 5])  # hole centres of the bar
 

@@ -4,10 +4,18 @@ import numpy as np
 import pytest
 from fe_shapes import bar_with_holes, box
 
-from rigfem.assembly import fe_mesh
 from rigfem.errors import InputError
-from rigfem.loads import (BearingLoad, BoltCircleTorque, Gravity, Inertia, Pressure, SurfaceForce, Torque,
-                          load_vector)
+from rigfem.fe import (
+    BearingLoad,
+    BoltCircleTorque,
+    Gravity,
+    Inertia,
+    Pressure,
+    SurfaceForce,
+    Torque,
+    fe_mesh,
+    load_vector,
+)
 
 RHO = 7.85e-9
 

@@ -4,11 +4,8 @@ import numpy as np
 import pytest
 from fe_shapes import box
 
-from rigfem.fe import build_model, solve
-from rigfem.loads import SurfaceForce
+from rigfem.fe import SurfaceForce, Symmetry, build_model, quadrature_stress, solve
 from rigfem.material import get_material
-from rigfem.stress import quadrature_stress
-from rigfem.supports import Symmetry
 
 
 @pytest.mark.parametrize("order", [1, 2])

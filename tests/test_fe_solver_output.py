@@ -7,11 +7,18 @@ import scipy.sparse as sp
 from fe_shapes import bar_with_holes, box
 
 from rigfem.errors import InputError
-from rigfem.fe import StaticProblem, build_model, export_data, solve
-from rigfem.loads import BearingLoad, SurfaceForce
+from rigfem.fe import (
+    BearingLoad,
+    Fixed,
+    ShaftInHole,
+    StaticProblem,
+    SurfaceForce,
+    build_model,
+    export_data,
+    solve,
+)
 from rigfem.material import get_material, material_from_dict
-from rigfem.supports import Fixed, ShaftInHole
-from rigfem.vtk import write_vtu
+from rigfem.report import write_vtu
 
 
 @pytest.fixture(scope="module")
@@ -116,7 +123,7 @@ def test_factorise_once_and_superposition(cantilever):
 _RELEASE_PROBE = """
 import gc
 import numpy as np, scipy.sparse as sp
-from rigfem.solver import LinearSolver
+from rigfem.fe import LinearSolver
 n = 40  # 3-D Laplacian, 64 000 unknowns: a factor of about 150 MB
 d = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], (n, n))
 eye = sp.identity(n)
@@ -144,7 +151,7 @@ def test_pardiso_factors_are_released_with_their_solver():
     import subprocess
     import sys
 
-    from rigfem.solver import pypardiso
+    from rigfem.fe.solver import pypardiso
 
     if pypardiso is None:
         pytest.skip("pypardiso not installed")

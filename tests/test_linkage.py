@@ -4,9 +4,17 @@ body, agreement with the 2013 equations where their quirks vanish, branch contin
 import numpy as np
 import pytest
 
-from rigfem.linkage import AssemblyError, solve
-from rigfem.mechanisms import RigMasses, crank_angles, four_bar, simulate, transmission_angle
-from rigfem.original import fourbar_kinematics, original_reactions
+from rigfem.dynamics import (
+    ClosureError,
+    crank_angles,
+    four_bar,
+    fourbar_kinematics,
+    original_reactions,
+    simulate,
+    solve,
+    transmission_angle,
+)
+from rigfem.rig import RigMasses
 
 REF = (540.0, 840.0, 780.0, 1020.0)
 
@@ -101,7 +109,7 @@ def test_gravity_adds_static_weight():
 
 def test_toggle_is_flagged_and_never_a_plain_peak():
     """Change-point four-bar (b2 + d = b3 + b4): mu reaches 180 deg at crank 180 deg."""
-    from rigfem.reactions import peaks
+    from rigfem.dynamics import peaks
 
     h = simulate(four_bar(540, 840, 780, 1080), samples=360)
     assert h.meta["singular"] is not None
@@ -129,7 +137,7 @@ def test_far_from_toggle_not_flagged():
 
 def test_cannot_close_names_crank_range():
     # d + b2 > b3 + b4 and d - b2 < b3 + b4: the loop breaks around 180 deg
-    with pytest.raises(AssemblyError, match=r"crank angles \d+\.\d-\d+\.\d deg"):
+    with pytest.raises(ClosureError, match=r"crank angles \d+\.\d-\d+\.\d deg"):
         four_bar(540, 840, 780, 1200)
 
 
@@ -137,7 +145,7 @@ def test_cannot_close_names_crank_range():
 def _balance(h, lk):
     """Max force (N) and moment (N·m) imbalance over all bodies, recomputed from the history:
     joint forces at joint points, prismatic constraint moments, driver, loads, gravity."""
-    from rigfem.linkage import CrankDriver
+    from rigfem.dynamics import CrankDriver
 
     g = np.asarray(lk.gravity_mm_s2) / 1000
     worst_f = worst_m = 0.0
@@ -177,7 +185,7 @@ def _balance(h, lk):
 
 def _driven_slider_crank():
     """Slider-crank driven at the slider, s = 400 + 80 sin(theta) mm: the crank rocks."""
-    from rigfem.linkage import SliderDriver
+    from rigfem.dynamics import SliderDriver
 
     lk = slider_crank(150, 350, masses="rig")
     lk.driver = SliderDriver("slide", 400.0, 80.0)
@@ -188,8 +196,8 @@ def _driven_slider_crank():
     return lk
 
 
-from rigfem.mechanisms import inverted_slider_crank, quick_return, slider_crank  # noqa: E402
-from rigfem.scene import load_scene  # noqa: E402
+from rigfem.dynamics import inverted_slider_crank, quick_return, slider_crank
+from rigfem.scene import load_scene
 
 
 @pytest.mark.parametrize("make", [
@@ -289,7 +297,7 @@ def test_evaluator_far_from_the_solved_range_falls_back_to_continuation():
 @pytest.mark.parametrize("model", ["rigid-body", "original"])
 def test_toggle_between_samples_is_still_flagged(model):
     """9 samples (40 deg apart) straddle the near-toggle at crank 180 deg (mu -> 179.9 deg)."""
-    from rigfem.reactions import peaks
+    from rigfem.dynamics import peaks
 
     h = simulate(four_bar(540, 840, 780, 1079.99), samples=9, model=model)
     assert h.singular_mask is None                       # no sample is near the toggle ...
@@ -300,7 +308,7 @@ def test_toggle_between_samples_is_still_flagged(model):
 
 def test_joint_direction_convention():
     """Naming the ground as body_b flips the reported force (force BY body_a ON body_b)."""
-    from rigfem.linkage import Revolute
+    from rigfem.dynamics import Revolute
 
     lk = four_bar(*REF)
     h = solve(lk, crank_angles(24))

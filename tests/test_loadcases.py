@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.loadcases import RailLayout, direction_weights, directions, rotate_into, screw_forces
+from rigfem.loads import (
+    direction_weights,
+    directions,
+    rotate_into,
+    screw_forces,
+)
+from rigfem.rig import RailLayout
 
 
 @pytest.mark.parametrize("n_dir", [4, 8, 12, 24])
@@ -45,7 +51,7 @@ def test_rail_layout_couplings():
 
 
 def _rig_bars():
-    from rigfem.loadcases import Bar
+    from rigfem.loads import Bar
 
     def layout(length):
         return RailLayout(20.0 + 60.0 * np.arange(int((length - 40) // 60) + 1), 60.0, 120.0)
@@ -62,8 +68,9 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
     Independent truth: Newton–Euler of the rail alone, a uniform bar over the meshed rail
     (0..L, pivot joint at ``layout.pivot_x``) with the catalogue's linear mass.
     """
-    from rigfem.loadcases import bar_body, cycle_rail
-    from rigfem.mechanisms import RIG_MASSES, four_bar, simulate
+    from rigfem.dynamics import four_bar, simulate
+    from rigfem.loads import bar_body, cycle_rail
+    from rigfem.rig import RIG_MASSES
 
     h = simulate(four_bar(480, 840, 780, 1020), samples=72, speed_hz=speed_hz)
     for bar in _rig_bars():
@@ -95,9 +102,9 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
 def test_dynamics_rail_matches_the_meshed_rail():
     """The dynamics' rail (mass, reach behind the pivot) is the meshed rail: catalogue kg/m
     equals the part file's, and ``rail_behind_mm`` equals the mesh layout's pivot position."""
-    from rigfem.loadcases import _bar
-    from rigfem.mechanisms import RIG_MASSES, four_bar, simulate
-    from rigfem.parts import load_part
+    from rigfem.dynamics import four_bar, simulate
+    from rigfem.loads.cases import _bar
+    from rigfem.rig import RIG_MASSES, load_part
     from rigfem.settings import PLATE
 
     h = simulate(four_bar(540, 840, 780, 1020), samples=8)

@@ -4,8 +4,12 @@ kinematics (and, for #5, a hand-solved Newton–Euler force analysis)."""
 import numpy as np
 import pytest
 
-from rigfem.mechanisms import coupler_point_path, simulate, transmission_angle
-from rigfem.original import fourbar_kinematics
+from rigfem.dynamics import (
+    coupler_point_path,
+    fourbar_kinematics,
+    simulate,
+    transmission_angle,
+)
 from rigfem.scene import builtin_scenes, load_scene
 
 N = 120

@@ -7,8 +7,15 @@ import numpy as np
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.mesh import MeshSettings, estimate, fit_cylinder, mesh_part, to_meshio, write_mesh
-from rigfem.parts import load_part
+from rigfem.mesh import (
+    MeshSettings,
+    estimate,
+    fit_cylinder,
+    mesh_part,
+    to_meshio,
+    write_mesh,
+)
+from rigfem.rig import load_part
 
 
 @pytest.fixture(autouse=True)
@@ -97,7 +104,7 @@ def test_plate_and_iprofile_groups_quality_and_volume(name, refine):
     assert all(len(t) > 0 for t in pm.surfaces.values())
     assert set(refine) <= set(pm.holes) and set(refine) <= set(pm.surfaces)
     assert pm.quality["min"] >= 0.1
-    from rigfem.parts import volume_mm3
+    from rigfem.mesh import volume_mm3
     assert tet_volumes(pm).sum() == pytest.approx(volume_mm3(part), rel=1e-2)
     for g in refine:  # the analytic hole records agree with the meshed walls
         fit = fit_cylinder(pm.points, pm.surfaces[g])
@@ -244,7 +251,7 @@ def test_custom_brep_wrapped_in_geo_and_unnamed_brep_rejected(tmp_path):
     """A BREP has no names: used through a .geo wrapper that names its faces; alone it is refused."""
     import gmsh
 
-    from rigfem.parts import gmsh_session
+    from rigfem.mesh import gmsh_session
 
     with gmsh_session():
         box = gmsh.model.occ.addBox(0, 0, 0, 30, 30, 8)

@@ -3,7 +3,7 @@
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.output import atomic_dir
+from rigfem.report import atomic_dir
 
 
 def test_atomic_dir_commits_on_success(tmp_path):

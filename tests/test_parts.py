@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.parts import known_parts, load_part, mass_kg, rail_hole_x, volume_mm3
+from rigfem.mesh import mass_kg, volume_mm3
+from rigfem.rig import known_parts, load_part, rail_hole_x
 
 RHO = 7850e-9  # kg/mm^3
 
@@ -116,7 +117,7 @@ def test_iprofile_fillets_keep_groups_and_holes():
     """The fillets add four cylindrical faces along x (group ``fillets``); other groups and holes unchanged."""
     import gmsh
 
-    from rigfem.parts import build, gmsh_session
+    from rigfem.mesh import build, gmsh_session
 
     def groups_and_fillets(fillet: float):
         with gmsh_session():

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from rigfem.dynamics import four_bar, peaks, simulate, singular_ranges
 from rigfem.errors import InputError
-from rigfem.mechanisms import four_bar, simulate
-from rigfem.reactions import peaks, read_csv, singular_ranges, write_csv
+from rigfem.io import read_csv, write_csv
 
 JOINTS = ("O2", "A", "B", "O4", "torque")
 

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from rigfem.report import finite, overall, render_markdown, write_json
+from rigfem.report import finite, render_markdown, write_json
+from rigfem.verdict import overall
 
 
 def test_finite_refuses_nan_and_inf_and_names_the_field():

@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from rigfem.rules import fourbar_rules, rules_for, slider_crank_rules, transmission_angle_range
+from rigfem.rig import (
+    fourbar_rules,
+    rules_for,
+    slider_crank_rules,
+    transmission_angle_range,
+)
 
 
 def _by_prefix(rules, prefix):

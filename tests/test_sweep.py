@@ -9,14 +9,20 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rigfem.dynamics import four_bar, peaks, simulate
 from rigfem.errors import InputError
-from rigfem.loadcases import part_cases
-from rigfem.mechanisms import four_bar, simulate
-from rigfem.partcheck import solve_cases
-from rigfem.reactions import peaks
-from rigfem.rules import fourbar_rules
-from rigfem.sweep import (SweepParams, _case_key, build_bases, case_peak, enumerate_configs,
-                          evaluate, run_sweep)
+from rigfem.fe import solve_cases
+from rigfem.loads import part_cases
+from rigfem.rig import fourbar_rules
+from rigfem.studies import (
+    SweepParams,
+    build_bases,
+    case_peak,
+    enumerate_configs,
+    evaluate,
+    run_sweep,
+)
+from rigfem.studies.sweep import _case_key
 
 #: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
 CHECK = (("order", 1), ("size_mm", 14.0), ("local_size_mm", 7.0), ("bearing_directions", 4),
@@ -97,7 +103,7 @@ def test_superposition_equals_full_solve(params, bases, cfg):
 
 
 def _spec_case(params, key):
-    from rigfem.sweep import _basis_specs
+    from rigfem.studies.sweep import _basis_specs
 
     specs = _basis_specs(params, params.settings())
     refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})
@@ -159,7 +165,7 @@ def test_dask_equals_serial(params, bases, tmp_path):
 
 
 def test_report_files(params, bases, tmp_path):
-    from rigfem.sweep_report import write_report
+    from rigfem.studies import write_report
 
     table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
     files = write_report(table, params, tmp_path / "out")
@@ -193,17 +199,18 @@ def test_stored_chunks_are_keyed_by_geometry_masses_and_mesh_recipe(monkeypatch)
     """A sweep resumed after a change to a part file, the mass catalogue or the meshing recipe
     must not reuse chunks computed before it."""
     import rigfem.mechanisms
+
     import rigfem.mesh
-    from rigfem.parts import PartDef
+    from rigfem.rig import PartDef
 
     p = SweepParams()
     k0 = p.key()
     assert SweepParams().key() == k0
     with monkeypatch.context() as m:
-        m.setattr(rigfem.mesh, "MESH_RECIPE", rigfem.mesh.MESH_RECIPE + 1)
+        m.setattr(rigfem.mesh, "MESH_RECIPE", rigfem.mesh.mesher.MESH_RECIPE + 1)
         assert p.key() != k0
     with monkeypatch.context() as m:
-        m.setattr(rigfem.mechanisms, "RIG_MASSES", dataclasses.replace(rigfem.mechanisms.RIG_MASSES, rail_kg_m=2.7))
+        m.setattr(rigfem.mechanisms, "RIG_MASSES", dataclasses.replace(rigfem.rig.catalogue.RIG_MASSES, rail_kg_m=2.7))
         assert p.key() != k0
     with monkeypatch.context() as m:
         m.setattr(PartDef, "content_hash", lambda self: "edited")

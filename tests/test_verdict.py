@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.verdict import goodman, half_ultimate, marin_endurance, von_mises
+from rigfem.fe import von_mises
+from rigfem.verdict import goodman, half_ultimate, marin_endurance
 
 
 def test_half_ultimate_pass_fail_undecided():

@@ -1,17 +1,22 @@
 """The ``rigfem`` command: one module per subcommand in this package.
 
 Each subcommand module defines ``HELP`` (one line), ``add_arguments(parser)`` and
-``run(args) -> int`` (the exit code).  Bad input raises :class:`rigfem.errors.InputError`,
-printed here as one line on stderr with exit code 2.
+``run(args) -> int`` (the exit code).  Bad input raises :class:`rigfem.errors.InputError`
+(one line on stderr, exit 2); what rigfem could not compute raises
+:class:`rigfem.errors.ComputeError` (exit 3).  Any other exception is an internal error: one
+line and exit 3, the traceback only with ``--debug``.  Ctrl-C and SIGTERM end quietly.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import traceback
 
-from rigfem.errors import InputError
+from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, TABLE, TERMINATED
+from rigfem.errors import ComputeError, InputError
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
 COMMANDS: dict[str, str] = {
@@ -40,13 +45,23 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="rigfem", description="Stress checker for the configurable-bar linkage rig.")
+    parser = _Parser(prog="rigfem", description="Stress checker for the configurable-bar linkage rig.",
+                     epilog=TABLE)
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, mod in _available().items():
-        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP)
+        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=TABLE)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so ``finally`` blocks clean up as for Ctrl-C."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    raise _Terminated()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,12 +69,30 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
-        return 2
+        return BAD_INPUT
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return int(args._run(args) or 0)
     except InputError as exc:
         print(f"rigfem: error: {exc}", file=sys.stderr)
-        return 2
+        return BAD_INPUT
+    except ComputeError as exc:
+        print(f"rigfem: could not compute: {exc}", file=sys.stderr)
+        return NO_COMPUTE
+    except KeyboardInterrupt:
+        print("rigfem: interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except _Terminated:
+        print("rigfem: terminated", file=sys.stderr)
+        return TERMINATED
+    except Exception as exc:  # an internal error: one line unless the user asks for the traceback
+        if args.debug:
+            traceback.print_exc()
+        print(f"rigfem: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the "
+              f"traceback)", file=sys.stderr)
+        return NO_COMPUTE
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import tomllib
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
-from rigfem.report import EXIT
+from rigfem.cli.exitcodes import EXIT
 from rigfem.scene import builtin_scenes
 
 HELP = "stress verdict (σu/2) per part of a rig configuration, with report, VTK files and plots"

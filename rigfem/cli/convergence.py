@@ -15,9 +15,18 @@ import sys
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE
-from rigfem.convergence import AWAY_MM, EXTEND, RATIO, TARGETS, analyse, scene_cases, study, to_json
 from rigfem.errors import InputError, check_range
 from rigfem.settings import FIDELITY, MODES, PARTS
+from rigfem.studies.convergence import (
+    AWAY_MM,
+    EXTEND,
+    RATIO,
+    TARGETS,
+    analyse,
+    scene_cases,
+    study,
+    to_json,
+)
 
 HELP = "mesh convergence (h and p) of each part's peak von Mises: Richardson limit, order, error vs time"
 

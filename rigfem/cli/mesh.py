@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 
 from rigfem.errors import InputError, check_range
-from rigfem.mesh import DEFAULT_SIZE, MeshSettings, mesh_part, write_mesh
-from rigfem.parts import load_part
+from rigfem.mesh.mesher import DEFAULT_SIZE, MeshSettings, mesh_part
+from rigfem.mesh.partmesh import write_mesh
+from rigfem.rig.parts import load_part
 
 HELP = "mesh a part (known name or .geo/.step/.brep file) and write .vtu or .msh"
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from rigfem.parts import GEOMETRY_DIR, known_parts, load_part, mass_kg, rail_hole_x
+from rigfem.mesh.geometry import mass_kg
+from rigfem.rig.parts import GEOMETRY_DIR, known_parts, load_part, rail_hole_x
 
 HELP = "list the known parts (geometry/*.toml) with dimensions and masses"
 

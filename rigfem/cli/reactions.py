@@ -10,10 +10,11 @@ import argparse
 import json
 import math
 
+from rigfem.dynamics.history import summary
+from rigfem.dynamics.mechanisms import MODELS, four_bar, simulate, slider_crank
 from rigfem.errors import InputError, check_range
-from rigfem.mechanisms import MODELS, four_bar, simulate, slider_crank
-from rigfem.reactions import summary, write_csv
-from rigfem.render import reactions_plot
+from rigfem.io.reactions_csv import write_csv
+from rigfem.report.pictures import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
 REFERENCE = (540.0, 840.0, 780.0, 1020.0)

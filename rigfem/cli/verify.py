@@ -14,9 +14,9 @@ import shutil
 import time
 from pathlib import Path
 
-from rigfem.calculix import verify_scene
 from rigfem.check import REFERENCE_SCENE
 from rigfem.errors import InputError, check_range
+from rigfem.studies.verify import verify_scene
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
 

@@ -1,0 +1,18 @@
+"""Exit codes of the ``rigfem`` command: the CLI is the only place that knows them.
+
+0 every part passes; 1 a part fails or cannot be decided; 2 bad input; 3 could not compute
+(mesher, solver, an external program or an internal error); 130 interrupted (Ctrl-C);
+143 terminated (SIGTERM).
+"""
+
+from __future__ import annotations
+
+PASS, FAIL, BAD_INPUT, NO_COMPUTE = 0, 1, 2, 3
+INTERRUPTED, TERMINATED = 130, 143
+
+#: verdict of a check -> exit code
+EXIT = {"pass": PASS, "fail": FAIL, "undecided": FAIL}
+
+#: the table printed by ``rigfem --help`` and README
+TABLE = ("exit codes: 0 every part passes, 1 a part fails or cannot be decided, 2 bad input, "
+         "3 could not compute (mesher, solver or internal error), 130 Ctrl-C, 143 SIGTERM")

@@ -1,0 +1,18 @@
+"""Motion and pin reactions over a crank turn: the general planar solver, the rig's linkages,
+the textbook mechanisms and the 2013 program.
+
+The public API, loaded on first use (``lazy_loader``): importing one name does not
+import the whole subpackage.
+"""
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "history": ["JointHistory", "BodyHistory", "ReactionHistory", "singular_ranges", "merge_ranges", "is_full_turn", "spline_evaluator", "peaks", "summary"],
+        "linkage": ["GROUND", "ClosureError", "AssemblyError", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage"],
+        "mechanisms": ["MU_TOGGLE_DEG", "MODELS", "fourbar_closes", "four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "compressor_gas_force", "inverted_slider_crank", "quick_return", "BUILDERS", "crank_angles", "simulate", "simulate_original"],
+        "original": ["fourbar_kinematics", "original_reactions", "original_program"],
+        "solver": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "solve"],
+    },
+)

@@ -1,0 +1,132 @@
+"""General planar rigid-body linkage solver: bodies, revolute and prismatic joints, one driver.
+
+Coordinates: per moving body the global position of its frame origin and the angle
+of its x axis, q = (x, y, phi) (SI inside: m, rad).  The ground is fixed at the
+origin with zero angle and has no coordinates.  With one driver constraint the
+constraint Jacobian Phi_q is square:
+
+* positions: Newton on Phi(q, theta) = 0.  A sequential continuation in crank angle
+  theta (third-order predictor, step halving, sign of det(Phi_q) kept) follows one
+  assembly branch through the turn; all samples are then solved at once by Newton
+  from a quintic Hermite predictor through the continuation points, and checked to be
+  on the same branch;
+* velocities: Phi_q qdot = -Phi_t;  accelerations: Phi_q qddot = gamma;
+* inverse dynamics: Phi_q^T lambda = Q_ext - Q_inertia (Newton–Euler about the centre
+  of mass of every body, point masses as particles), giving every joint reaction and
+  the driver torque (or force).
+
+Every stage after the continuation pass is vectorised over crank angles.
+The public interface is in mm, N, N·m, degrees (see ``rigfem.reactions``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from rigfem.errors import ComputeError, InputError
+
+GROUND = "ground"
+
+
+class ClosureError(InputError):
+    """The given lengths cannot close the loop at all (message names the lengths and the rule)."""
+
+
+class AssemblyError(ComputeError):
+    """The solver cannot close the loop at some driver positions (message names the angle)."""
+
+
+@dataclass
+class Body:
+    """A rigid body: own mass (kg), centre of mass and inertia about it (local frame, mm, kg·mm²).
+
+    ``point_masses`` are particles (label, kg, local position mm) carried by the body,
+    e.g. a carriage or plate lumped at a joint.
+    """
+
+    name: str
+    mass_kg: float = 0.0
+    com_local_mm: tuple[float, float] = (0.0, 0.0)
+    inertia_com_kg_mm2: float = 0.0
+    point_masses: list[tuple[str, float, tuple[float, float]]] = field(default_factory=list)
+
+    def totals(self) -> tuple[float, np.ndarray, float]:
+        """Mass (kg), centre of mass (local, m) and inertia about it (kg·m²) including particles."""
+        m = self.mass_kg + sum(p[1] for p in self.point_masses)
+        if m == 0.0:
+            return 0.0, np.zeros(2), 0.0
+        c0 = np.asarray(self.com_local_mm, float) / 1000
+        pts = [(pm, np.asarray(pos, float) / 1000) for _, pm, pos in self.point_masses]
+        c = (self.mass_kg * c0 + sum(pm * pos for pm, pos in pts)) / m
+        inertia = self.inertia_com_kg_mm2 * 1e-6 + self.mass_kg * np.sum((c0 - c) ** 2)
+        inertia += sum(pm * np.sum((pos - c) ** 2) for pm, pos in pts)
+        return m, c, float(inertia)
+
+
+@dataclass
+class Revolute:
+    """Pin joint: point ``local_a_mm`` of body_a coincides with ``local_b_mm`` of body_b."""
+
+    name: str
+    body_a: str
+    body_b: str
+    local_a_mm: tuple[float, float]
+    local_b_mm: tuple[float, float]
+
+
+@dataclass
+class Prismatic:
+    """Slider: point ``local_b_mm`` of body_b moves on the line of body_a through
+    ``local_a_mm`` with direction ``axis_a``; the relative angle phi_b - phi_a stays ``rel_angle_rad``."""
+
+    name: str
+    body_a: str
+    body_b: str
+    local_a_mm: tuple[float, float]
+    axis_a: tuple[float, float]
+    local_b_mm: tuple[float, float]
+    rel_angle_rad: float = 0.0
+
+
+@dataclass
+class CrankDriver:
+    """Constant-speed rotation of ``body`` relative to the ground: phi = theta + ``offset_rad``."""
+
+    body: str
+    offset_rad: float = 0.0
+
+
+@dataclass
+class SliderDriver:
+    """Driven slider on prismatic ``joint``: s = mean + amplitude·sin(theta) (mm), theta = cycle phase."""
+
+    joint: str
+    mean_mm: float
+    amplitude_mm: float
+
+
+@dataclass
+class Load:
+    """External force on ``body`` at ``local_mm``: ``force(state) -> (n, 2)`` N, state in mm/rad."""
+
+    body: str
+    local_mm: tuple[float, float]
+    force: Callable[[dict], np.ndarray]
+
+
+@dataclass
+class Linkage:
+    """A one-DOF planar linkage.  ``guess`` gives each body's approximate pose (x mm, y mm,
+    phi rad) at one driver phase (the crank body's guessed angle; phase 0 for a driven
+    slider); it selects the assembly branch, which the solver then follows continuously."""
+
+    bodies: list[Body]
+    joints: list[Revolute | Prismatic]
+    driver: CrankDriver | SliderDriver
+    guess: dict[str, tuple[float, float, float]]
+    loads: list[Load] = field(default_factory=list)
+    gravity_mm_s2: tuple[float, float] = (0.0, 0.0)
+    meta: dict = field(default_factory=dict)

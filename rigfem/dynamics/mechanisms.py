@@ -1,0 +1,440 @@
+"""Rig linkages built on the general solver, with the rig's masses from one catalogue.
+
+Builders (lengths in mm, angles in degrees) return a :class:`rigfem.dynamics.linkage.Linkage`:
+``four_bar``, ``slider_crank``, ``inverted_slider_crank``, ``quick_return``.  Their
+``start_deg`` is the crank angle at which the initial assembly (hence the branch) is
+computed; lengths below 10 mm are rejected as probable metres.
+``simulate`` turns a linkage (or a config dict / builder arguments) into a
+:class:`rigfem.dynamics.history.ReactionHistory` over one crank turn; it is what the
+stress checker calls.
+
+Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar of the
+catalogue's linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind
+the bar's first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from
+that joint, I_G = m L_i²/12), carriages, plates and couplings as particles at their joints;
+``"original"`` — the 2013 program (four-bar only, ``rigfem.original``), with the study's
+rail mass and its pivot at the guide's end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any
+
+import numpy as np
+
+from rigfem.dynamics.history import (
+    BodyHistory,
+    JointHistory,
+    ReactionHistory,
+    merge_ranges,
+    singular_ranges,
+)
+from rigfem.dynamics.linkage import (
+    GROUND,
+    Body,
+    ClosureError,
+    CrankDriver,
+    Linkage,
+    Load,
+    Prismatic,
+    Revolute,
+)
+from rigfem.dynamics.solver import solve
+from rigfem.errors import InputError
+from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
+
+#: a four-bar sample is flagged as a toggle when mu is within this angle of 0 or 180 deg
+#: (a slider-crank when its rod is within this angle of perpendicular to the slide)
+MU_TOGGLE_DEG = 5.0
+
+
+MODELS = ("rigid-body", "original")
+
+
+def _rail(name: str, length_mm: float, cat: RigMasses, points: list) -> Body:
+    """A guide rail as a uniform bar along +x, ``rail_behind_mm`` of it behind its first joint
+    (the frame origin)."""
+    m = cat.rail_kg_m * length_mm / 1000
+    return Body(name, m, (length_mm / 2 - cat.rail_behind_mm, 0.0), m * length_mm**2 / 12, points)
+
+
+def _massless(name: str, overrides: dict | None) -> Body:
+    kw = dict((overrides or {}).get(name, {}))
+    pts = [(lab, float(pm), tuple(pos)) for lab, pm, pos in kw.pop("point_masses", [])]
+    return Body(name, point_masses=pts, **kw)
+
+
+def _check_lengths(**lengths: float) -> None:
+    for k, v in lengths.items():
+        if not np.isfinite(v) or v <= 0:
+            raise InputError(f"{k} = {v!r} mm must be a positive length in mm")
+        if v < 10:
+            raise InputError(f"{k} = {v:g} looks like metres: lengths are in mm (allowed 10 to 10000 mm)")
+        if v > 10000:
+            raise InputError(f"{k} = {v:g} mm is outside the allowed range [10, 10000] mm")
+
+
+def _check_rails(rails_mm, bars: dict[str, float], behind_mm: float) -> None:
+    """Each rail a valid length (mm) that reaches the far joint of its bar from ``behind_mm``
+    behind the first."""
+    if len(rails_mm) != len(bars):
+        raise InputError(f"rails_mm needs {len(bars)} lengths (mm), one per bar ({', '.join(bars)}); "
+                         f"got {len(rails_mm)}")
+    for i, ((name, b), L) in enumerate(zip(bars.items(), rails_mm)):
+        _check_lengths(**{f"rails_mm[{i}]": L})
+        if L - behind_mm < b:
+            raise InputError(f"{name} = {b:g} mm does not fit on its rail: rails_mm[{i}] = {L:g} mm "
+                             f"reaches {L - behind_mm:g} mm past the pivot ({behind_mm:g} mm of it "
+                             f"lies behind); allowed {name} <= {L - behind_mm:g} mm")
+
+
+def _ranges_text(deg: np.ndarray, bad: np.ndarray) -> str:
+    rng = singular_ranges(deg, bad) or []
+    return ", ".join(f"{a:.1f}-{b:.1f} deg" for a, b in rng)
+
+
+# ----------------------------------------------------------------------------- four-bar
+def fourbar_closes(b2: float, b3: float, b4: float, d: float, deg: np.ndarray) -> np.ndarray:
+    """True where the four-bar loop closes at crank angle ``deg`` (O2 at 0, O4 at (d, 0))."""
+    th = np.radians(deg)
+    f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(th))
+    return (f <= b3 + b4 + 1e-12 * f) & (f >= abs(b3 - b4) - 1e-12 * f)
+
+
+def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = "rig",
+             rails_mm: tuple[float, float, float] = RIG_RAILS_MM, branch: str = "open",
+             coupler_point: tuple[float, float] | None = None, body_masses: dict | None = None,
+             start_deg: float = 0.0, catalogue: RigMasses = RIG_MASSES,
+             gravity_mm_s2: tuple[float, float] = (0.0, 0.0)) -> Linkage:
+    """Four-bar O2-A-B-O4: crank b2, coupler b3, rocker b4, ground d (mm), O4 at (d, 0).
+
+    Bodies ``crank`` (O2->A), ``coupler`` (A->B), ``rocker`` (O4->B); joints O2, A, B, O4.
+    ``masses="rig"``: rails of ``rails_mm`` with plate+carriage at A on the crank, coupling
+    at A and plate+carriage at B on the coupler, coupling at B on the rocker (RIG.md §3).
+    ``masses=None``: massless unless ``body_masses`` (name -> Body keyword dict) says so.
+    ``coupler_point`` (distance mm from A, angle deg from the coupler line) is recorded
+    in meta and reported by :func:`coupler_point_path`.  Raises AssemblyError naming the
+    crank-angle range where the loop cannot close.
+    """
+    _check_lengths(b2=b2, b3=b3, b4=b4, d=d)
+    if masses == "rig":
+        _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4}, catalogue.rail_behind_mm)
+    grid = np.linspace(0.0, 360.0, 3601)
+    ok = fourbar_closes(b2, b3, b4, d, grid)
+    if not ok.all():
+        raise ClosureError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled "
+                            f"for crank angles {_ranges_text(grid, ~ok)}")
+    if branch not in ("open", "crossed"):
+        raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
+    from rigfem.dynamics.original import fourbar_kinematics
+
+    sgn = 1 if branch == "open" else -1
+    k = fourbar_kinematics(b2, b3, b4, d, np.radians([start_deg]), 1.0, sgn)
+    A, th3, th4 = k["A"][0], k["theta3"][0], k["theta4"][0]
+    if masses == "rig":
+        c = catalogue
+        L2, L3, L4 = rails_mm
+        bodies = [_rail("crank", L2, c, [("A", c.plate + c.carriage, (b2, 0.0))]),
+                  _rail("coupler", L3, c, [("A", c.coupling, (0.0, 0.0)),
+                                           ("B", c.plate + c.carriage, (b3, 0.0))]),
+                  _rail("rocker", L4, c, [("B", c.coupling, (b4, 0.0))])]
+    elif masses is None:
+        bodies = [_massless(n, body_masses) for n in ("crank", "coupler", "rocker")]
+    else:
+        raise InputError(f"masses = {masses!r} must be 'rig' or none")
+    joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
+              Revolute("A", "crank", "coupler", (b2, 0.0), (0.0, 0.0)),
+              Revolute("B", "coupler", "rocker", (b3, 0.0), (b4, 0.0)),
+              Revolute("O4", GROUND, "rocker", (d, 0.0), (0.0, 0.0))]
+    guess = {"crank": (0.0, 0.0, np.radians(start_deg)), "coupler": (A[0], A[1], th3),
+             "rocker": (d, 0.0, th4)}
+
+    def toggle(deg, bodies_h):
+        mu = transmission_angle(bodies_h)
+        return np.sin(np.radians(mu)) < np.sin(np.radians(MU_TOGGLE_DEG))
+
+    meta = dict(type="four-bar", lengths_mm=dict(b2=b2, b3=b3, b4=b4, d=d), branch=branch,
+                rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle,
+                catalogue=asdict(catalogue))
+    if coupler_point is not None:
+        meta["coupler_point"] = dict(distance_mm=coupler_point[0], angle_deg=coupler_point[1])
+    return Linkage(bodies, joints, CrankDriver("crank"), guess, gravity_mm_s2=gravity_mm_s2, meta=meta)
+
+
+def transmission_angle(bodies: dict[str, BodyHistory]) -> np.ndarray:
+    """Four-bar transmission angle mu (deg, 0..180): the interior coupler–rocker angle at B."""
+    d = bodies["coupler"].angle_rad - bodies["rocker"].angle_rad
+    return np.degrees(np.arccos(np.clip(np.cos(d), -1.0, 1.0)))
+
+
+def coupler_point_path(h: ReactionHistory) -> np.ndarray:
+    """Global position (mm) of the four-bar coupler point recorded in ``h.meta`` (n, 2)."""
+    cp = h.meta["coupler_point"]
+    c = h.bodies["coupler"]
+    ang = c.angle_rad + np.radians(cp["angle_deg"])
+    return c.origin_mm + cp["distance_mm"] * np.stack([np.cos(ang), np.sin(ang)], -1)
+
+
+# ----------------------------------------------------------------------------- slider-crank
+def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | None = "rig",
+                 rails_mm: tuple[float, float] = RIG_RAILS_MM[:2], body_masses: dict | None = None,
+                 slider_force: Any = None, start_deg: float = 0.0, catalogue: RigMasses = RIG_MASSES,
+                 gravity_mm_s2: tuple[float, float] = (0.0, 0.0)) -> Linkage:
+    """Slider-crank: crank b2 (O2->A), rod b3 (A->B), slider B on the line y = ``offset`` (mm), +x side.
+
+    Bodies ``crank``, ``rod``, ``slider``; joints O2, A, B (revolute) and ``slide``
+    (prismatic, ground -> slider).  Rig masses (an assumption, the study never analysed
+    this case): crank rail with plate+carriage at A; rod rail with coupling at A and a
+    plate at B; the slider is a carriage on the ground rail plus a coupling.
+    ``slider_force(state) -> (n, 2)`` N is an external force on the slider (e.g. gas).
+    """
+    _check_lengths(b2=b2, b3=b3)
+    if masses == "rig":
+        _check_rails(rails_mm, {"b2": b2, "b3": b3}, catalogue.rail_behind_mm)
+    if not np.isfinite(offset) or abs(offset) > 10000:
+        raise InputError(f"offset = {offset!r} mm is outside the allowed range [-10000, 10000] mm")
+    grid = np.linspace(0.0, 360.0, 3601)
+    ok = np.abs(offset - b2 * np.sin(np.radians(grid))) <= b3
+    if not ok.all():
+        raise ClosureError(f"slider-crank b2={b2:g} b3={b3:g} offset={offset:g} mm cannot be assembled "
+                            f"for crank angles {_ranges_text(grid, ~ok)}")
+    th = np.radians(start_deg)
+    ax, ay = b2 * np.cos(th), b2 * np.sin(th)
+    bx = ax + np.sqrt(b3**2 - (offset - ay) ** 2)
+    if masses == "rig":
+        c = catalogue
+        bodies = [_rail("crank", rails_mm[0], c, [("A", c.plate + c.carriage, (b2, 0.0))]),
+                  _rail("rod", rails_mm[1], c, [("A", c.coupling, (0.0, 0.0)), ("B", c.plate, (b3, 0.0))]),
+                  Body("slider", 0.0, (0.0, 0.0), 0.0, [("B", c.carriage + c.coupling, (0.0, 0.0))])]
+    elif masses is None:
+        bodies = [_massless(n, body_masses) for n in ("crank", "rod", "slider")]
+    else:
+        raise InputError(f"masses = {masses!r} must be 'rig' or none")
+    joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
+              Revolute("A", "crank", "rod", (b2, 0.0), (0.0, 0.0)),
+              Revolute("B", "rod", "slider", (b3, 0.0), (0.0, 0.0)),
+              Prismatic("slide", GROUND, "slider", (0.0, offset), (1.0, 0.0), (0.0, 0.0))]
+    guess = {"crank": (0.0, 0.0, th), "rod": (ax, ay, np.arctan2(offset - ay, bx - ax)),
+             "slider": (bx, offset, 0.0)}
+    loads = [Load("slider", (0.0, 0.0), slider_force)] if slider_force is not None else []
+
+    def toggle(deg, bodies_h):
+        # rod within MU_TOGGLE_DEG of perpendicular to the slide: the crank cannot drive the slider
+        return np.abs(np.cos(bodies_h["rod"].angle_rad)) < np.sin(np.radians(MU_TOGGLE_DEG))
+
+    meta = dict(type="slider-crank", lengths_mm=dict(b2=b2, b3=b3, offset=offset),
+                rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle)
+    return Linkage(bodies, joints, CrankDriver("crank"), guess, loads, gravity_mm_s2, meta)
+
+
+def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,
+                         c_mm: float = 100.0):
+    """MECHANISMS.md #5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
+
+    V1 ∝ L - c - b3 + b2 (bottom dead centre), V2 ∝ L - c - x (x = piston distance from O2).
+    """
+    def force(state: dict) -> np.ndarray:
+        x = state["point_mm"][:, 0]
+        f = p_N * ((L_mm - c_mm - b3 + b2) / (L_mm - c_mm - x) - 1.0)
+        return np.stack([-f, np.zeros_like(f)], -1)
+
+    return force
+
+
+# ----------------------------------------------------------------------------- inverted slider-crank
+def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None = "rig",
+                          rails_mm: tuple[float, float] = (RIG_RAILS_MM[0], RIG_RAILS_MM[2]),
+                          body_masses: dict | None = None, start_deg: float = 0.0,
+                          catalogue: RigMasses = RIG_MASSES) -> Linkage:
+    """Inverted slider-crank: crank b2 at O2 = (0, 0); link 4 pivoted at O4 = (d, 0) carries a
+    slide line at distance ``arm`` from O4, perpendicular to the arm; block 3 pinned at the
+    crank pin A slides on it.  Bodies ``crank``, ``block``, ``rocker`` (frame x along the arm,
+    the slide line through (arm, 0) along local +y); joints O2, A, slide, O4.
+
+    Rig masses (assumption): crank rail with a plate at A; the block is a carriage with a
+    coupling; link 4 is a rail of length rails_mm[1] along the slide line, centred at the foot
+    of the arm, plus a plate at O4.
+    """
+    _check_lengths(d=d, b2=b2)
+    if not np.isfinite(arm) or arm < 0 or arm > 10000:
+        raise InputError(f"arm = {arm!r} mm is outside the allowed range [0, 10000] mm")
+    grid = np.linspace(0.0, 360.0, 3601)
+    f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(np.radians(grid)))
+    ok = f >= arm
+    if not ok.all():
+        raise ClosureError(f"inverted slider-crank d={d:g} b2={b2:g} arm={arm:g} mm cannot be assembled "
+                            f"for crank angles {_ranges_text(grid, ~ok)}")
+    th = np.radians(start_deg)
+    A = np.array([b2 * np.cos(th), b2 * np.sin(th)])
+    D = A - np.array([d, 0.0])
+    phi4 = np.arctan2(D[1], D[0]) - np.arccos(arm / np.hypot(*D))
+    if masses == "rig":
+        c = catalogue
+        m4 = c.rail_kg_m * rails_mm[1] / 1000
+        bodies = [_rail("crank", rails_mm[0], c, [("A", c.plate, (b2, 0.0))]),
+                  Body("block", 0.0, (0.0, 0.0), 0.0, [("A", c.carriage + c.coupling, (0.0, 0.0))]),
+                  Body("rocker", m4, (arm, 0.0), m4 * rails_mm[1] ** 2 / 12, [("O4", c.plate, (0.0, 0.0))])]
+    elif masses is None:
+        bodies = [_massless(n, body_masses) for n in ("crank", "block", "rocker")]
+    else:
+        raise InputError(f"masses = {masses!r} must be 'rig' or none")
+    joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
+              Revolute("A", "crank", "block", (b2, 0.0), (0.0, 0.0)),
+              Prismatic("slide", "rocker", "block", (arm, 0.0), (0.0, 1.0), (0.0, 0.0), 0.0),
+              Revolute("O4", GROUND, "rocker", (d, 0.0), (0.0, 0.0))]
+    guess = {"crank": (0.0, 0.0, th), "block": (A[0], A[1], phi4), "rocker": (d, 0.0, phi4)}
+    meta = dict(type="inverted-slider-crank", lengths_mm=dict(d=d, b2=b2, arm=arm), masses=masses or "custom")
+    return Linkage(bodies, joints, CrankDriver("crank"), guess, meta=meta)
+
+
+# ----------------------------------------------------------------------------- quick-return
+def quick_return(b2: float, pivot_below: float, ram_height: float, *, masses: str | None = "rig",
+                 rails_mm: tuple[float, float] = (RIG_RAILS_MM[0], RIG_RAILS_MM[2]),
+                 body_masses: dict | None = None, start_deg: float = 0.0,
+                 catalogue: RigMasses = RIG_MASSES) -> Linkage:
+    """Whitworth/shaper quick-return: crank b2 at O2 = (0, 0); slotted rocker pivoted at
+    O4 = (0, -pivot_below); block 3 on the crank pin slides in the rocker; the ram slides on
+    the horizontal line ``ram_height`` above O4 and its pin C slides in the rocker slot (block 5).
+
+    Bodies ``crank``, ``block``, ``rocker`` (frame x along the slot), ``ram_block``, ``ram``
+    (frame origin at C); joints O2, A, slot, O4, slot_C, C, ram_slide.  Needs pivot_below > b2.
+    Rig masses (assumption): crank rail + plate at A; carriage + coupling as each block;
+    rocker rail of length rails_mm[1] from O4; the ram a carriage + plate.
+    """
+    _check_lengths(b2=b2, pivot_below=pivot_below, ram_height=ram_height)
+    if pivot_below <= b2:
+        raise ClosureError(f"quick-return: pivot_below = {pivot_below:g} mm must exceed the crank "
+                            f"b2 = {b2:g} mm or the crank pin reaches the rocker pivot (0-360 deg)")
+    if ram_height <= pivot_below + b2:
+        raise InputError(f"ram_height = {ram_height:g} mm must exceed pivot_below + b2 = "
+                         f"{pivot_below + b2:g} mm")
+    th = np.radians(start_deg)
+    A = np.array([b2 * np.cos(th), b2 * np.sin(th)])
+    O4 = np.array([0.0, -pivot_below])
+    phi = np.arctan2(*(A - O4)[::-1])
+    yc = ram_height - pivot_below
+    xc = ram_height / np.tan(phi)
+    if masses == "rig":
+        c = catalogue
+        bodies = [_rail("crank", rails_mm[0], c, [("A", c.plate, (b2, 0.0))]),
+                  Body("block", point_masses=[("A", c.carriage + c.coupling, (0.0, 0.0))]),
+                  _rail("rocker", rails_mm[1], c, [("O4", c.plate, (0.0, 0.0))]),
+                  Body("ram_block", point_masses=[("C", c.carriage + c.coupling, (0.0, 0.0))]),
+                  Body("ram", point_masses=[("C", c.carriage + c.plate, (0.0, 0.0))])]
+    elif masses is None:
+        bodies = [_massless(n, body_masses) for n in ("crank", "block", "rocker", "ram_block", "ram")]
+    else:
+        raise InputError(f"masses = {masses!r} must be 'rig' or none")
+    joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
+              Revolute("A", "crank", "block", (b2, 0.0), (0.0, 0.0)),
+              Prismatic("slot", "rocker", "block", (0.0, 0.0), (1.0, 0.0), (0.0, 0.0), 0.0),
+              Revolute("O4", GROUND, "rocker", (0.0, -pivot_below), (0.0, 0.0)),
+              Prismatic("slot_C", "rocker", "ram_block", (0.0, 0.0), (1.0, 0.0), (0.0, 0.0), 0.0),
+              Revolute("C", "ram_block", "ram", (0.0, 0.0), (0.0, 0.0)),
+              Prismatic("ram_slide", GROUND, "ram", (0.0, yc), (1.0, 0.0), (0.0, 0.0), 0.0)]
+    guess = {"crank": (0.0, 0.0, th), "block": (A[0], A[1], phi), "rocker": (O4[0], O4[1], phi),
+             "ram_block": (xc, yc, phi), "ram": (xc, yc, 0.0)}
+    meta = dict(type="quick-return", lengths_mm=dict(b2=b2, pivot_below=pivot_below, ram_height=ram_height),
+                masses=masses or "custom")
+    return Linkage(bodies, joints, CrankDriver("crank"), guess, meta=meta)
+
+
+# ----------------------------------------------------------------------------- simulate
+BUILDERS = {"four-bar": four_bar, "slider-crank": slider_crank,
+            "inverted-slider-crank": inverted_slider_crank, "quick-return": quick_return}
+
+
+def crank_angles(samples: int, start_deg: float = 0.0) -> np.ndarray:
+    """``samples`` evenly spaced crank angles over one turn (deg), 360 excluded."""
+    return start_deg + 360.0 * np.arange(samples) / samples
+
+
+def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: float = 1.0,
+             model: str = "rigid-body") -> ReactionHistory:
+    """Reaction history of one constant-speed crank turn (N, N·m, mm, deg).
+
+    ``linkage_or_config`` is a Linkage or a dict ``{"type": "four-bar", "b2": .., ...}``
+    (builder keyword arguments).  ``model="original"`` (four-bar only) reproduces the 2013
+    program; ``"rigid-body"`` is the physically consistent default.  ``meta["singular"]``
+    lists the toggle crank-angle ranges (None if none); ``meta["mu_deg"]`` the
+    transmission-angle range of a four-bar.
+    """
+    if model not in MODELS:
+        raise InputError(f"model = {model!r} must be one of {', '.join(MODELS)}")
+    if int(samples) != samples or not 8 <= samples <= 1_000_000:
+        raise InputError(f"samples = {samples!r} must be a whole number in [8, 1000000]")
+    if not np.isfinite(speed_hz) or speed_hz == 0 or abs(speed_hz) > 100:
+        raise InputError(f"speed_hz = {speed_hz!r} must be non-zero and within [-100, 100] Hz")
+    if isinstance(linkage_or_config, dict):
+        cfg = dict(linkage_or_config)
+        typ = cfg.pop("type", None)
+        if typ not in BUILDERS:
+            raise InputError(f"linkage type = {typ!r} must be one of {', '.join(BUILDERS)}")
+        lk = BUILDERS[typ](**cfg)
+    else:
+        lk = linkage_or_config
+    deg = crank_angles(int(samples))
+    if model == "original":
+        if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":
+            raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
+                             f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
+        return simulate_original(lk, deg, speed_hz)
+    h = solve(lk, deg, speed_hz)
+    h.meta["model"] = "rigid-body"
+    if lk.meta.get("type") == "four-bar":
+        mu = transmission_angle(h.bodies)
+        h.meta["mu_deg"] = dict(min=float(mu.min()), max=float(mu.max()))
+    return h
+
+
+def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
+    """ReactionHistory of the 2013 program (rigfem.original) for a four-bar Linkage."""
+    from rigfem.dynamics.original import original_reactions
+
+    L = lk.meta["lengths_mm"]
+    b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]
+    sgn = 1 if lk.meta.get("branch", "open") == "open" else -1
+    template = solve(lk, deg[:1] if deg.size else deg, speed_hz, check_closure=False)
+    bodies_tpl = template.bodies
+
+    def build(angles: np.ndarray) -> ReactionHistory:
+        a = np.atleast_1d(np.asarray(angles, float))
+        r = original_reactions(b2, b3, b4, d, np.radians(a), speed_hz, RigMasses(**lk.meta["catalogue"]),
+                               tuple(lk.meta["rails_mm"]), branch=sgn)
+        k = r["kin"]
+        w2 = 2 * np.pi * speed_hz
+        pos = {"O2": np.zeros((a.size, 2)), "A": k["A"] * 1000, "B": k["B"] * 1000,
+               "O4": np.tile([d, 0.0], (a.size, 1))}
+        joints = {"O2": JointHistory("O2", GROUND, "crank", r["R12"], pos["O2"]),
+                  "A": JointHistory("A", "crank", "coupler", r["R23"], pos["A"]),
+                  "B": JointHistory("B", "coupler", "rocker", r["R34"], pos["B"]),
+                  "O4": JointHistory("O4", GROUND, "rocker", r["R14"], pos["O4"])}
+        zero = np.zeros(a.size)
+        aA = -(w2**2) * k["A"] * 1000
+        bodies = {}
+        for name, th, om, al, org, acc in (
+                ("crank", k["theta2"], k["omega2"], zero, pos["O2"], np.zeros((a.size, 2))),
+                ("coupler", k["theta3"], k["omega3"], k["alpha3"], pos["A"], aA),
+                ("rocker", k["theta4"], k["omega4"], k["alpha4"], pos["O4"], np.zeros((a.size, 2)))):
+            t = bodies_tpl[name]
+            bodies[name] = BodyHistory(name, th, om, al, org, acc, t.mass_kg, t.com_local_mm,
+                                       t.inertia_com_kg_mm2, t.point_masses, t.joint_local_mm)
+        mu = r["mu_deg"]
+        bad = np.sin(np.radians(mu)) < np.sin(np.radians(MU_TOGGLE_DEG))
+        bad |= ~np.all(np.isfinite(np.c_[r["R12"], r["R23"], r["R34"], r["R14"], r["M2"]]), axis=1)
+        meta = dict(lk.meta)
+        meta.pop("singular_fn", None)
+        meta.update(model="original", speed_hz=speed_hz, driver_unit="N·m",
+                    mu_deg=dict(min=float(mu.min()), max=float(mu.max())),
+                    singular=singular_ranges(a, bad))
+        for j in joints.values():
+            j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)
+        return ReactionHistory(a, joints, np.nan_to_num(r["M2"]), bodies, meta,
+                               singular_mask=bad if bad.any() else None)
+
+    h = build(deg)
+    # toggles between the samples: the closed-form model is cheap on a 0.1 deg grid
+    h.meta["singular"] = merge_ranges(h.meta["singular"], build(crank_angles(3600)).meta["singular"])
+    h.evaluator = build
+    return h

@@ -1,0 +1,154 @@
+"""Exact reproduction of the 2013 four-bar dynamics program (RIG.md §3), quirks included.
+
+Closed-form four-bar kinematics at constant crank speed, then per crank angle the
+program's 9 linear equations (force balance of bars 2, 3, 4 and three moment
+equations) for R12 (O2), R23 (A), R34 (B), R41 (O4) and the motor torque M2.
+The quirks (guide mass given the acceleration of the *combined* centre of mass,
+point masses added again, lever arms L3/2 and b3 - L3/2 on bar 3, no inertial
+moment on bar 2, I_G3 = m3 b3^2/12 and I_O4 = m4 b4^2/3 from the joint distances)
+are kept on purpose: this mode exists to reproduce the study's numbers.
+Internal units SI (m, kg, s); the public results are in mm, N, N·m, degrees.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
+
+
+def fourbar_kinematics(b2: float, b3: float, b4: float, d: float, theta2: np.ndarray, omega2: float,
+                       branch: int = 1) -> dict[str, np.ndarray]:
+    """Closed-form four-bar positions, velocities, accelerations (SI), O2 at 0, O4 at (d, 0).
+
+    ``branch`` = +1 is the open circuit (coupler turned counter-clockwise from A->O4),
+    -1 the crossed one.  Angles in rad; raises ValueError where the loop cannot close.
+    """
+    th2 = np.asarray(theta2, dtype=float)
+    ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
+    dx, dy = d - ax, -ay
+    f2 = dx * dx + dy * dy
+    f = np.sqrt(f2)
+    cpsi = (b3 * b3 + f2 - b4 * b4) / (2 * b3 * f)
+    if np.any(np.abs(cpsi) > 1.0 + 1e-12):
+        raise ValueError("four-bar loop cannot close at some crank angles")
+    psi = np.arccos(np.clip(cpsi, -1.0, 1.0))
+    th3 = np.arctan2(dy, dx) + branch * psi
+    bx, by = ax + b3 * np.cos(th3), ay + b3 * np.sin(th3)
+    th4 = np.arctan2(by, bx - d)
+    # velocity loop: b2 w2 e2' + b3 w3 e3' - b4 w4 e4' = 0  (e' = d e / d theta)
+    s2, c2, s3, c3, s4, c4 = np.sin(th2), np.cos(th2), np.sin(th3), np.cos(th3), np.sin(th4), np.cos(th4)
+    det = b3 * b4 * np.sin(th4 - th3)
+    w2 = omega2
+    w3 = b2 * w2 * b4 * np.sin(th2 - th4) / det
+    w4 = b2 * w2 * b3 * np.sin(th2 - th3) / det
+    # acceleration loop (alpha2 = 0): b3 a3 e3' - b4 a4 e4' = b2 w2^2 e2 + b3 w3^2 e3 - b4 w4^2 e4
+    rx = b2 * w2**2 * c2 + b3 * w3**2 * c3 - b4 * w4**2 * c4
+    ry = b2 * w2**2 * s2 + b3 * w3**2 * s3 - b4 * w4**2 * s4
+    # [ -b3 s3   b4 s4 ] [a3]   [rx]
+    # [  b3 c3  -b4 c4 ] [a4] = [ry]
+    m11, m12, m21, m22 = -b3 * s3, b4 * s4, b3 * c3, -b4 * c4
+    detm = m11 * m22 - m12 * m21
+    a3 = (rx * m22 - m12 * ry) / detm
+    a4 = (m11 * ry - m21 * rx) / detm
+    cos_mu = (b3 * b3 + b4 * b4 - f2) / (2 * b3 * b4)
+    mu = np.arccos(np.clip(cos_mu, -1.0, 1.0))
+    return dict(theta2=th2, theta3=th3, theta4=th4, omega2=np.full_like(th2, w2), omega3=w3, omega4=w4,
+                alpha2=np.zeros_like(th2), alpha3=a3, alpha4=a4, mu=mu,
+                A=np.stack([ax, ay], -1), B=np.stack([bx, by], -1))
+
+
+def _cross(r: np.ndarray, f: np.ndarray) -> np.ndarray:
+    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+
+
+def original_reactions(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, theta2: np.ndarray,
+                       speed_hz: float = 1.0, masses: RigMasses = RIG_MASSES,
+                       rails_mm: tuple[float, float, float] = RIG_RAILS_MM,
+                       branch: int = 1) -> dict[str, np.ndarray]:
+    """The 2013 program's reactions at crank angles ``theta2`` (rad).
+
+    Returns forces in N as (n, 2) arrays, each the force exerted by the first-named
+    body on the second: ``R12`` ground on crank at O2, ``R23`` crank on coupler at A,
+    ``R34`` coupler on rocker at B, ``R14`` ground on rocker at O4; ``M2`` motor torque
+    on the crank in N·m; plus the kinematics (``kin``) and transmission angle.
+    """
+    b2, b3, b4, d = (x / 1000.0 for x in (b2_mm, b3_mm, b4_mm, d_mm))
+    L2, L3, L4 = (x / 1000.0 for x in rails_mm)
+    w2 = 2 * np.pi * speed_hz
+    k = fourbar_kinematics(b2, b3, b4, d, theta2, w2, branch)
+    mr = masses.study_rail_kg_m
+    m2, m3, m4 = mr * L2, mr * L3, mr * L4
+    mp2 = masses.plate + masses.carriage        # at A on bar 2
+    mA3 = masses.coupling                       # at A on bar 3
+    mp3 = masses.plate + masses.carriage        # at B on bar 3
+    mp4 = masses.coupling                       # at B on bar 4
+    xg2 = (L2 / 2 * m2 + b2 * mp2) / (m2 + mp2)
+    xg3 = (L3 / 2 * m3 + b3 * mp3) / (m3 + mp3)
+    xg4 = (L4 / 2 * m4 + b4 * mp4) / (m4 + mp4)
+
+    def unit(th):
+        return np.stack([np.cos(th), np.sin(th)], -1)
+
+    def perp(v):
+        return np.stack([-v[..., 1], v[..., 0]], -1)
+
+    u2, u3, u4 = unit(k["theta2"]), unit(k["theta3"]), unit(k["theta4"])
+    w3, w4, a3, a4 = (k[n][..., None] for n in ("omega3", "omega4", "alpha3", "alpha4"))
+    aA = -w2**2 * b2 * u2
+    aG2 = -w2**2 * xg2 * u2
+    aG3 = aA + a3 * xg3 * perp(u3) - w3**2 * xg3 * u3
+    aB = aA + a3 * b3 * perp(u3) - w3**2 * b3 * u3
+    aG4 = a4 * xg4 * perp(u4) - w4**2 * xg4 * u4
+    F2 = m2 * aG2 + mp2 * aA
+    F3 = m3 * aG3 + mA3 * aA + mp3 * aB
+    F4 = m4 * aG4 + mp4 * aB
+    I3 = m3 * b3**2 / 12 + mA3 * xg3**2 + mp3 * (b3 - xg3) ** 2
+    I4 = m4 * b4**2 / 3 + mp4 * b4**2
+    n = k["theta2"].shape[0]
+    # unknowns: R12x R12y R23x R23y R34x R34y R14x R14y M2
+    K = np.zeros((n, 9, 9))
+    rhs = np.zeros((n, 9))
+    # bar 2: R12 - R23 = F2 ;  M2 + (b2 u2) x (-R23) = 0
+    K[:, 0, 0] = K[:, 1, 1] = 1.0
+    K[:, 0, 2] = K[:, 1, 3] = -1.0
+    rhs[:, 0:2] = F2
+    r2 = b2 * u2
+    K[:, 2, 8] = 1.0
+    K[:, 2, 2] = r2[:, 1]       # -(r x R23) = -(rx R23y - ry R23x)
+    K[:, 2, 3] = -r2[:, 0]
+    # bar 3: R23 - R34 = F3 ; (-L3/2 u3) x R23 + ((b3 - L3/2) u3) x (-R34) = I3 a3
+    K[:, 3, 2] = K[:, 4, 3] = 1.0
+    K[:, 3, 4] = K[:, 4, 5] = -1.0
+    rhs[:, 3:5] = F3
+    ra, rb = -L3 / 2 * u3, (b3 - L3 / 2) * u3
+    K[:, 5, 2], K[:, 5, 3] = -ra[:, 1], ra[:, 0]
+    K[:, 5, 4], K[:, 5, 5] = rb[:, 1], -rb[:, 0]
+    rhs[:, 5] = I3 * k["alpha3"]
+    # bar 4: R34 + R14 = F4 ; (b4 u4) x R34 = I4 a4
+    K[:, 6, 4] = K[:, 7, 5] = 1.0
+    K[:, 6, 6] = K[:, 7, 7] = 1.0
+    rhs[:, 6:8] = F4
+    r4 = b4 * u4
+    K[:, 8, 4], K[:, 8, 5] = -r4[:, 1], r4[:, 0]
+    rhs[:, 8] = I4 * k["alpha4"]
+    x = np.linalg.solve(K, rhs[..., None])[..., 0]
+    return dict(R12=x[:, 0:2], R23=x[:, 2:4], R34=x[:, 4:6], R14=x[:, 6:8], M2=x[:, 8],
+                mu_deg=np.degrees(k["mu"]), kin=k)
+
+
+def original_program(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, speed_hz: float = 1.0,
+                     instants: int = 5000) -> dict[str, float]:
+    """The 2013 program's printed figures: peak |R| of every pin, peak |M2|, mu min/max.
+
+    Sampled exactly like the study: ``instants`` equally spaced crank angles over one turn
+    (including both ends), no refinement.  Forces N, torque N·m, angles degrees.
+    """
+    th = np.linspace(0.0, 2 * np.pi, instants)
+    r = original_reactions(b2_mm, b3_mm, b4_mm, d_mm, th, speed_hz)
+    out = {name: float(np.max(np.hypot(r[key][:, 0], r[key][:, 1])))
+           for name, key in (("O2", "R12"), ("A", "R23"), ("B", "R34"), ("O4", "R14"))}
+    out["torque_Nm"] = float(np.max(np.abs(r["M2"])))
+    out["mu_min_deg"] = float(np.min(r["mu_deg"]))
+    out["mu_max_deg"] = float(np.max(r["mu_deg"]))
+    return out

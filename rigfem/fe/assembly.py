@@ -1,0 +1,324 @@
+"""Quadratic/linear tetrahedral meshes and a fast vectorised elasticity stiffness.
+
+The P2 mesh adds one node per edge (:func:`rigfem.mesh.partmesh.quadratic`): where gmsh's second-order
+mesh puts it for the curved edges (on the geometry at grooves, holes and fillets, moved
+elastically beside them), at the midpoint elsewhere.  Elements with such a node are *curved*
+(isoparametric): their Jacobian varies inside, so gradients and volume weights are
+computed per quadrature point; all others are affine.  A curved element whose Jacobian falls
+below :data:`MIN_JACOBIAN` of its straight shape anywhere is straightened (mid-nodes back to
+the chords) rather than left distorted.  Element node order is CalculiX C3D10 / VTK
+``tetra10`` (0-based): corners 0-3, then edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.  Global DOF
+``3*node + c`` (c = x, y, z).
+
+>>> import numpy as np
+>>> from skfem import MeshTet
+>>> from rigfem.mesh import PartMesh
+>>> m = MeshTet.init_tensor(*(np.linspace(0, 1, 3),) * 3)
+>>> fm = fe_mesh(PartMesh("cube", m.p.T, m.t.T), order=2)
+>>> K = stiffness(fm, 210e3, 0.3)
+>>> K.shape == (3 * len(fm.nodes),) * 2
+True
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+import scipy.sparse as sp
+from skfem.quadrature import get_quadrature
+from skfem.refdom import RefTet, RefTri
+
+from rigfem.errors import InputError
+from rigfem.material import lame
+from rigfem.mesh.partmesh import PartMesh, quadratic
+
+TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+
+
+TRI_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+
+
+#: barycentric coordinates of the 10 nodes of a P2 tetrahedron
+NODE_BARY = np.vstack([np.eye(4), 0.5 * (np.eye(4)[TET_EDGES[:, 0]] + np.eye(4)[TET_EDGES[:, 1]])])
+
+
+#: smallest det J of a curved element, relative to its straight shape, at its nodes and
+#: quadrature points; below it the element is straightened
+MIN_JACOBIAN = 0.2
+
+
+@dataclass
+class FEMesh:
+    """Nodes and P1/P2 elements of a part; ``surfaces`` hold 3- or 6-node triangles."""
+
+    nodes: np.ndarray  #: (N, 3)
+    elements: np.ndarray  #: (M, 4) or (M, 10), C3D4/C3D10 order
+    surfaces: dict[str, np.ndarray]  #: name -> (K, 3) or (K, 6)
+    order: int
+    n_vertices: int
+    curved: np.ndarray | None = None  #: (M,) bool, elements with a mid-node off its chord (P2)
+    straightened: int = 0  #: curved elements straightened for a distorted Jacobian
+    cache: dict = field(default_factory=dict, repr=False)  #: derived arrays reused across loads
+
+    @property
+    def ndof(self) -> int:
+        return 3 * len(self.nodes)
+
+
+def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
+    """P1 or P2 mesh of ``mesh``; P2 follows the curved boundary edges of the PartMesh."""
+    if order not in (1, 2):
+        raise InputError(f"order = {order!r} must be 1 or 2")
+    p = np.asarray(mesh.points, dtype=float)
+    t = np.asarray(mesh.tets, dtype=np.int64)
+    if p.ndim != 2 or p.shape[1] != 3 or t.ndim != 2 or t.shape[1] != 4 or len(t) == 0:
+        raise InputError("mesh must have points (N, 3) and tets (M, 4) with M >= 1")
+    if t.min() < 0 or t.max() >= len(p) or not np.isfinite(p).all():
+        raise InputError(f"mesh tets must index points 0..{len(p) - 1} and points must be finite")
+    d = p[t[:, 1:]] - p[t[:, :1]]
+    vol = np.linalg.det(d) / 6
+    if (np.abs(vol) <= 1e-12 * np.abs(vol).max()).any():
+        raise InputError(f"mesh has {(np.abs(vol) <= 1e-12 * np.abs(vol).max()).sum()} degenerate (zero-volume) tets")
+    t = t.copy()
+    t[vol < 0, 1:3] = t[vol < 0, 2:0:-1]  # orient positively (C3D10 needs it)
+    surfaces = {k: np.asarray(v, dtype=np.int64) for k, v in mesh.surfaces.items()}
+    if order == 1:
+        return FEMesh(p, t, surfaces, 1, len(p))
+    nodes, elements, surf2 = quadratic(dataclasses.replace(mesh, points=p, tets=t, surfaces=surfaces))
+    fm = FEMesh(nodes, elements, surf2, 2, len(p))
+    fm.straightened = _straighten_distorted(fm)
+    return fm
+
+
+def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
+    """Offsets (m, 6, 3) of the mid-edge nodes of ``elems`` from their edges' midpoints."""
+    el = fm.elements[elems]
+    x = fm.nodes
+    return x[el[:, 4:]] - 0.5 * (x[el[:, TET_EDGES[:, 0]]] + x[el[:, TET_EDGES[:, 1]]])
+
+
+def _straighten_distorted(fm: FEMesh) -> int:
+    """Mark curved elements; move the mid-nodes of distorted ones back to their chords.
+
+    Checks det J at the 10 nodes and the 11 points of the degree-4 rule against the straight
+    element's; repeats while straightening an edge distorts a neighbour.  Returns the count.
+    """
+    L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
+    done = 0
+    for _ in range(10):
+        fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+        idx = np.flatnonzero(fm.curved)
+        _, det0 = bary_gradients(_subset(fm, idx))
+        bad = idx[(_curved_J(fm, L, idx)[1].min(1) < MIN_JACOBIAN * det0)]
+        if not len(bad):
+            return done
+        el = fm.elements[bad]
+        fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
+        done += len(bad)
+    fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+    return done
+
+
+def tet_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points (nq, 4) and weights summing to 1/6 on the reference tet."""
+    X, W = get_quadrature(RefTet, degree)
+    return np.vstack([1 - X.sum(0), X]).T, W
+
+
+def tri_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points (nq, 3) and weights summing to 1/2 on the reference triangle."""
+    X, W = get_quadrature(RefTri, degree)
+    return np.vstack([1 - X.sum(0), X]).T, W
+
+
+def shape_values(L: np.ndarray, order: int) -> np.ndarray:
+    """Shape functions (nq, nloc) at barycentric points L (nq, 3|4) of a triangle or tet."""
+    if order == 1:
+        return L.copy()
+    edges = TET_EDGES if L.shape[1] == 4 else TRI_EDGES
+    return np.hstack([L * (2 * L - 1), 4 * L[:, edges[:, 0]] * L[:, edges[:, 1]]])
+
+
+def shape_dL(L: np.ndarray, order: int) -> np.ndarray:
+    """dN_a/dL_k (nq, nloc, nv) at barycentric points L (nq, nv) of a triangle (nv 3) or tet (nv 4)."""
+    nq, nv = L.shape
+    if order == 1:
+        return np.broadcast_to(np.eye(nv), (nq, nv, nv))
+    edges = TET_EDGES if nv == 4 else TRI_EDGES
+    C = np.zeros((nq, nv + len(edges), nv))
+    C[:, np.arange(nv), np.arange(nv)] = 4 * L - 1
+    for a, (i, j) in enumerate(edges):
+        C[:, nv + a, i] = 4 * L[:, j]
+        C[:, nv + a, j] = 4 * L[:, i]
+    return C
+
+
+def bary_gradients(fm: FEMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Gradients of the barycentric coordinates (M, 4, 3) and det J = 6·volume (M,) of the
+    straight (corner) tetrahedra."""
+    x = fm.nodes[fm.elements[:, :4]]
+    J = np.swapaxes(x[:, 1:] - x[:, :1], 1, 2)  # columns = edge vectors
+    Ji = np.linalg.inv(J)  # rows = grad L1..L3
+    return np.concatenate([-Ji.sum(1, keepdims=True), Ji], axis=1), np.linalg.det(J)
+
+
+def _ref_grads(L: np.ndarray) -> np.ndarray:
+    """∂N_a/∂ξ_k (nq, 10, 3) of P2 at barycentric points L, with L0 = 1 − ξ1 − ξ2 − ξ3."""
+    dL = shape_dL(L, 2)
+    return dL[..., 1:] - dL[..., :1]
+
+
+def _curved_J(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) and det J (m, nq) of P2 elements."""
+    J = np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
+    return J, np.linalg.det(J)
+
+
+def geometry(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None),
+             grads: bool = True) -> tuple[np.ndarray | None, np.ndarray]:
+    """Physical shape-function gradients (m, nq, nloc, 3) (None unless ``grads``) and det J
+    (m, nq) at barycentric points L (nq, 4): affine per element, per point on curved elements."""
+    sub = _subset(fm, elems)
+    G, det0 = bary_gradients(sub)
+    det = np.repeat(det0[:, None], len(L), axis=1)
+    dN = np.einsum("qak,ekd->eqad", shape_dL(L, fm.order), G, optimize=True) if grads else None
+    curved = np.flatnonzero(sub.curved) if sub.curved is not None else np.zeros(0, int)
+    if len(curved):
+        J, det[curved] = _curved_J(sub, L, curved)
+        if grads:
+            dN[curved] = np.einsum("qak,mqdk->mqad", _ref_grads(L), np.linalg.inv(J), optimize=True)
+    return dN, det
+
+
+def points_at(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """Physical coordinates (m, nq, 3) of barycentric points L (nq, 4) (on curved elements too)."""
+    return np.einsum("qa,mad->mqd", shape_values(L, fm.order), fm.nodes[fm.elements[elems]], optimize=True)
+
+
+def volume(fm: FEMesh) -> float:
+    """Volume of the mesh (mm³ in mm), curved elements included (det J of a P2 map is cubic:
+    the degree-3 rule is exact)."""
+    L, W = tet_quadrature(3)
+    return float(sum((geometry(fm, L, slice(s, s + 65536), grads=False)[1] @ W).sum()
+                     for s in range(0, len(fm.elements), 65536)))
+
+
+def _subset(fm: FEMesh, elems) -> FEMesh:
+    curved = None if fm.curved is None else fm.curved[elems]
+    return FEMesh(fm.nodes, fm.elements[elems], {}, fm.order, fm.n_vertices, curved)
+
+
+def element_dofs(elements: np.ndarray) -> np.ndarray:
+    """Global DOFs (M, 3*nloc) in local order a*3 + c."""
+    return (3 * elements[:, :, None] + np.arange(3)).reshape(len(elements), -1)
+
+
+def stiffness(fm: FEMesh, E: float, nu: float, chunk: int = 8192) -> sp.csr_matrix:
+    """Global stiffness matrix of isotropic linear elasticity (exact quadrature).
+
+    Element matrices are computed and summed straight into the node-block (3×3)
+    sparsity pattern by a compiled kernel; no COO triplets are formed.
+    """
+    lam, mu = lame(E, nu)
+    L, W = tet_quadrature(2 * (fm.order - 1))
+    indptr, indices, pos = block_pattern(fm.elements, len(fm.nodes))
+    data = np.zeros((len(indices), 3, 3))
+    for s in range(0, len(fm.elements), chunk):
+        sl = slice(s, s + chunk)
+        dN, det = geometry(fm, L, sl)
+        _add_elastic_blocks(dN, det * W[None, :], lam, mu, pos[sl], data)
+    return sp.bsr_matrix((data, indices, indptr), shape=(fm.ndof, fm.ndof)).tocsr()
+
+
+def block_pattern(elements: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Node-level CSR pattern (indptr, indices) and each element pair's block index (M, nloc, nloc)."""
+    return _block_pattern(np.ascontiguousarray(elements, dtype=np.int64), n)
+
+
+@numba.njit(cache=True)
+def _block_pattern(el, n):  # pragma: no cover - compiled
+    m, k = el.shape
+    eptr = np.zeros(n + 1, np.int64)  # node -> elements (counting sort)
+    for e in range(m):
+        for a in range(k):
+            eptr[el[e, a] + 1] += 1
+    eptr = np.cumsum(eptr)
+    elist = np.empty(eptr[-1], np.int64)
+    fill = eptr[:-1].copy()
+    for e in range(m):
+        for a in range(k):
+            elist[fill[el[e, a]]] = e
+            fill[el[e, a]] += 1
+    mark = -np.ones(n, np.int64)
+    indptr = np.zeros(n + 1, np.int64)
+    for r in range(n):  # count distinct neighbours
+        c = 0
+        for p in range(eptr[r], eptr[r + 1]):
+            for b in range(k):
+                j = el[elist[p], b]
+                if mark[j] != r:
+                    mark[j] = r
+                    c += 1
+        indptr[r + 1] = indptr[r] + c
+    indices = np.empty(indptr[-1], np.int32)
+    mark[:] = -1
+    for r in range(n):
+        c = indptr[r]
+        for p in range(eptr[r], eptr[r + 1]):
+            for b in range(k):
+                j = el[elist[p], b]
+                if mark[j] != r:
+                    mark[j] = r
+                    indices[c] = j
+                    c += 1
+        indices[indptr[r]:indptr[r + 1]] = np.sort(indices[indptr[r]:indptr[r + 1]])
+    pos = np.empty((m, k, k), np.int64)
+    for e in range(m):
+        for a in range(k):
+            r = el[e, a]
+            row = indices[indptr[r]:indptr[r + 1]]
+            for b in range(k):
+                pos[e, a, b] = indptr[r] + np.searchsorted(row, el[e, b])
+    return indptr, indices, pos
+
+
+@numba.njit(cache=True)
+def _add_elastic_blocks(dN, w, lam, mu, pos, data):  # pragma: no cover - compiled
+    """data[pos[e, a, b]] += ∫ (λ ∇N_a ⊗ ∇N_b + μ ∇N_b ⊗ ∇N_a + μ (∇N_a·∇N_b) I) for every element e."""
+    m, nq, nloc, _ = dN.shape
+    G = np.empty((3, 3))
+    for e in range(m):
+        for a in range(nloc):
+            for b in range(a, nloc):  # block (b, a) is the transpose of block (a, b)
+                G[:, :] = 0.0  # G[i, j] = Σ_q w ∂_i N_a ∂_j N_b
+                for q in range(nq):
+                    wq = w[e, q]
+                    for i in range(3):
+                        gi = wq * dN[e, q, a, i]
+                        for j in range(3):
+                            G[i, j] += gi * dN[e, q, b, j]
+                tr = mu * (G[0, 0] + G[1, 1] + G[2, 2])
+                p = pos[e, a, b]
+                pt = pos[e, b, a]
+                for i in range(3):
+                    for j in range(3):
+                        v = lam * G[i, j] + mu * G[j, i]
+                        data[p, i, j] += v
+                        if b != a:
+                            data[pt, j, i] += v
+                    data[p, i, i] += tr
+                    if b != a:
+                        data[pt, i, i] += tr
+
+
+def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
+    """Sum element matrices (M, k, k) into a CSR matrix."""
+    k = dofs.shape[1]
+    rows = np.repeat(dofs, k, axis=1).ravel()
+    cols = np.tile(dofs, (1, k)).ravel()
+    K = sp.csr_matrix((data.ravel(), (rows, cols)), shape=(n, n))
+    K.sum_duplicates()
+    return K

@@ -1,0 +1,159 @@
+"""Facade of the FE core: part mesh + material -> model -> supports + load cases -> Solution.
+
+>>> import numpy as np
+>>> from skfem import MeshTet
+>>> from rigfem.mesh import PartMesh
+>>> from rigfem.material import get_material
+>>> from rigfem.loads import SurfaceForce
+>>> from rigfem.supports import Fixed
+>>> m = MeshTet.init_tensor(np.linspace(0, 100, 11), np.linspace(0, 10, 3), np.linspace(0, 10, 3))
+>>> f = m.boundary_facets()
+>>> x = m.p[:, m.facets[:, f]].mean(1)
+>>> part = PartMesh("bar", m.p.T, m.t.T, surfaces={"root": m.facets[:, f[x[0] < 1e-9]].T,
+...                                                  "tip": m.facets[:, f[x[0] > 100 - 1e-9]].T})
+>>> model = build_model(part, get_material("rig_steel"), order=2)
+>>> sol = solve(model, [Fixed("root")], [SurfaceForce("tip", (0, 0, -10)), SurfaceForce("tip", (0, 10, 0))])
+>>> sol.U.shape[1], bool(sol.equilibrium_error.max() < 1e-7)
+(2, True)
+>>> peak = sol.peak(np.array([1.0, 0.5]))   # superposed case: σ = 1·σ_0 + 0.5·σ_1
+>>> bool(peak.value > 0 and peak.error >= 0)
+True
+>>> problem = StaticProblem(model, [Fixed("root")])   # factorise once ...
+>>> more = problem.solve([SurfaceForce("tip", (5, 0, 0))])   # ... solve later batches on the same factors
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from rigfem.errors import InputError
+from rigfem.fe.assembly import FEMesh, fe_mesh, stiffness, volume
+from rigfem.fe.forces import load_vector
+from rigfem.fe.solution import Solution
+from rigfem.fe.solver import LinearSolver, default_method
+from rigfem.fe.stress import nodal_stress
+from rigfem.fe.supports import FreeBody, constraints, rigid_modes
+from rigfem.material import Material
+from rigfem.mesh.partmesh import PartMesh
+
+
+@dataclass
+class Model:
+    """A part ready to solve: P1/P2 mesh, material and assembled stiffness."""
+
+    part: PartMesh
+    material: Material
+    mesh: FEMesh
+    K: sp.csr_matrix
+    assembly_time: float
+    volume: float  #: of the (curved) mesh, mm³: the part's FE mass is volume × density
+
+
+#: Poisson's ratio from which linear tetrahedra lock (too stiff in near-incompressible strain)
+LOCKING_NU = 0.45
+
+
+def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
+    """Build the P1/P2 mesh of ``part`` and assemble its stiffness once.
+
+    Warns when linear elements meet a nearly incompressible material: they lock and
+    under-predict deflection and stress (use order 2).
+    """
+    if order == 1 and material.nu >= LOCKING_NU:
+        warnings.warn(f"material {material.name!r}: nu = {material.nu:g} >= {LOCKING_NU} with linear (P1) "
+                      f"tetrahedra: volumetric locking under-predicts deflection and stress; use order 2",
+                      UserWarning, stacklevel=2)
+    t0 = time.perf_counter()
+    fm = fe_mesh(part, order)
+    K = stiffness(fm, material.E, material.nu)
+    return Model(part, material, fm, K, time.perf_counter() - t0, volume(fm))
+
+
+def load_matrix(model: Model, cases: list) -> np.ndarray:
+    """Load matrix (ndof, ncases); each case is one load or a list of loads (summed)."""
+    if not cases:
+        raise InputError("loads: at least one load case is required")
+    F = np.zeros((model.mesh.ndof, len(cases)))
+    for k, case in enumerate(cases):
+        for load in case if isinstance(case, (list, tuple)) else [case]:
+            F[:, k] += load_vector(model.mesh, model.part.holes, model.material.density, load)
+    return F
+
+
+@dataclass
+class ExportData:
+    """The model as plain arrays for another FE code (CalculiX): 0-based, C3D10/C3D4 node order."""
+
+    nodes: np.ndarray  #: (N, 3)
+    elements: np.ndarray  #: (M, 10) C3D10 or (M, 4) C3D4 order
+    element_type: str  #: "C3D10" or "C3D4"
+    fixed_dofs: np.ndarray  #: global DOF 3*node + component, prescribed zero
+    springs: sp.coo_matrix | None  #: support spring stiffness (ShaftInHole), DOF-indexed, or None
+    loads: np.ndarray  #: (3N, ncases) nodal forces
+    E: float
+    nu: float
+
+
+def export_data(model: Model, supports: list, cases: list) -> ExportData:
+    """Nodes, elements, fixed DOFs, support springs and nodal loads of a model."""
+    fm = model.mesh
+    fixed, springs, _ = constraints(fm, model.part.holes, supports, model.material.E)
+    return ExportData(fm.nodes, fm.elements, "C3D10" if fm.order == 2 else "C3D4", fixed,
+                      None if springs is None else springs.tocoo(), load_matrix(model, cases),
+                      model.material.E, model.material.nu)
+
+
+class StaticProblem:
+    """A model with its supports, factorised once; :meth:`solve` takes any number of load cases."""
+
+    def __init__(self, model: Model, supports: list, solver: str = "auto", rtol: float = 1e-10) -> None:
+        fm = model.mesh
+        self.model = model
+        self.fixed, springs, self.support_dofs = constraints(fm, model.part.holes, supports, model.material.E)
+        self.free_body = any(isinstance(s, FreeBody) for s in supports)
+        A = model.K if springs is None else (model.K + springs).tocsr()
+        self.free = np.setdiff1d(np.arange(fm.ndof), self.fixed)
+        self._R = rigid_modes(fm.nodes)
+        self._amg = (default_method(len(self.free)) if solver == "auto" else solver) == "amg"
+        if self._amg:
+            # keep every node's 3 DOFs for aggregation: fixed DOFs become decoupled (scaled) identity rows
+            d = np.ones(fm.ndof)
+            d[self.fixed] = 0.0
+            D = sp.diags(d)
+            A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
+            self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
+        else:
+            self.linear_solver = LinearSolver(A[self.free][:, self.free], solver, rtol=rtol)
+
+    def solve(self, cases: list) -> Solution:
+        """Displacements, reactions and recovered stresses of every load case (one factorisation)."""
+        model, ls = self.model, self.linear_solver
+        F = load_matrix(model, cases)
+        U = np.zeros_like(F)
+        t_solve = ls.solve_time
+        if self._amg:
+            keep = np.ones(len(F), bool)
+            keep[self.fixed] = False
+            U[:] = ls.solve(F * keep[:, None])
+        else:
+            U[self.free] = ls.solve(F[self.free])
+        reactions = model.K @ U - F
+        if self.free_body:
+            U -= self._R @ np.linalg.lstsq(self._R, U, rcond=None)[0]
+        t0 = time.perf_counter()
+        S = nodal_stress(model.mesh, model.material.E, model.material.nu, U)
+        return Solution(model=model, F=F, U=U, reactions=reactions, nodal_stress=S, support_dofs=self.support_dofs,
+                        residuals=ls.residuals, backward_errors=ls.backward_errors, method=ls.method,
+                        free_body=self.free_body,
+                        times={"assembly": model.assembly_time, "factorise": ls.setup_time,
+                               "solve": ls.solve_time - t_solve, "stress": time.perf_counter() - t0})
+
+
+def solve(model: Model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10) -> Solution:
+    """Solve all load cases with one factorisation: ``StaticProblem(model, supports).solve(cases)``."""
+    return StaticProblem(model, supports, solver, rtol).solve(cases)

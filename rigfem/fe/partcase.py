@@ -1,0 +1,197 @@
+"""One part case through the FE solver: mesh → unit solutions → superposed peak → verdict.
+
+A :class:`rigfem.loads.cases.PartCase` is meshed (cached), solved once per *unit* load with one
+factorisation, and the stress of every row (crank angle) is the superposition
+``σ(θ) = Σ_k c_k(θ) σ_k``, evaluated in chunks so a 360-angle cycle costs a few matrix
+products, not 360 solves.
+
+Free bodies (cycle mode) get *inertia relief*: the FE part's mass distribution is not exactly
+the dynamics model's (the rail mesh starts behind the pivot, holes remove mass), so each unit
+load is made self-equilibrated by the rigid-body acceleration field of the part itself that
+cancels its resultant.  The relieved fraction is reported; the 3-2-1 support then carries
+≈ 0 and adds no spurious point-support stress.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from rigfem.fe.forces import BearingLoad, Inertia
+from rigfem.fe.model import Model, build_model, load_matrix, solve
+from rigfem.fe.solution import Solution
+from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
+from rigfem.loads.cases import PartCase, UnitLoad
+from rigfem.mesh.mesher import MeshSettings, mesh_part
+from rigfem.mesh.partmesh import PartMesh
+from rigfem.rig.parts import load_part
+
+#: surface groups that raise stress without carrying load (the I-profile's root fillets, whose
+#: peak needs about half the interface size: results/convergence/README.md)
+CONCENTRATORS = ("fillets",)
+
+
+#: rows superposed at once (memory: rows × nodes × 6 doubles)
+CHUNK = 24
+
+
+def mesh_case(case: PartCase, size_mm: float, local_size_mm: float) -> PartMesh:
+    """The (cached) mesh of a case's part, refined at the interfaces that carry its load and,
+    twice as finely, at the refined groups that concentrate stress (:data:`CONCENTRATORS`)."""
+    part = load_part(case.part, case.params or None)
+    conc = tuple(g for g in case.refine if g in CONCENTRATORS)
+    return mesh_part(part, MeshSettings(size=size_mm, refine=tuple(g for g in case.refine if g not in conc),
+                                        refine_size=local_size_mm, concentrate=conc))
+
+
+def supports_of(case: PartCase) -> list:
+    """rigfem.supports objects of a case: screws as shafts in holes, fixed faces, faces that
+    may slide on their support (zero normal displacement), or a free body."""
+    out = []
+    for kind, groups in case.supports:
+        if kind == "bolt":
+            out += [ShaftInHole(g) for g in groups]
+        elif kind == "fixed":
+            out += [Fixed(g) for g in groups]
+        elif kind == "slide":
+            out += [Symmetry(g) for g in groups]
+        elif kind == "free":
+            out.append(FreeBody())
+        else:
+            raise ValueError(f"unknown support kind {kind!r}")
+    return out
+
+
+def fe_load(u: UnitLoad):
+    """The rigfem.loads object of a unit load (bearing on a hole, or a unit inertia field)."""
+    if u.kind == "bearing":
+        return BearingLoad(u.group, u.direction)
+    o = u.direction
+    return {"a0x": Inertia(a0=(1.0, 0.0, 0.0), origin=o), "a0y": Inertia(a0=(0.0, 1.0, 0.0), origin=o),
+            "alpha": Inertia(alpha=(0.0, 0.0, 1.0), origin=o),
+            "omega2": Inertia(omega=(0.0, 0.0, 1.0), origin=o)}[u.component]
+
+
+def _resultants(x: np.ndarray, F: np.ndarray, about: np.ndarray) -> np.ndarray:
+    """Force and moment about ``about`` (6, k) of nodal load columns F (3N, k)."""
+    f = F.reshape(len(x), 3, -1)
+    moment = np.cross((x - about)[:, None, :], f.transpose(0, 2, 1)).sum(0).T
+    return np.concatenate([f.sum(0), moment], axis=0)
+
+
+def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndarray]:
+    """Each load plus the rigid-acceleration inertia field that cancels its resultant.
+
+    Returns the FE load cases, the resultants (6, k) that were relieved (force, moment about
+    the centroid) and each load's force magnitude scale (k,), to judge a combination.  A
+    bearing load's resultant is exact by construction (its force through the hole centre), so
+    only body forces are integrated here.
+    """
+    x = model.mesh.nodes
+    c = x.mean(0)
+    R = np.zeros((6, len(loads)))
+    body = [k for k, ld in enumerate(loads) if isinstance(ld, Inertia)]
+    if body:
+        R[:, body] = _resultants(x, load_matrix(model, [loads[k] for k in body]), c)
+    for k, ld in enumerate(loads):
+        if isinstance(ld, BearingLoad):
+            f = np.asarray(ld.force, float)
+            R[:3, k] = f
+            R[3:, k] = np.cross(np.asarray(model.part.holes[ld.hole].center, float) - c, f)
+    unit = [Inertia(a0=tuple(e), origin=tuple(c)) for e in np.eye(3)]
+    unit += [Inertia(alpha=tuple(e), origin=tuple(c)) for e in np.eye(3)]
+    G = _resultants(x, load_matrix(model, unit), c)  # (6, 6): resultant per unit rigid acceleration
+    acc = -np.linalg.solve(G, R)  # (6, k)
+    cases = [[ld, Inertia(a0=tuple(a[:3]), alpha=tuple(a[3:]), origin=tuple(c))]
+             for ld, a in zip(loads, acc.T)]
+    return cases, R, np.linalg.norm(R[:3], axis=0)
+
+
+@dataclasses.dataclass
+class CaseResult:
+    """Outcome of one part case: the peak over all rows and what backs it."""
+
+    case: PartCase
+    mode: str
+    solution: Solution  #: shared by every case of the same part geometry and supports
+    coef: np.ndarray  #: (n_rows, solution load cases) weights of this case
+    vm_rows: np.ndarray  #: (n_rows,) peak von Mises of every row
+    row: int  #: the critical row
+    peak: object  #: rigfem.fe.solution.Peak of the critical row
+    cycle_nodes: np.ndarray | None  #: nodes that peak at some row (the fatigue candidates)
+    cycle_stress: np.ndarray | None  #: (n_rows, len(cycle_nodes), 6) stress history there, MPa
+    mesh: PartMesh
+    imbalance: float  #: largest relieved load imbalance of a row (free bodies), relative
+    seconds: dict
+
+
+def _key(case: PartCase) -> tuple:
+    return case.part, tuple(sorted(case.params.items()))
+
+
+def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto",
+                progress=None) -> list[CaseResult]:
+    """Solve every (mode, case); cases of one part geometry share mesh and stiffness, cases
+    with the same supports share one factorisation, identical unit loads are solved once."""
+    geo: dict[tuple, list[tuple[str, PartCase]]] = {}
+    for mode, case in cases:
+        geo.setdefault(_key(case), []).append((mode, case))
+    results = {}
+    for group in geo.values():
+        t0 = time.perf_counter()
+        refine = tuple(sorted({g for _, c in group for g in c.refine}))
+        first = group[0][1]
+        pm = mesh_case(dataclasses.replace(first, refine=refine), settings.size_mm, settings.local_size_mm)
+        model = build_model(pm, settings.material, settings.order)
+        t_model = time.perf_counter() - t0
+        by_support: dict[tuple, list[tuple[str, PartCase]]] = {}
+        for mode, case in group:
+            by_support.setdefault(tuple(case.supports), []).append((mode, case))
+        for sup_cases in by_support.values():
+            for (mode, case), res in zip(sup_cases, _solve_shared(model, pm, sup_cases, settings, solver)):
+                res.seconds["mesh+assembly (shared)"] = t_model
+                results[id(case)] = res
+                if progress:
+                    progress(case.name, mode)
+    return [results[id(case)] for _, case in cases]
+
+
+def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCase]], settings,
+                  solver: str) -> list[CaseResult]:
+    t0 = time.perf_counter()
+    unique: dict[UnitLoad, int] = {}
+    for _, case in sup_cases:
+        for u in case.loads:
+            unique.setdefault(u, len(unique))
+    loads = [fe_load(u) for u in unique]
+    supports = supports_of(sup_cases[0][1])
+    free = any(isinstance(s, FreeBody) for s in supports)
+    R = scale = None
+    if free:
+        loads, R, scale = relieved_cases(model, loads)
+    sol = solve(model, supports, loads, solver=solver)
+    t_solve = time.perf_counter() - t0
+    fe_mass = model.volume * model.material.density * 1e3  # kg (density in t/mm³)
+    out = []
+    for mode, case in sup_cases:
+        t1 = time.perf_counter()
+        coef = np.zeros((len(case.rows), len(unique)))
+        for j, u in enumerate(case.loads):
+            ratio = case.mass_kg / fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
+            coef[:, unique[u]] += ratio * case.coef[:, j]
+        imbalance = 0.0
+        if free:
+            load = np.abs(coef) @ scale
+            imbalance = float((np.linalg.norm(coef @ R[:3].T, axis=1) / np.where(load > 0, load, 1)).max())
+        vm_rows, peak_nodes = sol.peak_sweep(coef, chunk=CHUNK)
+        row = int(np.argmax(vm_rows))
+        nodes = hist = None
+        if len(case.rows) > 1:  # the stress cycle at every node that peaks at some angle
+            nodes = np.unique(peak_nodes)
+            hist = np.einsum("rk,knc->rnc", coef, sol.nodal_stress[:, nodes])
+        out.append(CaseResult(case, mode, sol, coef, vm_rows, row, sol.peak(coef[row]), nodes, hist, pm,
+                              imbalance, {"solve (shared)": t_solve,
+                                          "superpose": time.perf_counter() - t1}))
+    return out

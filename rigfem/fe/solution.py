@@ -1,0 +1,144 @@
+"""The result of a linear FE solve: displacements, reactions, stresses per load case.
+
+Stresses are linear in the loads, so a combination of the cases with
+coefficients c (e.g. the load factors of one crank angle) is
+``σ(c) = Σ_k c_k σ_k``: :meth:`Solution.stress` is one tensordot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rigfem.fe.stress import zz_error
+from rigfem.fe.tensors import principal, von_mises
+
+
+@dataclass(frozen=True)
+class Peak:
+    """Peak von Mises stress with its location and discretisation-error estimate."""
+
+    value: float  #: MPa
+    node: int
+    xyz: tuple[float, float, float]
+    surface: str  #: named surface (a hole first), "(unnamed boundary)" or "(interior)"
+    surfaces: tuple[str, ...]  #: every named surface the node lies on
+    error: float  #: relative ZZ error estimate of ``value`` (recovered vs raw stress on the node's patch)
+
+
+@dataclass
+class Solution:
+    """Displacements U (3N, k) and recovered nodal stresses (k, N, 6) of k load cases."""
+
+    model: object  #: the rigfem.fe.model.Model solved (not imported: the model module builds Solutions)
+    F: np.ndarray  #: (3N, k) applied nodal loads
+    U: np.ndarray  #: (3N, k) displacements
+    reactions: np.ndarray  #: (3N, k) support forces on the part, K u − f
+    nodal_stress: np.ndarray  #: (k, N, 6) Voigt xx, yy, zz, xy, yz, xz
+    support_dofs: dict[str, np.ndarray]  #: support name -> its DOFs
+    residuals: np.ndarray  #: (k,) relative residual ‖Ku − f‖/‖f‖ of each solve (free DOFs)
+    backward_errors: np.ndarray  #: (k,) normwise backward error of each solve (checked ≤ rtol)
+    method: str
+    free_body: bool
+    times: dict[str, float] = field(default_factory=dict)
+
+    def _coef(self, c) -> np.ndarray:
+        k = self.U.shape[1]
+        c = np.eye(k)[0] if c is None and k == 1 else np.asarray(c, dtype=float)
+        if c.shape != (k,) or not np.isfinite(c).all():
+            from rigfem.errors import InputError
+            raise InputError(f"combination coefficients must be {k} finite numbers")
+        return c
+
+    def displacement(self, c=None) -> np.ndarray:
+        """Nodal displacement (N, 3) of the combination c (default: the only case)."""
+        return (self.U @ self._coef(c)).reshape(-1, 3)
+
+    def stress(self, c=None) -> np.ndarray:
+        """Recovered nodal stress (N, 6) of the combination c."""
+        return np.tensordot(self._coef(c), self.nodal_stress, 1)
+
+    def von_mises(self, c=None) -> np.ndarray:
+        """Nodal von Mises stress (N,) of the combination c."""
+        return von_mises(self.stress(c))
+
+    def peak_sweep(self, C: np.ndarray, chunk: int = 32) -> tuple[np.ndarray, np.ndarray]:
+        """Peak nodal von Mises (n,) and its node (n,) for each row of combinations C (n, k).
+
+        The cheap path for a sweep over crank angles; call :meth:`peak` on the
+        worst row for location, surface and error estimate.
+        """
+        C = np.atleast_2d(np.asarray(C, dtype=float))
+        if C.shape[1] != self.U.shape[1] or not np.isfinite(C).all():
+            from rigfem.errors import InputError
+            raise InputError(f"combination matrix must be (n, {self.U.shape[1]}) and finite, got {C.shape}")
+        vals, nodes = np.empty(len(C)), np.empty(len(C), dtype=np.int64)
+        for s in range(0, len(C), chunk):
+            vm = von_mises(np.tensordot(C[s:s + chunk], self.nodal_stress, 1))
+            nodes[s:s + chunk] = vm.argmax(1)
+            vals[s:s + chunk] = vm.max(1)
+        return vals, nodes
+
+    def principal(self, c=None) -> np.ndarray:
+        """Nodal principal stresses (N, 3), descending, of the combination c."""
+        return principal(self.stress(c))
+
+    def peak(self, c=None) -> Peak:
+        """Peak nodal von Mises of the combination c, where it is and its error estimate."""
+        s = self.stress(c)
+        vm = von_mises(s)
+        n = int(np.argmax(vm))
+        fm, mat = self.model.mesh, self.model.material
+        err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s)
+        names = self.surfaces_of(n)
+        where = names[0] if names else "(unnamed boundary)" if n in self._boundary_nodes() else "(interior)"
+        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), where, names, err)
+
+    def surfaces_of(self, node: int) -> tuple[str, ...]:
+        """Named surfaces containing ``node``, holes first."""
+        names = [nm for nm, tri in self.model.mesh.surfaces.items() if (tri == node).any()]
+        return tuple(sorted(names, key=lambda nm: nm not in self.model.part.holes))
+
+    def _boundary_nodes(self) -> set[int]:
+        t = self.model.mesh.elements[:, :4]
+        faces = np.sort(np.vstack([t[:, [0, 1, 2]], t[:, [0, 1, 3]], t[:, [0, 2, 3]], t[:, [1, 2, 3]]]), 1)
+        u, cnt = np.unique(faces, axis=0, return_counts=True)
+        b = set(u[cnt == 1].ravel().tolist())
+        el = self.model.mesh.elements
+        if el.shape[1] == 10:  # a mid-edge node is on the boundary if both its corners are (sufficient here)
+            from rigfem.fe.assembly import TET_EDGES
+            for a, (i, j) in enumerate(TET_EDGES):
+                m = np.isin(el[:, i], list(b)) & np.isin(el[:, j], list(b))
+                b.update(el[m, 4 + a].tolist())
+        return b
+
+    def resultants(self, dofs: np.ndarray, vec: np.ndarray) -> np.ndarray:
+        """Force and moment about the origin (k, 6) of nodal vectors ``vec`` (3N, k) over ``dofs``."""
+        x = self.model.mesh.nodes
+        mask = np.zeros(len(vec), bool)
+        mask[dofs] = True
+        v = np.where(mask[:, None], vec, 0.0).reshape(len(x), 3, -1)
+        return np.concatenate([v.sum(0).T, np.einsum("ijk,nj,nkc->ci", _levi(), x, v)], axis=1)
+
+    @property
+    def support_reactions(self) -> dict[str, np.ndarray]:
+        """Support name -> reaction force and moment about the origin (k, 6) on the part."""
+        return {name: self.resultants(d, self.reactions) for name, d in self.support_dofs.items()}
+
+    @property
+    def equilibrium_error(self) -> np.ndarray:
+        """(k,) |Σ applied + Σ reactions| (forces and moments) relative to Σ|applied nodal forces|."""
+        alld = np.arange(len(self.F))
+        tot = self.resultants(alld, self.F + self.reactions)
+        L = np.ptp(self.model.mesh.nodes, axis=0).max()
+        scale = np.linalg.norm(self.F.reshape(-1, 3, self.F.shape[1]), axis=1).sum(0)
+        err = np.hypot(np.linalg.norm(tot[:, :3], axis=1), np.linalg.norm(tot[:, 3:], axis=1) / L)
+        return np.where(scale > 0, err / np.where(scale > 0, scale, 1), err)
+
+
+def _levi() -> np.ndarray:
+    e = np.zeros((3, 3, 3))
+    e[0, 1, 2] = e[1, 2, 0] = e[2, 0, 1] = 1
+    e[0, 2, 1] = e[2, 1, 0] = e[1, 0, 2] = -1
+    return e

@@ -1,0 +1,233 @@
+"""Supports: fixed surfaces, symmetry planes, a shaft in a hole, and free-body mode.
+
+How rigfem models a shaft in a hole (:class:`ShaftInHole`): the hole wall rests
+on an elastic foundation that connects it to a rigid, fixed shaft.  Springs per
+unit area act in the local radial, tangential and axial directions.  The radial
+modulus defaults to E/r (the contact stiffness of a steel shaft of radius r,
+order of magnitude), the tangential and axial ones to 1e-3 of it, so the shaft
+carries radial load like a pin and only weakly resists rotation about, and
+sliding along, its axis (those reactions are reported: they should be small).
+With ``direction`` set, radial springs act only on the half of the wall facing
+that direction (the side the shaft bears on).  Unlike clamping every node of
+the hole, the support traction is bounded, so it adds no stress singularity
+at the hole edges; the peak converges under mesh refinement.
+
+Free-body mode (:class:`FreeBody`) removes only the six rigid-body modes by a
+statically determinate 3-2-1 support on three far-apart nodes; for a
+self-equilibrated load set its six reactions are ≈ 0 (reported), and the rigid
+motion is projected out of the displacement afterwards.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from rigfem.errors import InputError
+from rigfem.fe.assembly import (
+    FEMesh,
+    _scatter,
+    element_dofs,
+    shape_dL,
+    shape_values,
+    tri_quadrature,
+)
+from rigfem.mesh.partmesh import Hole
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """All displacement components zero on a named surface."""
+
+    surface: str
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """Zero normal displacement on a plane surface whose normal is a coordinate axis."""
+
+    surface: str
+
+
+@dataclass(frozen=True)
+class ShaftInHole:
+    """Hole wall on an elastic foundation to a fixed rigid shaft; moduli in force/length³."""
+
+    hole: str
+    k_radial: float | None = None  #: default E / radius
+    k_tangential: float | None = None  #: default 1e-3 k_radial
+    k_axial: float | None = None  #: default 1e-3 k_radial
+    direction: tuple[float, float, float] | None = None  #: bearing side; None = whole wall
+
+
+@dataclass(frozen=True)
+class FreeBody:
+    """No support: only rigid-body motion is removed (self-equilibrated loads)."""
+
+
+Support = Fixed | Symmetry | ShaftInHole | FreeBody
+
+
+def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False):
+    """Points (K, nq, 3), weights·area (K, nq), shape values (nq, nloc), nodes (K, nloc) of a
+    surface, and with ``normals`` unit normals (K, nq, 3) (orientation: (x1−x0)×(x2−x0)).
+
+    6-node triangles are mapped isoparametrically, so a curved triangle's points, area and
+    normals are those of its curved shape.
+    """
+    if name not in fm.surfaces:
+        raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
+    tri = fm.surfaces[name]
+    if len(tri) == 0:
+        raise InputError(f"surface {name!r} is empty")
+    L, W = tri_quadrature(degree)
+    x = fm.nodes[tri]
+    N = shape_values(L, fm.order)
+    dL = shape_dL(L, fm.order)
+    t = np.einsum("qak,Kad->Kqkd", dL[..., 1:] - dL[..., :1], x)  # tangents ∂x/∂ξ1, ∂x/∂ξ2
+    nv = np.cross(t[:, :, 0], t[:, :, 1])
+    area2 = np.linalg.norm(nv, axis=-1)
+    out = (np.einsum("qa,kad->kqd", N, x), area2 * W[None, :], N, tri)
+    return out + (nv / area2[..., None],) if normals else out
+
+
+def surface_nodes(fm: FEMesh, name: str) -> np.ndarray:
+    """Unique node ids of a named surface."""
+    if name not in fm.surfaces:
+        raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
+    return np.unique(fm.surfaces[name])
+
+
+def rigid_modes(x: np.ndarray) -> np.ndarray:
+    """Rigid-body modes (3N, 6) about the centroid; rotations scaled by the body size."""
+    c = x - x.mean(0)
+    s = max(np.abs(c).max(), np.finfo(float).tiny)
+    c = c / s
+    R = np.zeros((len(x), 3, 6))
+    R[:, [0, 1, 2], [0, 1, 2]] = 1.0
+    R[:, 1, 3], R[:, 2, 3] = -c[:, 2], c[:, 1]
+    R[:, 0, 4], R[:, 2, 4] = c[:, 2], -c[:, 0]
+    R[:, 0, 5], R[:, 1, 5] = -c[:, 1], c[:, 0]
+    return R.reshape(-1, 6)
+
+
+def _plane_axis(fm: FEMesh, name: str) -> int:
+    tri = fm.surfaces[name] if name in fm.surfaces else None
+    if tri is None:
+        raise InputError(f"symmetry surface {name!r} is not in the mesh")
+    x = fm.nodes[tri[:, :3]]
+    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    ax = int(np.argmax(np.abs(n[0])))
+    if not np.allclose(np.abs(n[:, ax]), 1.0, atol=1e-6):
+        raise InputError(f"symmetry surface {name!r} must be a plane normal to the x, y or z axis")
+    return ax
+
+
+def shaft_terms(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> tuple[np.ndarray, ...]:
+    """The elastic foundation of a shaft in a hole at each quadrature point of the wall.
+
+    Returns points (K, nq, 3), spring moduli (K, nq, 3) in the radial, tangential and axial
+    directions, those directions (K, nq, 3, 3), weights·area (K, nq), shape values (nq, nloc)
+    and the wall's nodes (K, nloc).  :func:`shaft_springs` assembles them; the CalculiX export
+    writes the same terms as springs.
+    """
+    kr = E / hole.radius if s.k_radial is None else s.k_radial
+    kt = 1e-3 * kr if s.k_tangential is None else s.k_tangential
+    ka = 1e-3 * kr if s.k_axial is None else s.k_axial
+    for nm, v in (("k_radial", kr), ("k_tangential", kt), ("k_axial", ka)):
+        if not (np.isfinite(v) and v >= 0):
+            raise InputError(f"ShaftInHole({s.hole!r}).{nm} = {v!r} must be finite and >= 0")
+    pts, w, N, tri = surface_quadrature(fm, s.hole, 4)
+    a = np.asarray(hole.axis, float) / np.linalg.norm(hole.axis)
+    d = pts - np.asarray(hole.center, float)
+    rad = d - (d @ a)[..., None] * a
+    n = rad / np.linalg.norm(rad, axis=-1, keepdims=True)
+    t = np.cross(a, n)
+    krq = np.full(w.shape, kr)
+    if s.direction is not None:
+        dirn = np.asarray(s.direction, float)
+        dirn = dirn - (dirn @ a) * a
+        if np.linalg.norm(dirn) == 0:
+            raise InputError(f"ShaftInHole({s.hole!r}).direction must not be parallel to the hole axis")
+        krq = np.where(n @ dirn > 0, kr, 0.0)
+    k = np.stack([krq, np.full(w.shape, kt), np.full(w.shape, ka)], -1)
+    dirs = np.stack([n, t, np.broadcast_to(a, n.shape)], -2)
+    return pts, k, dirs, w, N, tri
+
+
+def shaft_springs(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> sp.csr_matrix:
+    """Stiffness of the elastic foundation of a shaft in a hole."""
+    _, k, dirs, w, N, tri = shaft_terms(fm, hole, s, E)
+    S = np.einsum("kqd,kqdi,kqdj->kqij", k, dirs, dirs)
+    Ke = np.einsum("kq,qa,qb,kqij->kaibj", w, N, N, S, optimize=True)
+    n = Ke.shape[1] * 3
+    return _scatter(element_dofs(tri), Ke.reshape(-1, n, n), fm.ndof)
+
+
+def three_two_one(x: np.ndarray) -> np.ndarray:
+    """Six DOFs of a statically determinate 3-2-1 support on three far-apart nodes."""
+    c = x.mean(0)
+    A = int(np.argmax(np.linalg.norm(x - c, axis=1)))
+    B = int(np.argmax(np.linalg.norm(x - x[A], axis=1)))
+    ab = x[B] - x[A]
+    d = x - x[A]
+    C = int(np.argmax(np.linalg.norm(np.cross(d, ab), axis=1)))
+    e = np.cross(ab, x[C] - x[A])  # motion of C under a rotation about AB
+    kb = [k for k in range(3) if k != int(np.argmax(np.abs(ab)))]
+    kc = int(np.argmax(np.abs(e)))
+    return np.array([3 * A, 3 * A + 1, 3 * A + 2, 3 * B + kb[0], 3 * B + kb[1], 3 * C + kc])
+
+
+def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
+    """Fixed DOFs, spring matrix (or None) and per-support DOF sets; checks rigid-body modes."""
+    if not supports:
+        raise InputError("supports: none given; add Fixed/Symmetry/ShaftInHole supports, or FreeBody() "
+                         "for a self-equilibrated load set")
+    free_body = any(isinstance(s, FreeBody) for s in supports)
+    if free_body and len(supports) > 1:
+        raise InputError("supports: FreeBody() cannot be combined with other supports")
+    fixed, springs, groups = [], None, {}
+    for s in supports:
+        if isinstance(s, Fixed):
+            dofs = (3 * surface_nodes(fm, s.surface)[:, None] + np.arange(3)).ravel()
+            groups[f"Fixed({s.surface})"] = dofs
+        elif isinstance(s, Symmetry):
+            ax = _plane_axis(fm, s.surface)
+            dofs = 3 * surface_nodes(fm, s.surface) + ax
+            groups[f"Symmetry({s.surface})"] = dofs
+        elif isinstance(s, ShaftInHole):
+            if s.hole not in holes:
+                raise InputError(f"ShaftInHole: hole {s.hole!r} is not in the part; available: "
+                                 f"{', '.join(holes) or 'none'}")
+            Ks = shaft_springs(fm, holes[s.hole], s, E)
+            springs = Ks if springs is None else springs + Ks
+            groups[f"ShaftInHole({s.hole})"] = (3 * surface_nodes(fm, s.hole)[:, None] + np.arange(3)).ravel()
+            continue
+        elif isinstance(s, FreeBody):
+            dofs = three_two_one(fm.nodes[:fm.n_vertices])
+            groups["FreeBody(3-2-1)"] = dofs
+        else:
+            raise InputError(f"supports: {s!r} is not a support (Fixed, Symmetry, ShaftInHole, FreeBody)")
+        fixed.append(dofs)
+    fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
+    _check_rigid(fm, fixed, springs)
+    return fixed, springs, groups
+
+
+def _check_rigid(fm: FEMesh, fixed: np.ndarray, springs: sp.csr_matrix | None) -> None:
+    """Raise InputError when the supports leave a rigid-body mode free."""
+    R = rigid_modes(fm.nodes)
+    Q = R[fixed].T @ R[fixed] / max(len(fixed), 1)
+    if springs is not None:
+        Qs = R.T @ (springs @ R)
+        Q = Q + Qs / max(np.abs(np.diag(Qs)).max(), np.finfo(float).tiny)
+    ev, V = np.linalg.eigh(Q)
+    bad = ev < 1e-12 * max(ev.max(), np.finfo(float).tiny)
+    if bad.any():
+        names = ["translation x", "translation y", "translation z", "rotation x", "rotation y", "rotation z"]
+        modes = [names[int(np.argmax(np.abs(V[:, i])))] for i in np.where(bad)[0]]
+        raise InputError(f"supports: insufficient, {bad.sum()} rigid-body mode(s) free (e.g. {', '.join(modes)}); "
+                         f"add supports, or FreeBody() for a self-equilibrated load set")

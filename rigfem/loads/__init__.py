@@ -1,0 +1,13 @@
+"""From a reaction history to per-part load cases: unit loads and their superposition weights.
+
+The public API, loaded on first use (``lazy_loader``): importing one name does not
+import the whole subpackage.
+"""
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "cases": ["INERTIA", "UnitLoad", "PartCase", "direction_weights", "directions", "rotate_into", "screw_forces", "bearing_cases", "Bar", "Fitting", "bar_body", "force_on", "rail_angle", "original_rail", "POST_SUPPORTS", "POST_HELD", "original_fitting", "cycle_rail", "cycle_fitting", "part_cases"],
+    },
+)

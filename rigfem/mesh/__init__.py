@@ -1,0 +1,15 @@
+"""The mesh of one part: gmsh/OpenCASCADE geometry, meshing, second-order nodes, the cache.
+
+The public API, loaded on first use (``lazy_loader``): importing one name does not
+import the whole subpackage.
+"""
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "geometry": ["gmsh_session", "build", "volume_mm3", "mass_kg"],
+        "mesher": ["MESH_RECIPE", "MACHINE_GIB", "TETS_PER_H3", "CURVATURE_MM", "MeshSettings", "DEFAULT_SIZE", "Estimate", "estimate_tets", "estimate", "cache_dir", "fit_cylinder", "second_order", "mesh_part"],
+        "partmesh": ["Hole", "PartMesh", "quality_summary", "save_npz", "load_npz", "TET10_EDGES", "TRI6_EDGES", "quadratic", "to_meshio", "write_mesh"],
+    },
+)

@@ -1,0 +1,360 @@
+"""Meshing a part in gmsh: sizes, refinement fields, second-order nodes, memory estimate, the mesh cache."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rigfem.mesh.partmesh import (
+    Hole,
+    PartMesh,
+    load_npz,
+    quality_summary,
+    save_npz,
+)
+
+#: bump when the meshing recipe changes, so cached meshes are not reused
+MESH_RECIPE = 5  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
+
+
+#                  4: curvature sizing with the global size, concentrators at half the refined size;
+#                  5: mid-edge points of curved boundary edges
+#: machine memory the estimate is checked against, GiB: this machine's physical memory
+MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
+
+
+#: empirical tets per h^3 of volume for gmsh's Delaunay mesher (calibrated on the rail and plate)
+TETS_PER_H3 = 8.4
+
+
+#: curved surfaces get CURVATURE_MM / size elements per 2*pi (gmsh Mesh.MeshSizeFromCurvature):
+#: 6 at the draft 8 mm, 8 at the standard 6 mm, 12 at the fine 4 mm
+CURVATURE_MM = 48.0
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """How to mesh a part: global size, and finer size near the surfaces that carry load."""
+
+    size: float  #: mm, global (largest) element size
+    refine: tuple[str, ...] = ()  #: surface groups carrying load: refined, everything else coarse
+    refine_size: float | None = None  #: mm, size on the refined surfaces (default size/4)
+    refine_dist: float | None = None  #: mm, distance over which the size grows back (default 2*size)
+    min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
+    concentrate: tuple[str, ...] = ()  #: refined groups that raise stress (fillets): half the refined size
+
+    @property
+    def size_near(self) -> float:
+        return self.refine_size if self.refine_size is not None else self.size / 4
+
+    @property
+    def dist(self) -> float:
+        return self.refine_dist if self.refine_dist is not None else 2 * self.size
+
+    def key(self) -> dict:
+        return {"size": self.size, "refine": sorted(self.refine), "refine_size": self.size_near,
+                "refine_dist": self.dist, "min_quality": self.min_quality,
+                "concentrate": sorted(self.concentrate)}
+
+    @property
+    def curvature_n(self) -> int:
+        """Elements per 2*pi on a curved surface: CURVATURE_MM / size (at least 6), so curved
+        faces (rail grooves, holes) get finer with the global size and a size sequence converges."""
+        return max(6, round(CURVATURE_MM / self.size))
+
+
+#: default global element size per part kind, mm (rail: about 4 elements across its 23 x 24 section)
+DEFAULT_SIZE = {"rail": 6.0, "plate": 5.0, "iprofile": 4.0, "custom": 5.0}
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Predicted size of a mesh and of its P2 solve, before meshing."""
+
+    tets: int
+    gmsh_bytes: float  #: peak memory of gmsh while meshing
+    solve_bytes: float  #: memory of a direct P2 solve on the mesh (3 DOF per node)
+
+    @property
+    def gib(self) -> float:
+        return max(self.gmsh_bytes, self.solve_bytes) / 2**30
+
+
+def estimate_tets(volume: float, refined_area: float, s: MeshSettings, concentrated_area: float = 0.0) -> int:
+    """Tetrahedra gmsh will make: volume/h^3 plus a graded layer over the refined surfaces.
+
+    The size grows linearly from ``size_near`` (half that on concentrators) at a refined surface
+    to ``size`` at ``dist``; a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3)
+    over 0..dist extra tets (at most the whole volume at the refined size).
+    """
+    h, D = s.size, s.dist
+
+    def layer(hn: float) -> float:
+        hn = min(hn, h)
+        return D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3 if h - hn > 1e-12 else 0.0
+
+    hn = min(s.size_near, h)
+    extra = refined_area * layer(hn) + concentrated_area * layer(hn / 2)
+    return int(TETS_PER_H3 * min(volume / h**3 + extra, volume / (hn / 2 if concentrated_area else hn)**3))
+
+
+def estimate(tets: int) -> Estimate:
+    """Memory of meshing (about 1 kB per tet in gmsh) and of a direct P2 solve.
+
+    P2 on tets: about 1.4 nodes per tet, 3 DOF each; the stiffness has about 80 entries
+    per row; a nested-dissection factor of a 3-D problem holds about 8*n^(4/3) entries
+    (12 bytes each, value plus index).
+    """
+    n = 3 * 1.4 * tets
+    return Estimate(tets, 1000.0 * tets, 12.0 * (80 * n + 8 * n ** (4 / 3)))
+
+
+def cache_dir() -> Path:
+    """Folder of cached meshes: $RIGFEM_CACHE or ~/.cache/rigfem (outside the repository)."""
+    return Path(os.environ.get("RIGFEM_CACHE") or Path.home() / ".cache" / "rigfem")
+
+
+def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Hole | None:
+    """The cylinder through the vertices of a triangulated surface, or None if it is not one.
+
+    Start: axis orthogonal to the face normals (smallest eigenvector of sum n n^T), circle by
+    a linear (Kasa) fit in the plane normal to it; then a least-squares fit of the distances
+    to the axis.  Rejected if the surface is flat or a vertex lies off by more than rtol*r.
+    """
+    from scipy.optimize import least_squares
+
+    p = points[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    w, v = np.linalg.eigh(n.T @ n)
+    if w[1] < 0.05 * w.sum() or w[0] > 0.2 * w.sum():  # flat, or normals spread in 3-D
+        return None
+    a0 = v[:, 0]
+    q = points[np.unique(tris)]
+    e1 = np.cross(a0, [1.0, 0, 0] if abs(a0[0]) < 0.9 else [0, 1.0, 0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a0, e1)
+    x, y = q @ e1, q @ e2
+    sol, *_ = np.linalg.lstsq(np.c_[2 * x, 2 * y, np.ones_like(x)], x**2 + y**2, rcond=None)
+    r0 = np.sqrt(sol[2] + sol[0] ** 2 + sol[1] ** 2)
+
+    def axis_point(z):
+        a = a0 + z[0] * e1 + z[1] * e2
+        return a / np.linalg.norm(a), (sol[0] + z[2]) * e1 + (sol[1] + z[3]) * e2
+
+    def residual(z):
+        a, c = axis_point(z)
+        return np.linalg.norm(np.cross(q - c, a), axis=1) - z[4]
+
+    fit = least_squares(residual, [0, 0, 0, 0, r0], x_scale=[1, 1, r0, r0, r0], xtol=1e-14, ftol=1e-14)
+    a, c = axis_point(fit.x)
+    r = float(fit.x[4])
+    if r <= 0 or np.abs(fit.fun).max() > rtol * r:
+        return None
+    a = a * np.sign(a[np.argmax(np.abs(a))])
+    t = (q - c) @ a
+    return Hole(c + a * (t.min() + t.max()) / 2, a, r, float(t.max() - t.min()))
+
+
+def _quality() -> np.ndarray:
+    """gmsh's minSICN of every linear tetrahedron of the current mesh."""
+    import gmsh
+
+    return np.asarray(gmsh.model.mesh.getElementQualities(gmsh.model.mesh.getElementsByType(4)[0], "minSICN"))
+
+
+def second_order(groups: dict[str, list[int]], rtol: float = 1e-3):
+    """Make gmsh's current linear tet mesh second order and read it back.
+
+    gmsh puts every boundary mid-edge node on the geometry (grooves, holes, fillets) and then
+    moves the interior nodes by an elastic analogy (``HighOrderElastic``) so the elements next
+    to a curved wall stay valid; that can shift vertices slightly, so the whole mesh is read
+    again.  ``groups`` maps surface names to gmsh surface tags.  Returns points (N, 3),
+    positively oriented tets (M, 4), the groups' triangles, and the curved edges: vertex pairs
+    (E, 2) and mid-edge points (E, 3) of the edges whose node is off the straight midpoint by
+    more than ``rtol`` times the edge length.
+    """
+    import gmsh
+
+    gmsh.model.mesh.setOrder(2)
+    gmsh.model.mesh.optimize("HighOrderElastic")
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    xyz = np.zeros((int(tags.max()) + 1, 3))
+    xyz[tags.astype(np.int64)] = coords.reshape(-1, 3)
+    el = gmsh.model.mesh.getElementsByType(11)[1].astype(np.int64).reshape(-1, 10)
+    vert = np.unique(el[:, :4])
+    index = np.full(len(xyz), -1, np.int64)
+    index[vert] = np.arange(len(vert))
+    points, tets = xyz[vert], index[el[:, :4]]
+    neg = np.linalg.det(points[tets[:, 1:]] - points[tets[:, :1]]) < 0
+    tets[neg, 1:3] = tets[neg, 2:0:-1]
+    surfaces = {name: index[np.concatenate([gmsh.model.mesh.getElementsByType(9, t)[1] for t in ents]
+                                           ).astype(np.int64).reshape(-1, 6)[:, :3]]
+                for name, ents in groups.items()}
+    ref = np.asarray(gmsh.model.mesh.getElementProperties(11)[4]).reshape(10, 3)
+    bary = np.c_[1 - ref.sum(1), ref]  # the two corners each of gmsh's mid-edge nodes lies between
+    mids, first = np.unique(el[:, 4:].ravel(), return_index=True)
+    pairs = el[:, np.array([np.flatnonzero(b > 0.25) for b in bary[4:]])].reshape(-1, 2)[first]
+    a, b, m = xyz[pairs[:, 0]], xyz[pairs[:, 1]], xyz[mids]
+    off = np.linalg.norm(m - 0.5 * (a + b), axis=1) > rtol * np.linalg.norm(b - a, axis=1)
+    return points, tets, surfaces, index[pairs[off]], m[off]
+
+
+def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> None:
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", s.size)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", s.curvature_n)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
+    if not refine_tags:
+        return
+    f = gmsh.model.mesh.field
+    plain = [t for t in refine_tags if t not in conc_tags]
+    ths = [_threshold(tags, size, s) for tags, size in ((plain, s.size_near), (conc_tags, s.size_near / 2))
+           if tags]
+    if len(ths) > 1:
+        both = f.add("Min")
+        f.setNumbers(both, "FieldsList", ths)
+        ths = [both]
+    f.setAsBackgroundMesh(ths[0])
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+
+
+def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
+    """A gmsh Threshold field: ``size_near`` on the surfaces ``tags``, growing to ``s.size`` at ``s.dist``."""
+    import gmsh
+
+    f = gmsh.model.mesh.field
+    dist = f.add("Distance")
+    f.setNumbers(dist, "SurfacesList", tags)
+    extent = max(float(np.ptp(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3), axis=0).max())
+                 for t in tags)
+    # sample points on each surface about half a refined element apart (within 20..500 per direction)
+    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / size_near), 20, 500)))
+    th = f.add("Threshold")
+    f.setNumber(th, "InField", dist)
+    f.setNumber(th, "SizeMin", min(size_near, s.size))
+    f.setNumber(th, "SizeMax", s.size)
+    f.setNumber(th, "DistMin", 0.0)
+    f.setNumber(th, "DistMax", s.dist)
+    return th
+
+
+def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
+              machine_gib: float = MACHINE_GIB) -> PartMesh:
+    """Mesh a part (``rigfem.rig.parts.PartDef``) with linear tets; cached by content hash.
+
+    Refuses (InputError) a request whose estimate exceeds ``machine_gib`` and a mesh whose
+    minimum minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.
+    """
+    import gmsh
+
+    from rigfem.errors import InputError, check_range
+    from rigfem.mesh.geometry import build, gmsh_session
+
+    check_range("size", settings.size, 0.0, None, "mm", lo_open=True)
+    check_range("refine_size", settings.size_near, 0.0, None, "mm", lo_open=True)
+    check_range("refine_dist", settings.dist, 0.0, None, "mm", lo_open=True)
+    check_range("min_quality", settings.min_quality, 0.0, 1.0)
+    key_src = {"part": part.content_hash(), "settings": settings.key(), "recipe": MESH_RECIPE,
+               "gmsh": gmsh.__version__}
+    key = hashlib.sha256(json.dumps(key_src, sort_keys=True).encode()).hexdigest()[:32]
+    path = cache_dir() / "meshes" / f"{part.name}-{key}.npz"
+    if use_cache and path.is_file():
+        try:
+            pm = load_npz(path)
+        except (OSError, KeyError, ValueError):  # unreadable cache entry: mesh again, overwrite it
+            pass
+        else:
+            pm.meta["cache"] = "hit"
+            return pm
+    t0 = time.perf_counter()
+    with gmsh_session(part.name):
+        gmsh.option.setNumber("General.NumThreads", 1)
+        holes = build(part)
+        groups = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups(2)}
+        unknown = [g for g in settings.refine + settings.concentrate if g not in groups]
+        if unknown:
+            raise InputError(f"refine: {', '.join(unknown)} not a surface group of {part.name}; "
+                             f"groups: {', '.join(sorted(groups))}")
+        refine_tags, conc_tags = (sorted({t for g in names for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
+                                  for names in (settings.refine + settings.concentrate, settings.concentrate))
+        est = _estimate_model(refine_tags, conc_tags, settings)
+        if est.gib > machine_gib:
+            raise InputError(f"size = {settings.size:g} mm (refine_size = {settings.size_near:g} mm) "
+                             f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
+                             f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
+                             f"more than the machine's {machine_gib:g} GiB: increase --size")
+        _set_fields(refine_tags, conc_tags, settings)
+        gmsh.model.mesh.generate(3)
+        q = _quality()
+        if len(q) and q.min() < settings.min_quality:
+            # HXT can leave a flat tet across a thin wall whose two faces carry mirrored surface
+            # meshes (the filleted I-profile web); gmsh's Delaunay inserts points and recovers
+            gmsh.model.mesh.clear()
+            gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+            gmsh.model.mesh.generate(3)
+            q = _quality()
+        if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
+            raise InputError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
+                             f"min_quality = {settings.min_quality:g}; change size = {settings.size:g} mm "
+                             f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
+        points, tets, surfaces, edges, mids = second_order(
+            {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()})
+    seconds = time.perf_counter() - t0
+    empty = [k for k, v in surfaces.items() if len(v) == 0]
+    if empty or len(tets) == 0:
+        raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size = {settings.size:g} mm")
+    if not holes:  # custom part: cylinders fitted to the meshed surfaces
+        holes = {k: h for k, v in surfaces.items() if (h := fit_cylinder(points, v)) is not None}
+    quality = quality_summary(q)  # of the linear mesh, before gmsh curved it
+    meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
+            "density": part.density, "settings": settings.key(), "hash": key,
+            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
+    pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
+    if use_cache:
+        save_npz(pm, path)
+    return pm
+
+
+def _estimate_model(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> Estimate:
+    """Estimate from the current gmsh model's volume, the area of the refined surfaces and the
+    curved surfaces that curvature-based sizing meshes finer than ``s.size``."""
+    import gmsh
+
+    occ_vols = gmsh.model.occ.getEntities(3)
+    if occ_vols:
+        volume = sum(gmsh.model.occ.getMass(3, t) for _, t in occ_vols)
+        area = sum(gmsh.model.occ.getMass(2, t) for t in refine_tags if t not in conc_tags)
+        conc = sum(gmsh.model.occ.getMass(2, t) for t in conc_tags)
+        curved = [(gmsh.model.occ.getMass(2, t), _curvature_size(t, s.curvature_n)) for _, t in gmsh.model.getEntities(2)
+                  if t not in refine_tags]
+    else:  # built-in kernel: bounding box as an upper bound
+        lo, hi = np.array(gmsh.model.getBoundingBox(-1, -1)).reshape(2, 3)
+        volume = float(np.prod(hi - lo))
+        area = sum(float(np.prod(np.sort(np.diff(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3),
+                                                         axis=0)[0])[1:])) for t in refine_tags)
+        curved, conc = [], 0.0
+    tets = estimate_tets(volume, area, s, conc)
+    # a layer one curvature size hc thick over a curved surface: A*hc/hc^3 tets instead of A*hc/h^3
+    tets += int(TETS_PER_H3 * sum(a * (1 / hc**2 - hc / s.size**3) for a, hc in curved if hc < s.size))
+    return estimate(tets)
+
+
+def _curvature_size(tag: int, n: int) -> float:
+    """Element size gmsh's curvature sizing gives a surface: 2*pi/(k*n), k its largest principal
+    curvature on a 3 x 3 grid of parametric points (inf for a flat surface)."""
+    import gmsh
+
+    lo, hi = gmsh.model.getParametrizationBounds(2, tag)
+    uv = np.stack(np.meshgrid(*[np.linspace(a + 0.1 * (b - a), b - 0.1 * (b - a), 3) for a, b in zip(lo, hi)]),
+                  -1).reshape(-1)
+    kmax = np.abs(np.concatenate(gmsh.model.getPrincipalCurvatures(tag, uv)[:2])).max()
+    return 2 * np.pi / (kmax * n) if kmax > 1e-9 else np.inf

@@ -1,0 +1,167 @@
+"""The mesh of one part: the one data type shared by meshing, the FE solver and the reports.
+
+Units: mm.  A :class:`PartMesh` is what gmsh produced for a part, reduced to plain
+arrays (like meshio's ``Mesh``): the tetrahedra's vertices, the named interface surfaces as
+triangles, the geometry of every cylindrical interface (holes, bearing seat) so loads and
+supports can attach by name, and the curved edges: the mid-edge nodes of gmsh's second-order
+mesh that are off their chords (on the grooves, holes and fillets, and the interior nodes
+gmsh moved to keep the elements next to them valid), so P2 elements follow the geometry
+instead of faceting it (:func:`quadratic`).
+
+:func:`mesh_part` meshes a part of :mod:`rigfem.parts` in gmsh (OpenCASCADE geometry, HXT
+linear tets, one thread so identical input gives an identical mesh): a global ``size`` and a
+Distance/Threshold field that grades down to ``refine_size`` at the surface groups that carry
+load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates the element count
+and the memory of the mesh and of a direct P2 solve on it and refuses requests above the
+machine (24 GiB); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
+refuses a mesh below ``min_quality``; then makes the mesh second order (:func:`second_order`).
+Results are cached as .npz under $RIGFEM_CACHE or
+~/.cache/rigfem, keyed by a hash of the part definition, the settings and the gmsh version.
+The FE solver builds P2 from :func:`quadratic`; :func:`write_mesh` exports .vtu/.msh (tetra or
+tetra10).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Hole:
+    """A cylindrical interface surface of a part (screw hole, pivot hole, bearing seat)."""
+
+    center: np.ndarray  #: (3,) mm, point on the axis at mid-depth of the cylinder
+    axis: np.ndarray  #: (3,) unit vector along the cylinder axis
+    radius: float  #: mm
+    depth: float  #: mm, axial length of the cylindrical surface
+
+
+@dataclass
+class PartMesh:
+    """Linear tetrahedral mesh of one part with its named interface surfaces."""
+
+    name: str
+    points: np.ndarray  #: (N, 3) float, mm
+    tets: np.ndarray  #: (M, 4) int, 0-based, positively oriented
+    surfaces: dict[str, np.ndarray] = field(default_factory=dict)  #: group name -> (K, 3) triangles
+    holes: dict[str, Hole] = field(default_factory=dict)  #: group name -> cylinder geometry
+    quality: dict[str, float] = field(default_factory=dict)  #: e.g. {"min": .., "p01": .., "median": ..}
+    meta: dict = field(default_factory=dict)  #: part parameters, mesh settings, content hash
+    #: edges whose P2 node is off its chord (:func:`second_order`): vertex pairs (E, 2), nodes (E, 3)
+    curved_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+
+def quality_summary(q: np.ndarray) -> dict[str, float]:
+    """Minimum, 1st and 5th percentile and median of per-tet quality values."""
+    return {"min": float(q.min()), "p01": float(np.percentile(q, 1)),
+            "p05": float(np.percentile(q, 5)), "median": float(np.median(q))}
+
+
+def save_npz(pm: PartMesh, path: Path) -> None:
+    """Store a PartMesh as .npz (atomic: written to a temporary name, then renamed)."""
+    arrays = {"points": pm.points, "tets": pm.tets, "curved_edges": pm.curved_edges,
+              "curved_points": pm.curved_points}
+    arrays |= {f"surf:{k}": v for k, v in pm.surfaces.items()}
+    arrays |= {f"hole:{k}": np.concatenate([h.center, h.axis, [h.radius, h.depth]])
+               for k, h in pm.holes.items()}
+    arrays["json"] = np.array(json.dumps({"name": pm.name, "quality": pm.quality, "meta": pm.meta}))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def load_npz(path: Path) -> PartMesh:
+    """Read a PartMesh written by :func:`save_npz`."""
+    with np.load(path) as z:
+        info = json.loads(str(z["json"]))
+        surfaces = {k[5:]: z[k] for k in z.files if k.startswith("surf:")}
+        holes = {k[5:]: Hole(z[k][:3].copy(), z[k][3:6].copy(), float(z[k][6]), float(z[k][7]))
+                 for k in z.files if k.startswith("hole:")}
+        return PartMesh(info["name"], z["points"], z["tets"], surfaces, holes, info["quality"], info["meta"],
+                        z["curved_edges"], z["curved_points"])
+
+
+TET10_EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])  #: VTK/meshio tetra10 order
+
+
+TRI6_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+
+
+def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
+    return np.minimum(pairs[..., 0], pairs[..., 1]).astype(np.int64) * n + np.maximum(pairs[..., 0], pairs[..., 1])
+
+
+def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """P2 nodes, tetra10 elements (M, 10) and triangle6 groups of a mesh (VTK / C3D10 order).
+
+    Nodes are the vertices, then one node per edge: at ``pm.curved_points`` for the edges of
+    ``pm.curved_edges``, at the straight midpoint elsewhere.
+    """
+    from rigfem.errors import InputError
+
+    points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
+    n = len(points)
+    ukeys, inv = np.unique(_edge_keys(tets[:, TET10_EDGES], n), return_inverse=True)
+    mid = 0.5 * (points[ukeys // n] + points[ukeys % n])
+
+    def lookup(pairs: np.ndarray, what: str) -> np.ndarray:
+        k = _edge_keys(pairs, n)
+        pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
+        if not (ukeys[pos] == k).all():
+            raise InputError(f"{what} has edges that are not tet edges of the mesh")
+        return pos
+
+    if len(pm.curved_edges):
+        mid[lookup(np.asarray(pm.curved_edges, np.int64), "curved_edges")] = pm.curved_points
+    surfaces = {name: np.hstack([tri, n + lookup(np.asarray(tri, np.int64)[:, TRI6_EDGES], f"surface {name!r}")])
+                for name, tri in pm.surfaces.items()}
+    return np.vstack([points, mid]), np.hstack([tets, n + inv.reshape(-1, 6)]), surfaces
+
+
+def to_meshio(pm: PartMesh, order: int = 1):
+    """meshio.Mesh of the part: tets plus one triangle block per named surface.
+
+    ``order=2`` writes tetra10/triangle6 with the mid-edge nodes of :func:`quadratic` (on the
+    geometry where the boundary is curved).
+    """
+    import meshio
+
+    from rigfem.errors import InputError
+
+    if order not in (1, 2):
+        raise InputError(f"order = {order!r} must be 1 or 2")
+    if order == 2:
+        points, tets, surfaces = quadratic(pm)
+    else:
+        points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
+        surfaces = {k: np.asarray(v, np.int64) for k, v in pm.surfaces.items()}
+    tet_t, tri_t = ("tetra", "triangle") if order == 1 else ("tetra10", "triangle6")
+    names = sorted(surfaces)
+    cells = [(tet_t, tets)] + [(tri_t, surfaces[k]) for k in names]
+    ids = [np.full(len(tets), len(names) + 1)] + [np.full(len(surfaces[k]), i + 1) for i, k in enumerate(names)]
+    field_data = {k: np.array([i + 1, 2]) for i, k in enumerate(names)}
+    field_data[pm.name] = np.array([len(names) + 1, 3])
+    return meshio.Mesh(points, cells, cell_data={"gmsh:physical": ids, "gmsh:geometrical": ids},
+                       field_data=field_data)
+
+
+def write_mesh(pm: PartMesh, path: str | Path, order: int = 1) -> None:
+    """Write .vtu or .msh (gmsh 2.2 format, physical names kept) through meshio."""
+    from rigfem.errors import InputError
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".vtu", ".msh"):
+        raise InputError(f"--out {path}: file type must be .vtu or .msh")
+    mesh = to_meshio(pm, order)
+    if suffix == ".msh":
+        mesh.write(path, file_format="gmsh22", binary=False)
+    else:
+        mesh.write(path)

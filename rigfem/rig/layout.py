@@ -1,0 +1,51 @@
+"""Where couplings sit on a guide rail: hole positions and the coupling's screw spacing.
+
+The loads (which holes a joint's screws go through) and the sweep (which joint distances
+a rail can carry) both ask this one place.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigfem.errors import InputError
+from rigfem.rig.parts import load_part, rail_hole_x
+
+
+@dataclass(frozen=True)
+class RailLayout:
+    """Where couplings sit on a rail: hole positions and the coupling's screw spacing (mm)."""
+
+    hole_x: np.ndarray  #: x of every mounting hole, increasing
+    pitch: float
+    screw_spacing: float  #: distance between a coupling's two screws (plate definition)
+
+    @property
+    def pivot_x(self) -> float:
+        """The pivot joint: the first position whose coupling screws both land on holes."""
+        return float(self.hole_x[0] + self.screw_spacing / 2)
+
+    def coupling(self, distance_mm: float, bar: str) -> tuple[int, int]:
+        """Hole indices of the two screws of the coupling ``distance_mm`` from the pivot.
+
+        The joint is placed on the nearest position whose screws land on holes.
+        """
+        x = self.pivot_x + distance_mm
+        lo = int(round((x - self.screw_spacing / 2 - self.hole_x[0]) / self.pitch))
+        hi = lo + int(round(self.screw_spacing / self.pitch))
+        if lo < 0 or hi >= len(self.hole_x):
+            most = self.hole_x[-1] - self.screw_spacing / 2 - self.pivot_x
+            raise InputError(f"{bar}: a joint {distance_mm:g} mm from the pivot does not fit on a "
+                             f"{self.hole_x[-1] + self.hole_x[0]:g} mm rail; allowed 0..{most:g} mm "
+                             f"(choose a longer rail)")
+        return lo, hi
+
+
+@functools.lru_cache(maxsize=256)
+def rail_layout(rail: str, length_mm: float, plate: str) -> RailLayout:
+    """The layout of rail part ``rail`` cut to ``length_mm``, with couplings of plate ``plate``."""
+    r = load_part(rail, {"length": length_mm})
+    return RailLayout(rail_hole_x(r), r["pitch"], load_part(plate)["screw_spacing"])

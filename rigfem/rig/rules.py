@@ -1,0 +1,95 @@
+"""Rig rules (RIG.md §2): what makes a configuration buildable and acceptable.
+
+Each rule is reported with its value, its limit and pass/fail, so a report can show
+how far a configuration is from every limit.  Lengths in mm, angles in degrees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+#: rail hole pitch (mm): bar lengths can only be set in these steps
+HOLE_PITCH_MM = 60.0
+
+
+#: the crank guide clears the rocker pivot only from this ground length (mm)
+MIN_GROUND_MM = 660.0
+
+
+#: acceptable transmission-angle band of the final design (deg)
+MU_LIMITS_DEG = (35.0, 145.0)
+
+
+@dataclass
+class Rule:
+    """One rule: ``ok`` is ``value <relation> limit``."""
+
+    name: str
+    value: float
+    limit: float
+    ok: bool
+    relation: str
+    unit: str = "mm"
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _rule(name: str, value: float, relation: str, limit: float, unit: str = "mm") -> Rule:
+    ok = {"<": value < limit, "<=": value <= limit, ">": value > limit, ">=": value >= limit,
+          "==": bool(np.isclose(value, limit, rtol=0, atol=1e-9))}[relation]
+    return Rule(name, float(value), float(limit), bool(ok), relation, unit)
+
+
+def transmission_angle_range(b2: float, b3: float, b4: float, d: float) -> tuple[float, float]:
+    """(mu_min, mu_max) in degrees with the crank along the ground line (RIG.md §2).
+
+    When the loop locks before reaching that position the cosine leaves [-1, 1] and the
+    extreme is clipped to 0 or 180 deg (a toggle).
+    """
+    def mu(f):
+        return float(np.degrees(np.arccos(np.clip((b3**2 + b4**2 - f**2) / (2 * b3 * b4), -1.0, 1.0))))
+
+    return mu(d - b2), mu(d + b2)
+
+
+def _mountable(lengths: dict[str, float]) -> Rule:
+    """Largest distance (mm) of any length from a whole number of hole pitches; limit 0."""
+    errs = {k: abs(v - HOLE_PITCH_MM * round(v / HOLE_PITCH_MM)) for k, v in lengths.items()}
+    worst = max(errs, key=errs.get)
+    off = f"; {worst} is off by {errs[worst]:g} mm" if errs[worst] > 1e-9 else ""
+    return _rule(f"mountable (whole 60 mm hole pitches{off})", errs[worst], "==", 0.0)
+
+
+def fourbar_rules(b2: float, b3: float, b4: float, d: float) -> list[Rule]:
+    """The rig rules of a four-bar (crank b2, coupler b3, rocker b4, ground d; mm)."""
+    mu_min, mu_max = transmission_angle_range(b2, b3, b4, d)
+    return [
+        _rule("loop can close (d < b2 + b3 + b4)", d, "<", b2 + b3 + b4),
+        _rule("crank turns fully (b2 + d < b3 + b4)", b2 + d, "<", b3 + b4),
+        _rule("crank guide clears the rocker pivot (d >= 660 mm)", d, ">=", MIN_GROUND_MM),
+        _rule("transmission angle min (mu_min > 35 deg)", mu_min, ">", MU_LIMITS_DEG[0], "deg"),
+        _rule("transmission angle max (mu_max < 145 deg)", mu_max, "<", MU_LIMITS_DEG[1], "deg"),
+        _mountable(dict(b2=b2, b3=b3, b4=b4, d=d)),
+    ]
+
+
+def slider_crank_rules(b2: float, b3: float, offset: float = 0.0) -> list[Rule]:
+    """The rig rules of a slider-crank (crank b2, rod b3, slide-line offset; mm)."""
+    rules = [_rule("rod and crank cannot align (b2 < b3)", b2, "<", b3)]
+    if offset:
+        rules.append(_rule("crank turns fully with the offset (b2 + |offset| < b3)", b2 + abs(offset), "<", b3))
+    rules.append(_mountable(dict(b2=b2, b3=b3)))
+    return rules
+
+
+def rules_for(meta: dict) -> list[Rule]:
+    """Rules of a linkage from its ``meta`` (four-bar and slider-crank; others have none)."""
+    L = meta.get("lengths_mm", {})
+    if meta.get("type") == "four-bar":
+        return fourbar_rules(L["b2"], L["b3"], L["b4"], L["d"])
+    if meta.get("type") == "slider-crank":
+        return slider_crank_rules(L["b2"], L["b3"], L.get("offset", 0.0))
+    return []

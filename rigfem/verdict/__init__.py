@@ -1,0 +1,15 @@
+"""The verdict on a part: σu/2 criterion with its error band, Goodman fatigue.
+
+The public API, loaded on first use (``lazy_loader``): importing one name does not
+import the whole subpackage.
+"""
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach(
+    __name__,
+    submod_attrs={
+        "criterion": ["Verdict", "half_ultimate", "overall"],
+        "fatigue": ["SURFACE", "RELIABILITY", "LOADING", "marin_endurance", "goodman"],
+        "part": ["verdict_of"],
+    },
+)

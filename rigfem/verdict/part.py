@@ -1,0 +1,74 @@
+"""The verdict of one solved part case: its peak against the criterion, with the caveats that shaped it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigfem.fe.model import LOCKING_NU
+from rigfem.fe.partcase import CaseResult
+from rigfem.rig.parts import load_part
+from rigfem.verdict.criterion import half_ultimate
+from rigfem.verdict.fatigue import goodman
+
+
+def _profile_caveat(res: CaseResult) -> list[str]:
+    """A rail whose section is heavier than the catalogue's is stiffer and stronger than the real one."""
+    part = load_part(res.case.part, res.case.params or None)
+    ref = part.reference.get("linear_mass_catalogue")
+    if part.kind != "rail" or ref is None:
+        return []
+    kg_m = res.solution.model.volume * part.density * 1e-9 / (part["length"] / 1000.0)
+    if kg_m <= 1.05 * ref.value:
+        return []
+    return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "
+            f"is stiffer and stronger than the real one, so this stress is likely low (a 3.1 kg/m profile "
+            f"carried 1.8-2.1x the rectangle's peak: results/rail_profile/study.md)"]
+
+
+def _fatigue(res: CaseResult, settings) -> dict | None:
+    """Goodman check of the stress cycle at the nodes that peak at some crank angle (cycle cases)."""
+    if res.cycle_nodes is None:
+        return None
+    fat = goodman(res.cycle_stress, settings.material.sigma_u, **settings.fatigue)
+    fat["node"] = int(res.cycle_nodes[fat.pop("point")])
+    fat["location_mm"] = [float(v) for v in res.solution.model.mesh.nodes[fat["node"]]]
+    return fat
+
+
+def verdict_of(res: CaseResult, settings) -> dict:
+    """Report entry of a case result (plain data, MPa, mm, deg)."""
+    mat = settings.material
+    pk = res.peak
+    v = half_ultimate(pk.value, mat.sigma_u, 100.0 * pk.error, settings.limit_factor)
+    sol = res.solution
+    c = res.coef[res.row]
+    eq = float(np.max(sol.equilibrium_error))
+    out = {
+        "name": res.case.name, "part": res.case.part, "mode": res.mode,
+        "peak_mpa": v.peak_mpa, "crank_deg": float(res.case.rows[res.row]),
+        "surface": pk.surface, "location_mm": [round(float(t), 3) for t in pk.xyz],
+        "error_pct": v.error_pct, "limit_mpa": v.limit_mpa, "utilisation_pct": v.utilisation_pct,
+        "verdict": v.verdict,
+        "max_displacement_mm": float(np.linalg.norm(sol.displacement(c), axis=1).max()),
+        "fatigue": _fatigue(res, settings),
+        "mesh": {"nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
+                 "dofs": int(sol.model.mesh.ndof), "order": settings.order,
+                 "quality_min": float(res.mesh.quality.get("min", 0.0)),
+                 "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
+                 "straightened": int(sol.model.mesh.straightened),
+                 "cache": res.mesh.meta.get("cache", "")},
+        "solve": {"method": sol.method, "load_cases": int(sol.U.shape[1]),
+                  "rows": int(len(res.case.rows)),
+                  "residual_max": float(sol.residuals.max()), "equilibrium_error": eq,
+                  "relieved_imbalance": res.imbalance,
+                  "seconds": {k: round(t, 3) for k, t in res.seconds.items()}},
+        "notes": list(res.case.notes),
+    }
+    out["notes"] += _profile_caveat(res)
+    if settings.order == 1 and mat.nu >= LOCKING_NU:
+        out["notes"].append(f"linear elements with nu = {mat.nu:g}: volumetric locking under-predicts stress; "
+                            f"use order 2")
+    if res.imbalance > 1e-3:
+        out["notes"].append(f"free-body loads were out of balance by up to {100 * res.imbalance:.1f} % "
+                            f"(FE vs dynamics mass distribution); removed by inertia relief")
+    return out
