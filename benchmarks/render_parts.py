@@ -18,8 +18,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from rigfem.mesh import DEFAULT_SIZE, MeshSettings, PartMesh, mesh_part
-from rigfem.report import boundary_faces
+from rigfem.mesh import DEFAULT_SIZE, MeshSettings, PartMesh, boundary_faces, mesh_part
 from rigfem.rig import load_part, rail_hole_groups, rail_hole_x
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "parts"

@@ -1,8 +1,13 @@
 """``rigfem check``: a scene → peak reactions → part load cases → FE → verdict → report folder.
 
->>> from rigfem.check import run_check                       # doctest: +SKIP
->>> report = run_check("final-cm", out="results/final-cm")   # doctest: +SKIP
->>> report["verdict"], [p["utilisation_pct"] for p in report["parts"]]  # doctest: +SKIP
+>>> import pathlib, tempfile
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "final-cm"
+>>> report = run_check("final-cm", out=out, quiet=True, overrides={
+...     "parts": ["plate_A"], "modes": ["original"], "fidelity": "draft", "frames": 0})
+>>> report["verdict"], [(p["name"], p["mode"]) for p in report["parts"]]
+('pass', [('plate_A', 'original')])
+>>> (out / "report.json").is_file()
+True
 
 The report dict is written as ``report.json`` and ``report.md`` beside one VTU per part and
 mode (the critical crank angle), a ParaView ``.pvd`` animation per part over the crank cycle

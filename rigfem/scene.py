@@ -5,7 +5,7 @@ ignored here.  Keys (lengths mm, angles deg)::
 
     [linkage]
     type = "four-bar"          # four-bar | slider-crank | inverted-slider-crank | quick-return
-    b2 = 540.0                 # builder arguments (see rigfem.mechanisms)
+    b2 = 540.0                 # builder arguments (see rigfem.dynamics.mechanisms)
     speed_hz = 1.0             # or rpm = 20, or omega_rad_s = -3.12 (negative = clockwise)
     masses = "rig"             # "rig" (the catalogue) or "none" (massless unless [linkage.bodies])
     [linkage.bodies.rod]       # optional per-body mass data (with masses = "none")

@@ -142,7 +142,7 @@ def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
     assert "nan" not in text and "inf" not in text
     assert len(chunk) == 3
     chunk[1].unlink()  # an interrupted sweep: the second chunk never finished
-    import rigfem.sweep as sw
+    import rigfem.studies.sweep as sw
 
     calls = []
     real = sw.run_chunk
@@ -198,19 +198,19 @@ def test_default_local_cluster_equals_serial(params, bases, tmp_path):
 def test_stored_chunks_are_keyed_by_geometry_masses_and_mesh_recipe(monkeypatch):
     """A sweep resumed after a change to a part file, the mass catalogue or the meshing recipe
     must not reuse chunks computed before it."""
-    import rigfem.mechanisms
-
-    import rigfem.mesh
+    import rigfem.mesh.mesher
+    import rigfem.rig.catalogue
     from rigfem.rig import PartDef
 
     p = SweepParams()
     k0 = p.key()
     assert SweepParams().key() == k0
     with monkeypatch.context() as m:
-        m.setattr(rigfem.mesh, "MESH_RECIPE", rigfem.mesh.mesher.MESH_RECIPE + 1)
+        m.setattr(rigfem.mesh.mesher, "MESH_RECIPE", rigfem.mesh.mesher.MESH_RECIPE + 1)
         assert p.key() != k0
     with monkeypatch.context() as m:
-        m.setattr(rigfem.mechanisms, "RIG_MASSES", dataclasses.replace(rigfem.rig.catalogue.RIG_MASSES, rail_kg_m=2.7))
+        m.setattr(rigfem.rig.catalogue, "RIG_MASSES",
+                  dataclasses.replace(rigfem.rig.catalogue.RIG_MASSES, rail_kg_m=2.7))
         assert p.key() != k0
     with monkeypatch.context() as m:
         m.setattr(PartDef, "content_hash", lambda self: "edited")

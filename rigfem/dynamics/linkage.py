@@ -16,7 +16,7 @@ constraint Jacobian Phi_q is square:
   the driver torque (or force).
 
 Every stage after the continuation pass is vectorised over crank angles.
-The public interface is in mm, N, N·m, degrees (see ``rigfem.reactions``).
+The public interface is in mm, N, N·m, degrees (see ``rigfem.dynamics.history``).
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform
 catalogue's linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind
 the bar's first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from
 that joint, I_G = m L_i²/12), carriages, plates and couplings as particles at their joints;
-``"original"`` — the 2013 program (four-bar only, ``rigfem.original``), with the study's
+``"original"`` — the 2013 program (four-bar only, ``rigfem.dynamics.original``), with the study's
 rail mass and its pivot at the guide's end.
 """
 
@@ -389,7 +389,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
 
 
 def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
-    """ReactionHistory of the 2013 program (rigfem.original) for a four-bar Linkage."""
+    """ReactionHistory of the 2013 program (rigfem.dynamics.original) for a four-bar Linkage."""
     from rigfem.dynamics.original import original_reactions
 
     L = lk.meta["lengths_mm"]

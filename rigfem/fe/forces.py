@@ -33,7 +33,7 @@ import numpy as np
 from rigfem.errors import InputError
 from rigfem.fe.assembly import FEMesh, geometry, points_at, shape_values, tet_quadrature
 from rigfem.fe.supports import surface_quadrature
-from rigfem.mesh.partmesh import Hole
+from rigfem.mesh.partmesh import TET_FACE_OPPOSITE, Hole, face_owners
 
 
 def _vec(name: str, v) -> np.ndarray:
@@ -117,17 +117,8 @@ def outward_normals(fm: FEMesh, name: str, degree: int = 1) -> np.ndarray:
     (of the curved surface where its triangles are curved)."""
     *_, tri, normals = surface_quadrature(fm, name, degree, normals=True)
     tri = tri[:, :3]
-    t = fm.elements[:, :4]
-    n = np.int64(len(fm.nodes))
-    faces = np.sort(np.concatenate([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]]), 1)
-    key = (faces[:, 0] * n + faces[:, 1]) * n + faces[:, 2]
-    order = np.argsort(key)
-    st = np.sort(tri, 1)
-    k = (st[:, 0] * n + st[:, 1]) * n + st[:, 2]
-    pos = order[np.searchsorted(key[order], k).clip(0, len(key) - 1)]
-    if not (key[pos] == k).all():
-        raise InputError(f"surface {name!r} has triangles that are not faces of the mesh")
-    opposite = fm.nodes[t[pos % len(t), pos // len(t)]]  # vertex not on the face
+    elem, face = face_owners(fm.elements, tri, f"surface {name!r}")
+    opposite = fm.nodes[fm.elements[elem, TET_FACE_OPPOSITE[face]]]  # vertex not on the face
     x = fm.nodes[tri]
     return normals * np.sign(np.einsum("kqd,kd->kq", normals, x[:, 0] - opposite))[..., None]
 

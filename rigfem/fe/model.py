@@ -4,8 +4,7 @@
 >>> from skfem import MeshTet
 >>> from rigfem.mesh import PartMesh
 >>> from rigfem.material import get_material
->>> from rigfem.loads import SurfaceForce
->>> from rigfem.supports import Fixed
+>>> from rigfem.fe import Fixed, SurfaceForce
 >>> m = MeshTet.init_tensor(np.linspace(0, 100, 11), np.linspace(0, 10, 3), np.linspace(0, 10, 3))
 >>> f = m.boundary_facets()
 >>> x = m.p[:, m.facets[:, f]].mean(1)

@@ -47,7 +47,7 @@ def mesh_case(case: PartCase, size_mm: float, local_size_mm: float) -> PartMesh:
 
 
 def supports_of(case: PartCase) -> list:
-    """rigfem.supports objects of a case: screws as shafts in holes, fixed faces, faces that
+    """rigfem.fe.supports objects of a case: screws as shafts in holes, fixed faces, faces that
     may slide on their support (zero normal displacement), or a free body."""
     out = []
     for kind, groups in case.supports:
@@ -65,7 +65,7 @@ def supports_of(case: PartCase) -> list:
 
 
 def fe_load(u: UnitLoad):
-    """The rigfem.loads object of a unit load (bearing on a hole, or a unit inertia field)."""
+    """The rigfem.fe.forces object of a unit load (bearing on a hole, or a unit inertia field)."""
     if u.kind == "bearing":
         return BearingLoad(u.group, u.direction)
     o = u.direction

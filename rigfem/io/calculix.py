@@ -29,6 +29,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.mesh.partmesh import face_owners
 
 #: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
 _FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}
@@ -102,27 +103,6 @@ def _orient(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
 
 
 #: corner nodes (0-based) of the faces P1..P4 of CalculiX's C3D4/C3D10
-_TET_FACES = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]])
-
-
-def _element_faces(elements: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Element index and ccx face number (1..4) of each boundary triangle (corner nodes first)."""
-    if tris.ndim != 2 or tris.shape[1] < 3 or len(tris) == 0:
-        raise InputError(f"pressure triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
-    m = int(max(elements.max(), tris.max())) + 1
-
-    def code(corners: np.ndarray) -> np.ndarray:
-        c = np.sort(corners, axis=-1).astype(np.int64)
-        return (c[..., 0] * m + c[..., 1]) * m + c[..., 2]
-
-    faces = code(elements[:, _TET_FACES]).ravel()  # row 4e + f
-    order = np.argsort(faces)
-    key = code(tris[:, :3])
-    pos = np.searchsorted(faces[order], key).clip(0, len(faces) - 1)
-    if not np.array_equal(faces[order][pos], key):
-        raise InputError("pressure triangles must be faces of the elements")
-    idx = order[pos]
-    return idx // 4, idx % 4 + 1
 
 
 def _lines(rows: np.ndarray, fmt: str) -> str:
@@ -175,7 +155,8 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
             raise InputError("gravity must be 3 finite numbers, not all 0, with a material density")
     elements = _orient(nodes, elements)
     if pressure is not None:
-        p_elem, p_face = _element_faces(elements, np.asarray(pressure[0]))
+        p_elem, p_face = face_owners(elements, np.asarray(pressure[0]), "pressure")
+        p_face = p_face + 1  # ccx face numbers S1..S4
         p_val = np.broadcast_to(np.asarray(pressure[1], dtype=float), p_elem.shape)
         if not np.all(np.isfinite(p_val)):
             raise InputError("pressure values must be finite")

@@ -8,7 +8,7 @@ mesh that are off their chords (on the grooves, holes and fillets, and the inter
 gmsh moved to keep the elements next to them valid), so P2 elements follow the geometry
 instead of faceting it (:func:`quadratic`).
 
-:func:`mesh_part` meshes a part of :mod:`rigfem.parts` in gmsh (OpenCASCADE geometry, HXT
+:func:`mesh_part` meshes a part of :mod:`rigfem.rig.parts` in gmsh (OpenCASCADE geometry, HXT
 linear tets, one thread so identical input gives an identical mesh): a global ``size`` and a
 Distance/Threshold field that grades down to ``refine_size`` at the surface groups that carry
 load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates the element count
@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from rigfem.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,42 @@ TET10_EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])  #: VTK
 
 
 TRI6_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+#: corner nodes of a tetrahedron's four faces, in CalculiX's face order (S1..S4)
+TET_FACES = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]])
+#: the corner opposite each face of TET_FACES
+TET_FACE_OPPOSITE = np.array([3, 2, 0, 1])
+
+
+def boundary_faces(tets: np.ndarray) -> np.ndarray:
+    """Triangles (K, 3) that belong to exactly one tetrahedron, outward for positive tets."""
+    f = np.vstack([tets[:, face[::-1]] for face in TET_FACES])
+    _, idx, cnt = np.unique(np.sort(f, axis=1), axis=0, return_index=True, return_counts=True)
+    return f[idx[cnt == 1]]
+
+
+def face_owners(tets: np.ndarray, tris: np.ndarray, what: str = "surface") -> tuple[np.ndarray, np.ndarray]:
+    """Element index and face number (0..3, :data:`TET_FACES` order) of each triangle (K, >=3).
+
+    Raises InputError naming ``what`` if a triangle is not a face of the mesh.
+    """
+    tris = np.asarray(tris)
+    if tris.ndim != 2 or tris.shape[1] < 3 or len(tris) == 0:
+        raise InputError(f"{what} triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
+    m = np.int64(max(int(tets[:, :4].max()), int(tris[:, :3].max())) + 1)
+
+    def code(corners: np.ndarray) -> np.ndarray:
+        c = np.sort(corners, axis=-1).astype(np.int64)
+        return (c[..., 0] * m + c[..., 1]) * m + c[..., 2]
+
+    faces = code(tets[:, TET_FACES]).ravel()  # row 4e + f
+    order = np.argsort(faces)
+    key = code(tris[:, :3])
+    pos = np.searchsorted(faces[order], key).clip(0, len(faces) - 1)
+    if not np.array_equal(faces[order][pos], key):
+        raise InputError(f"{what} has triangles that are not faces of the mesh")
+    idx = order[pos]
+    return idx // 4, idx % 4
+
 
 
 def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:

@@ -10,15 +10,9 @@ import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from rigfem.fe.partcase import CaseResult
+from rigfem.mesh.partmesh import boundary_faces
 
 matplotlib.use("Agg")
-
-
-def boundary_faces(tets: np.ndarray) -> np.ndarray:
-    """Triangles (K, 3) that belong to exactly one tetrahedron, outward oriented."""
-    f = np.vstack([tets[:, [0, 2, 1]], tets[:, [0, 1, 3]], tets[:, [1, 2, 3]], tets[:, [0, 3, 2]]])
-    _, idx, cnt = np.unique(np.sort(f, axis=1), axis=0, return_index=True, return_counts=True)
-    return f[idx[cnt == 1]]
 
 
 def _panel(ax, verts: np.ndarray, vals: np.ndarray, norm, cmap, mark: np.ndarray) -> None:
