@@ -159,3 +159,45 @@ def test_pardiso_factors_are_released_with_their_solver():
     first, more = map(float, out.stdout.split())
     assert first > 50.0  # the probe's factor is big enough to be seen
     assert more < 0.5 * first
+
+
+def test_solution_cache_reproduces_the_solve_exactly(tmp_path, monkeypatch):
+    """A part model solved once is loaded from the disk cache the second time, bit for bit."""
+    from fe_shapes import plate_with_hole
+
+    from rigfem.fe import Pressure, Symmetry, build_model, cached_solve
+    from rigfem.material import get_material
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    pm = plate_with_hole(60.0, 40.0, 2.0, 5.0, size=8.0, h_hole=3.0)
+    pm.meta["hash"] = "test-mesh"
+    sup = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
+    first = cached_solve(build_model(pm, get_material("rig_steel"), 2), sup, [Pressure("xmax", -10.0)])
+    second = cached_solve(build_model(pm, get_material("rig_steel"), 2), sup, [Pressure("xmax", -10.0)])
+    assert "cache" not in first.times and second.times["cache"] == 1.0
+    for name in ("U", "F", "reactions", "nodal_stress"):
+        assert np.array_equal(getattr(first, name), getattr(second, name))
+    assert second.peak().value == first.peak().value
+    # another load, material or mesh is another entry
+    other = cached_solve(build_model(pm, get_material("abs"), 2), sup, [Pressure("xmax", -10.0)])
+    assert "cache" not in other.times
+    assert len(list((tmp_path / "solutions").iterdir())) == 2
+
+
+def test_peak_von_mises_is_exact():
+    """The bounded search returns the brute-force maximum, including rows whose peak lies outside
+    the candidate nodes (fallback) and rows of zeros."""
+    from rigfem.fe import peak_von_mises, von_mises
+
+    rng = np.random.default_rng(1)
+    S = rng.normal(size=(5, 3000, 6))
+    S[0, 17] *= 40.0  # one field with a sharp peak, others diffuse
+    C = rng.normal(size=(40, 5))
+    C[3] = 0.0
+    C[4] = [0.0, 1.0, -1.0, 0.5, 0.0]
+    brute = von_mises(np.einsum("rk,knc->rnc", C, S))
+    for cand in (3, 50, 4000):
+        vals, nodes = peak_von_mises(C, S, candidates=cand)
+        assert np.allclose(vals, brute.max(1), rtol=1e-13, atol=0)
+        ok = vals > 0
+        assert np.array_equal(nodes[ok], brute.argmax(1)[ok])

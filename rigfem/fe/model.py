@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -43,14 +43,24 @@ from rigfem.mesh.partmesh import PartMesh
 
 @dataclass
 class Model:
-    """A part ready to solve: P1/P2 mesh, material and assembled stiffness."""
+    """A part ready to solve: P1/P2 mesh, material, and its stiffness (assembled on first use,
+    so a model whose unit solutions come from the cache never assembles it)."""
 
     part: PartMesh
     material: Material
     mesh: FEMesh
-    K: sp.csr_matrix
-    assembly_time: float
     volume: float  #: of the (curved) mesh, mm³: the part's FE mass is volume × density
+    assembly_time: float = 0.0  #: s, P1/P2 mesh plus stiffness assembly
+    _K: sp.csr_matrix | None = field(default=None, repr=False)
+
+    @property
+    def K(self) -> sp.csr_matrix:
+        """Global stiffness matrix (assembled once, on first use)."""
+        if self._K is None:
+            t0 = time.perf_counter()
+            self._K = stiffness(self.mesh, self.material.E, self.material.nu)
+            self.assembly_time += time.perf_counter() - t0
+        return self._K
 
 
 #: Poisson's ratio from which linear tetrahedra lock (too stiff in near-incompressible strain)
@@ -58,7 +68,7 @@ LOCKING_NU = 0.45
 
 
 def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
-    """Build the P1/P2 mesh of ``part`` and assemble its stiffness once.
+    """Build the P1/P2 mesh of ``part``; its stiffness is assembled once, when first needed.
 
     Warns when linear elements meet a nearly incompressible material: they lock and
     under-predict deflection and stress (use order 2).
@@ -69,8 +79,7 @@ def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
                       UserWarning, stacklevel=2)
     t0 = time.perf_counter()
     fm = fe_mesh(part, order)
-    K = stiffness(fm, material.E, material.nu)
-    return Model(part, material, fm, K, time.perf_counter() - t0, volume(fm))
+    return Model(part, material, fm, volume(fm), time.perf_counter() - t0)
 
 
 def load_matrix(model: Model, cases: list) -> np.ndarray:

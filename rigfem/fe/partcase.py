@@ -19,8 +19,9 @@ import time
 
 import numpy as np
 
+from rigfem.fe.cache import cached_solve
 from rigfem.fe.forces import BearingLoad, Inertia
-from rigfem.fe.model import Model, build_model, load_matrix, solve
+from rigfem.fe.model import Model, build_model, load_matrix
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
@@ -31,10 +32,6 @@ from rigfem.rig.parts import load_part
 #: surface groups that raise stress without carrying load (the I-profile's root fillets, whose
 #: peak needs about half the interface size: results/convergence/README.md)
 CONCENTRATORS = ("fillets",)
-
-
-#: rows superposed at once (memory: rows × nodes × 6 doubles)
-CHUNK = 24
 
 
 def mesh_case(case: PartCase, size_mm: float, local_size_mm: float) -> PartMesh:
@@ -171,7 +168,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
     R = scale = None
     if free:
         loads, R, scale = relieved_cases(model, loads)
-    sol = solve(model, supports, loads, solver=solver)
+    sol = cached_solve(model, supports, loads, solver=solver)
     t_solve = time.perf_counter() - t0
     fe_mass = model.volume * model.material.density * 1e3  # kg (density in t/mm³)
     out = []
@@ -185,7 +182,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         if free:
             load = np.abs(coef) @ scale
             imbalance = float((np.linalg.norm(coef @ R[:3].T, axis=1) / np.where(load > 0, load, 1)).max())
-        vm_rows, peak_nodes = sol.peak_sweep(coef, chunk=CHUNK)
+        vm_rows, peak_nodes = sol.peak_sweep(coef)
         row = int(np.argmax(vm_rows))
         nodes = hist = None
         if len(case.rows) > 1:  # the stress cycle at every node that peaks at some angle

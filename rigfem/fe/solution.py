@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigfem.fe.stress import zz_error
-from rigfem.fe.tensors import principal, von_mises
+from rigfem.fe.tensors import peak_von_mises, principal, von_mises
 
 
 @dataclass(frozen=True)
@@ -42,6 +42,7 @@ class Solution:
     method: str
     free_body: bool
     times: dict[str, float] = field(default_factory=dict)
+    _unit_vm: np.ndarray | None = field(default=None, repr=False)  #: (k, N) von Mises of each case
 
     def _coef(self, c) -> np.ndarray:
         k = self.U.shape[1]
@@ -63,22 +64,19 @@ class Solution:
         """Nodal von Mises stress (N,) of the combination c."""
         return von_mises(self.stress(c))
 
-    def peak_sweep(self, C: np.ndarray, chunk: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    def peak_sweep(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Peak nodal von Mises (n,) and its node (n,) for each row of combinations C (n, k).
 
-        The cheap path for a sweep over crank angles; call :meth:`peak` on the
-        worst row for location, surface and error estimate.
+        The cheap path for a sweep over crank angles (exact: :func:`rigfem.fe.tensors.peak_von_mises`);
+        call :meth:`peak` on the worst row for location, surface and error estimate.
         """
         C = np.atleast_2d(np.asarray(C, dtype=float))
         if C.shape[1] != self.U.shape[1] or not np.isfinite(C).all():
             from rigfem.errors import InputError
             raise InputError(f"combination matrix must be (n, {self.U.shape[1]}) and finite, got {C.shape}")
-        vals, nodes = np.empty(len(C)), np.empty(len(C), dtype=np.int64)
-        for s in range(0, len(C), chunk):
-            vm = von_mises(np.tensordot(C[s:s + chunk], self.nodal_stress, 1))
-            nodes[s:s + chunk] = vm.argmax(1)
-            vals[s:s + chunk] = vm.max(1)
-        return vals, nodes
+        if self._unit_vm is None:
+            self._unit_vm = von_mises(self.nodal_stress)
+        return peak_von_mises(C, self.nodal_stress, self._unit_vm)
 
     def principal(self, c=None) -> np.ndarray:
         """Nodal principal stresses (N, 3), descending, of the combination c."""
