@@ -76,14 +76,9 @@ def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list
     if mask is None or not np.any(mask):
         return None
     idx = np.flatnonzero(mask)
-    ranges, start, prev = [], idx[0], idx[0]
-    for i in idx[1:]:
-        if i != prev + 1:
-            ranges.append([float(crank_deg[start]), float(crank_deg[prev])])
-            start = i
-        prev = i
-    ranges.append([float(crank_deg[start]), float(crank_deg[prev])])
-    return ranges
+    breaks = np.flatnonzero(np.diff(idx) != 1)
+    starts, ends = np.r_[idx[0], idx[breaks + 1]], np.r_[idx[breaks], idx[-1]]
+    return [[float(crank_deg[a]), float(crank_deg[b])] for a, b in zip(starts, ends)]
 
 
 def merge_ranges(*lists: list[list[float]] | None) -> list[list[float]] | None:

@@ -49,7 +49,8 @@ def _code_hash() -> str:
     """Hash of the source that computes a solution (meshing, FE), so an edit invalidates entries."""
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
-    for f in sorted([*root.glob("fe/*.py"), *root.glob("mesh/*.py"), root / "material.py"]):
+    shaping = ("assembly", "forces", "supports", "solver", "model", "stress")
+    for f in sorted([*(root / "fe" / f"{m}.py" for m in shaping), *root.glob("mesh/*.py"), root / "material.py"]):
         h.update(f.read_bytes())
     return h.hexdigest()[:16]
 

@@ -20,39 +20,33 @@ def principal(s: np.ndarray) -> np.ndarray:
 
 
 def peak_von_mises(C: np.ndarray, S: np.ndarray, unit_vm: np.ndarray | None = None,
-                   candidates: int = 256) -> tuple[np.ndarray, np.ndarray]:
+                   chunk: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """Largest von Mises stress over the nodes, and its node, of every combination row of C.
 
     ``C`` (n, k) weights the unit stress fields ``S`` (k, N, 6).  Exact, but cheap: von Mises
-    is a seminorm, so ``vm(Σ c_k σ_k) ≤ Σ |c_k| vm(σ_k)`` bounds every node from the unit
-    fields' own von Mises ``unit_vm`` (k, N); a row is evaluated exactly at the ``candidates``
-    nodes of highest bound and falls back to every node only when a node outside them could
-    still be higher than the best found.
+    is a seminorm, so for every row r of a chunk of neighbouring rows (crank angles)
+    ``vm_r(n) ≤ B(n) = Σ_k max_r |c_rk| vm(σ_k(n))``, from the unit fields' own von Mises
+    ``unit_vm`` (k, N).  The chunk is evaluated exactly at the nodes of highest B, which gives
+    a lower bound L of every row's peak, then at every node with B(n) ≥ L: no other node can
+    hold a peak of the chunk.
     """
     C = np.atleast_2d(C)
     k, N = S.shape[:2]
     if unit_vm is None:
         unit_vm = von_mises(S)
-    m = min(candidates, N)
     slack = 1 + 10 * k * np.finfo(S.dtype).eps  # rounding of the bound itself (float32 or float64)
-    vals, nodes = np.empty(len(C)), np.empty(len(C), dtype=np.int64)
-    for r, c in enumerate(C):
-        used = np.flatnonzero(c)
-        if used.size == 0:
-            vals[r], nodes[r] = 0.0, 0
-            continue
-        bound = np.abs(c[used]) @ unit_vm[used]
-        if m < N:
-            cand = np.argpartition(-bound, m)[: m + 1]
-            rest = bound[cand[-1]]  # the (m+1)-th largest bound: no node outside cand[:m] exceeds it
-            cand = cand[:m]
-        else:
-            cand, rest = np.arange(N), -np.inf
-        vm = von_mises(np.tensordot(c[used], S[np.ix_(used, cand)], 1))
-        i = int(np.argmax(vm))
-        if vm[i] < rest * slack:  # a node outside the candidates might be higher: all nodes
-            vm = von_mises(np.tensordot(c[used], S[used], 1))
-            cand = np.arange(N)
-            i = int(np.argmax(vm))
-        vals[r], nodes[r] = vm[i], cand[i]
+    vals, nodes = np.zeros(len(C)), np.zeros(len(C), dtype=np.int64)
+    used = np.flatnonzero(np.abs(C).max(axis=0) > 0)
+    if used.size == 0:
+        return vals, nodes
+    C, V = C[:, used], unit_vm[used]
+    for s in range(0, len(C), chunk):
+        c = C[s:s + chunk]
+        bound = np.abs(c).max(axis=0).astype(V.dtype) @ V  # (N,)
+        first = np.argpartition(bound, -16)[-16:] if N > 16 else np.arange(N)
+        lower = von_mises(np.tensordot(c, S[np.ix_(used, first)], 1)).max(axis=1).min()
+        cand = np.flatnonzero(bound * slack >= lower)
+        vm = von_mises(np.tensordot(c, S[np.ix_(used, cand)], 1))
+        i = vm.argmax(axis=1)
+        vals[s:s + chunk], nodes[s:s + chunk] = vm[np.arange(len(c)), i], cand[i]
     return vals, nodes

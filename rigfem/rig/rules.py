@@ -6,6 +6,7 @@ how far a configuration is from every limit.  Lengths in mm, angles in degrees.
 
 from __future__ import annotations
 
+import operator
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -38,8 +39,8 @@ class Rule:
 
 
 def _rule(name: str, value: float, relation: str, limit: float, unit: str = "mm") -> Rule:
-    ok = {"<": value < limit, "<=": value <= limit, ">": value > limit, ">=": value >= limit,
-          "==": bool(np.isclose(value, limit, rtol=0, atol=1e-9))}[relation]
+    ok = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge,
+          "==": lambda a, b: abs(a - b) <= 1e-9}[relation](value, limit)
     return Rule(name, float(value), float(limit), bool(ok), relation, unit)
 
 
