@@ -103,17 +103,14 @@ def test_dynamics_rail_matches_the_meshed_rail():
     """The dynamics' rail (mass, reach behind the pivot) is the meshed rail: catalogue kg/m
     equals the part file's, and ``rail_behind_mm`` equals the mesh layout's pivot position."""
     from rigfem.dynamics import four_bar, simulate
-    from rigfem.loads.cases import _bar
-    from rigfem.rig import RIG_MASSES, load_part
-    from rigfem.settings import PLATE
+    from rigfem.rig import RIG_MASSES, load_part, rail_layout
+    from rigfem.settings import PLATE, RAIL
 
     h = simulate(four_bar(540, 840, 780, 1020), samples=8)
-    spacing = load_part(PLATE)["screw_spacing"]
-    bar = _bar("crank_rail", {"part": "rail_size25", "length": 700.0, "pivot": "O2", "far": "A"},
-               h, spacing)
-    assert bar.layout.pivot_x == RIG_MASSES.rail_behind_mm
+    layout = rail_layout(RAIL, 700.0, PLATE)
+    assert layout.pivot_x == RIG_MASSES.rail_behind_mm
     cat = load_part("rail_size25").reference["linear_mass_catalogue"].value
     assert RIG_MASSES.rail_kg_m == cat
     crank = h.bodies["crank"]  # the rail's own mass and centre (point masses apart)
-    assert crank.com_local_mm[0] == pytest.approx(350.0 - bar.layout.pivot_x)
+    assert crank.com_local_mm[0] == pytest.approx(350.0 - layout.pivot_x)
     assert crank.mass_kg == pytest.approx(0.7 * cat)
