@@ -46,20 +46,19 @@ def supports() -> list:
             FixedComponents("outer_lower", "xy"), FixedComponents("outer_upper", "z", edge_with="outer_lower")]
 
 
-def load(scale: float = 1.0) -> list:
-    """The LE10 load case: 1 MPa pressure on the upper face, in N/(mm·scale)²."""
+def load(unit_mm: float = 1.0) -> list:
+    """The LE10 load case: 1 MPa pressure on the upper face, in N per (mesh unit)²."""
     from rigfem.fe.forces import Pressure
 
-    return [Pressure("top", PRESSURE / scale**2)]
+    return [Pressure("top", PRESSURE * unit_mm**2)]
 
 
-def le10_mesh(size: float, layers: int | None = None, scale: float = 1.0):
+def le10_mesh(size: float, layers: int | None = None):
     """Quadratic-tet mesh of the LE10 quarter plate (a :class:`rigfem.mesh.PartMesh`, curved P2 nodes).
 
     ``size`` is the element size in mm; ``layers`` (default: about 600/size, at least 2) is the
-    number of element layers through the thickness, structured-free tets otherwise.  ``scale``
-    multiplies every coordinate (1 = mm; 1e-3 gives metres), so the results can be checked for
-    unit independence.  gmsh is always finalized (:func:`rigfem.mesh.gmsh_session`).
+    number of element layers through the thickness (the vertical edges are split evenly), free
+    tets otherwise.  gmsh is always finalized (:func:`rigfem.mesh.gmsh_session`).
     """
     import gmsh
 
@@ -68,7 +67,6 @@ def le10_mesh(size: float, layers: int | None = None, scale: float = 1.0):
     from rigfem.mesh.partmesh import PartMesh
 
     size = check_range("LE10 element size", size, 10.0, 2000.0, "mm")
-    check_range("LE10 scale", scale, 1e-6, 1e6, lo_open=True)
     (a, b), (c, d), h = INNER, OUTER, HALF_THICKNESS
     with gmsh_session("le10"):
         occ = gmsh.model.occ
@@ -77,9 +75,8 @@ def le10_mesh(size: float, layers: int | None = None, scale: float = 1.0):
         up = [e for e in occ.extrude(quarter, 0, 0, h) if e[0] == 3]
         down = [e for e in occ.extrude(quarter, 0, 0, -h) if e[0] == 3]
         occ.fragment(up, down)
-        occ.dilate(occ.getEntities(3), 0, 0, 0, scale, scale, scale)
         occ.synchronize()
-        eps = 1e-6 * c * scale
+        eps = 1e-6 * c
         groups: dict[str, list[int]] = {k: [] for k in SURFACES}
         for _, t in gmsh.model.getEntities(2):
             x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, t)
@@ -87,16 +84,16 @@ def le10_mesh(size: float, layers: int | None = None, scale: float = 1.0):
                 groups["DC"].append(t)
             elif x1 < eps:
                 groups["AB"].append(t)
-            elif z0 > h * scale - eps:
+            elif z0 > h - eps:
                 groups["top"].append(t)
-            elif x1 > c * scale - eps and y1 > d * scale - eps and z1 - z0 > eps:
+            elif x1 > c - eps and y1 > d - eps and z1 - z0 > eps:
                 groups["outer_upper" if z0 > -eps else "outer_lower"].append(t)
         if any(len(v) != (2 if k in ("DC", "AB") else 1) for k, v in groups.items()):
             raise InputError(f"LE10 geometry: unexpected faces {groups}")  # pragma: no cover - geometry guard
         for k, v in groups.items():
             gmsh.model.addPhysicalGroup(2, v, name=k)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size * scale)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", size * scale / 4)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size / 4)
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
         gmsh.option.setNumber("Mesh.Algorithm3D", 10)
         gmsh.option.setNumber("General.NumThreads", 1)
@@ -110,26 +107,28 @@ def le10_mesh(size: float, layers: int | None = None, scale: float = 1.0):
         gmsh.model.mesh.generate(3)
         pts, tets, surfaces, edges, mids = second_order(groups)
     return PartMesh("le10", pts, tets, surfaces, {}, curved_edges=edges, curved_points=mids,
-                    meta={"size_mm": size, "layers": layers, "scale": scale})
+                    meta={"size_mm": size, "layers": layers})
 
 
-def node_at(points: np.ndarray, xyz, scale: float = 1.0) -> int:
-    """Index of the mesh node at ``xyz`` (mm × scale); InputError if no node is there."""
-    target = np.asarray(xyz, float) * scale
+def node_at(points: np.ndarray, xyz_mm, unit_mm: float = 1.0) -> int:
+    """Index of the mesh node at ``xyz_mm``; InputError if no node is there."""
+    target = np.asarray(xyz_mm, float) / unit_mm
     k = int(np.argmin(np.linalg.norm(points - target, axis=1)))
-    if np.linalg.norm(points[k] - target) > 1e-6 * OUTER[0] * scale:
-        raise InputError(f"LE10: no mesh node at {tuple(target)}")
+    if np.linalg.norm(points[k] - target) > 1e-6 * OUTER[0] / unit_mm:
+        raise InputError(f"LE10: no mesh node at {tuple(xyz_mm)} mm")
     return k
 
 
-def solve_le10(part, solver: str = "auto") -> dict:
-    """Solve LE10 on ``part`` (from :func:`le10_mesh`) with rigfem's P2 FE; σyy at D (MPa) and more."""
+def solve_le10(part, unit_mm: float = 1.0, solver: str = "auto") -> dict:
+    """Solve LE10 on ``part`` (from :func:`le10_mesh`) with rigfem's P2 FE: σyy at D (MPa), DOFs,
+    the model and the solution.  ``unit_mm`` is the length of the mesh's unit in mm (1000 for a
+    mesh in metres): E and p are then given in N per unit², σyy converted back to MPa."""
     from rigfem.fe.model import build_model, solve
 
-    scale = float(part.meta.get("scale", 1.0))
-    mat = Material(STEEL.name, STEEL.E / scale**2, STEEL.nu, STEEL.sigma_u, STEEL.density)  # N, mm·scale
+    check_range("LE10 unit_mm", unit_mm, 1e-6, 1e6, lo_open=True)
+    mat = Material(STEEL.name, STEEL.E * unit_mm**2, STEEL.nu, STEEL.sigma_u, STEEL.density)
     model = build_model(part, mat, order=2)
-    sol = solve(model, supports(), [load(scale)], solver=solver)
-    d = node_at(model.mesh.nodes, POINT_D, scale)
-    return {"syy_D": float(sol.stress()[d, 1]) * scale**2, "dof": int(model.mesh.ndof),
+    sol = solve(model, supports(), [load(unit_mm)], solver=solver)
+    d = node_at(model.mesh.nodes, POINT_D, unit_mm)
+    return {"syy_D": float(sol.stress()[d, 1]) / unit_mm**2, "dof": int(model.mesh.ndof),
             "model": model, "solution": sol, "node_D": d}
