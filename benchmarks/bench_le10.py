@@ -1,7 +1,9 @@
 """NAFEMS LE10 (thick plate under pressure): rigfem vs CalculiX, σyy(D), time and memory vs DOF.
 
-Whole refinement sequence (element size halving every two levels, ratio √2; the largest level
-needs about 8 GiB and a few minutes — run it on a quiet machine):
+Whole refinement sequence (element size ratio √2 from 400 mm to 71 mm, then 60 mm: about 400k
+DOF, the largest that fits about 8 GiB — rigfem's direct solve needed 0.9 / 2.7 GiB at 83k / 207k
+DOF, so about 6–7 GiB there; a 50 mm level, about 660k DOF, would switch rigfem to AMG, above
+DIRECT_MAX_DOF, and is left out — run it on a quiet machine, it takes about 15 minutes):
 
     python benchmarks/bench_le10.py
 
@@ -41,7 +43,7 @@ import time
 from pathlib import Path
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
-SIZES = (400.0, 283.0, 200.0, 141.0, 100.0, 71.0, 50.0)  #: mm, ratio √2
+SIZES = (400.0, 283.0, 200.0, 141.0, 100.0, 71.0, 60.0)  #: mm, ratio √2, then the largest that fits
 
 
 def _hwm_mib(pid: int | str = "self") -> float:

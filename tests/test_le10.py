@@ -2,10 +2,11 @@
 
 Tolerances: NAFEMS asks for σyy(D) within 2 % of −5.38 MPa.  The "standard-like" mesh here is
 the 150 mm one (4 element layers through the 600 mm thickness, about 30k DOF, seconds): it
-reads −5.43 MPa (0.9 %).  The P2 answer at D is not monotonic on the coarse levels
-(400 / 300 / 200 mm: 2.2 / 1.3 / 2.4 % high, `python benchmarks/bench_le10.py`), so the
-coarse 300 mm mesh used for the cross-checks is held to a looser 3 %; its real checks are
-against CalculiX on the identical model (the .frd keeps 5 digits: 1e-4) and the load balance.
+reads −5.43 MPa (+0.9 %).  The P2 answer at D is not monotonic on the coarse levels (400 / 283 /
+200 mm: +2.1 / −0.4 / +2.3 %, 300 mm: +1.3 %; results/benchmarks/le10.md), so the coarse 300 mm
+mesh used for the cross-checks is held to a looser 3 %; its real checks are CalculiX on the
+identical model (the .frd keeps 5 digits: 2e-4) and the load balance (p × area to 1e-4: the
+curved P2 faces carry the exact ellipse area to about 1e-5).
 """
 
 from __future__ import annotations

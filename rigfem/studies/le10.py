@@ -24,8 +24,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.errors import InputError, check_range
+from typing import TYPE_CHECKING
+
+from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.material import Material
+
+if TYPE_CHECKING:
+    from rigfem.mesh.partmesh import PartMesh
 
 INNER = (2000.0, 1000.0)  #: semi-axes (x, y) of the inner ellipse, mm
 OUTER = (3250.0, 2750.0)  #: semi-axes (x, y) of the outer ellipse, mm
@@ -53,12 +58,12 @@ def load(unit_mm: float = 1.0) -> list:
     return [Pressure("top", PRESSURE * unit_mm**2)]
 
 
-def le10_mesh(size: float, layers: int | None = None):
+def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
     """Quadratic-tet mesh of the LE10 quarter plate (a :class:`rigfem.mesh.PartMesh`, curved P2 nodes).
 
-    ``size`` is the element size in mm; ``layers`` (default: about 600/size, at least 2) is the
-    number of element layers through the thickness (the vertical edges are split evenly), free
-    tets otherwise.  gmsh is always finalized (:func:`rigfem.mesh.gmsh_session`).
+    ``size`` is the element size in mm; ``layers`` (default: about 600/size, at least 2; 0 = let
+    gmsh choose) is the number of element layers through the thickness (the vertical edges are
+    split evenly, rounded up to even), free tets otherwise.  gmsh is always finalized (:func:`rigfem.mesh.gmsh_session`).
     """
     import gmsh
 
@@ -89,7 +94,7 @@ def le10_mesh(size: float, layers: int | None = None):
             elif x1 > c - eps and y1 > d - eps and z1 - z0 > eps:
                 groups["outer_upper" if z0 > -eps else "outer_lower"].append(t)
         if any(len(v) != (2 if k in ("DC", "AB") else 1) for k, v in groups.items()):
-            raise InputError(f"LE10 geometry: unexpected faces {groups}")  # pragma: no cover - geometry guard
+            raise ComputeError(f"LE10 geometry: gmsh made unexpected faces {groups}")
         for k, v in groups.items():
             gmsh.model.addPhysicalGroup(2, v, name=k)
         gmsh.option.setNumber("Mesh.MeshSizeMax", size)
@@ -97,8 +102,7 @@ def le10_mesh(size: float, layers: int | None = None):
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
         gmsh.option.setNumber("Mesh.Algorithm3D", 10)
         gmsh.option.setNumber("General.NumThreads", 1)
-        if layers is None:
-            layers = max(2, round(2 * h / size))
+        layers = max(2, round(2 * h / size)) if layers is None else int(check_range("LE10 layers", layers, 0, 200))
         if layers:  # at least ``layers`` elements through the thickness: the edges along z set it
             for _, t in gmsh.model.getEntities(1):
                 x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(1, t)
@@ -119,7 +123,7 @@ def node_at(points: np.ndarray, xyz_mm, unit_mm: float = 1.0) -> int:
     return k
 
 
-def solve_le10(part, unit_mm: float = 1.0, solver: str = "auto") -> dict:
+def solve_le10(part: PartMesh, unit_mm: float = 1.0, solver: str = "auto") -> dict:
     """Solve LE10 on ``part`` (from :func:`le10_mesh`) with rigfem's P2 FE: σyy at D (MPa), DOFs,
     the model and the solution.  ``unit_mm`` is the length of the mesh's unit in mm (1000 for a
     mesh in metres): E and p are then given in N per unit², σyy converted back to MPa."""
