@@ -63,7 +63,8 @@ def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
 
     ``size`` is the element size in mm; ``layers`` (default: about 600/size, at least 2; 0 = let
     gmsh choose) is the number of element layers through the thickness (the vertical edges are
-    split evenly, rounded up to even), free tets otherwise.  gmsh is always finalized (:func:`rigfem.mesh.gmsh_session`).
+    split evenly, rounded up to even), free tets otherwise.  gmsh is always finalized
+    (:func:`rigfem.mesh.gmsh_session`).
     """
     import gmsh
 
