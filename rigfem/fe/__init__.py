@@ -16,7 +16,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "solution": ["Peak", "Solution"],
         "solver": ["DIRECT_MAX_DOF", "METHODS", "SolverError", "default_method", "LinearSolver"],
         "stress": ["quadrature_stress", "element_node_stress", "nodal_stress", "zz_error"],
-        "supports": ["Fixed", "Symmetry", "ShaftInHole", "FreeBody", "Support", "surface_quadrature", "surface_nodes", "rigid_modes", "shaft_terms", "shaft_springs", "three_two_one", "constraints"],
+        "supports": ["Fixed", "FixedComponents", "Symmetry", "ShaftInHole", "FreeBody", "Support", "surface_quadrature", "surface_nodes", "component_dofs", "rigid_modes", "shaft_terms", "shaft_springs", "three_two_one", "constraints"],
         "tensors": ["von_mises", "principal", "peak_von_mises"],
     },
 )

@@ -1,4 +1,8 @@
-"""Supports: fixed surfaces, symmetry planes, a shaft in a hole, and free-body mode.
+"""Supports: fixed surfaces, fixed components, symmetry planes, a shaft in a hole, free-body mode.
+
+:class:`FixedComponents` holds chosen displacement components at zero on a named surface or,
+with ``edge_with``, only on the line of nodes it shares with a second surface (the standard
+benchmarks' "u_z = 0 along the mid-plane edge", NAFEMS LE10).
 
 How rigfem models a shaft in a hole (:class:`ShaftInHole`): the hole wall rests
 on an elastic foundation that connects it to a rigid, fixed shaft.  Springs per
@@ -45,6 +49,16 @@ class Fixed:
 
 
 @dataclass(frozen=True)
+class FixedComponents:
+    """Displacement ``components`` (a string of x, y, z) zero on a named surface's nodes, or,
+    with ``edge_with``, only on the nodes it shares with that second surface (a line)."""
+
+    surface: str
+    components: str
+    edge_with: str | None = None
+
+
+@dataclass(frozen=True)
 class Symmetry:
     """Zero normal displacement on a plane surface whose normal is a coordinate axis."""
 
@@ -67,7 +81,7 @@ class FreeBody:
     """No support: only rigid-body motion is removed (self-equilibrated loads)."""
 
 
-Support = Fixed | Symmetry | ShaftInHole | FreeBody
+Support = Fixed | FixedComponents | Symmetry | ShaftInHole | FreeBody
 
 
 def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False):
@@ -98,6 +112,21 @@ def surface_nodes(fm: FEMesh, name: str) -> np.ndarray:
     if name not in fm.surfaces:
         raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
     return np.unique(fm.surfaces[name])
+
+
+def component_dofs(fm: FEMesh, s: FixedComponents) -> np.ndarray:
+    """The DOFs a :class:`FixedComponents` support holds at zero."""
+    comps = str(s.components)
+    if not comps or any(c not in "xyz" for c in comps) or len(set(comps)) != len(comps):
+        raise InputError(f"FixedComponents({s.surface!r}).components = {s.components!r} must be distinct "
+                         f"letters of 'xyz', e.g. 'xy'")
+    nodes = surface_nodes(fm, s.surface)
+    if s.edge_with is not None:
+        nodes = np.intersect1d(nodes, surface_nodes(fm, s.edge_with))
+        if len(nodes) < 2:
+            raise InputError(f"FixedComponents({s.surface!r}, edge_with={s.edge_with!r}): the surfaces share "
+                             f"{len(nodes)} node(s), not a line")
+    return (3 * nodes[:, None] + np.array(["xyz".index(c) for c in comps])).ravel()
 
 
 def rigid_modes(x: np.ndarray) -> np.ndarray:
@@ -194,6 +223,10 @@ def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
         if isinstance(s, Fixed):
             dofs = (3 * surface_nodes(fm, s.surface)[:, None] + np.arange(3)).ravel()
             groups[f"Fixed({s.surface})"] = dofs
+        elif isinstance(s, FixedComponents):
+            dofs = component_dofs(fm, s)
+            edge = f", edge_with={s.edge_with}" if s.edge_with else ""
+            groups[f"FixedComponents({s.surface}, {s.components}{edge})"] = dofs
         elif isinstance(s, Symmetry):
             ax = _plane_axis(fm, s.surface)
             dofs = 3 * surface_nodes(fm, s.surface) + ax
@@ -210,7 +243,8 @@ def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
             dofs = three_two_one(fm.nodes[:fm.n_vertices])
             groups["FreeBody(3-2-1)"] = dofs
         else:
-            raise InputError(f"supports: {s!r} is not a support (Fixed, Symmetry, ShaftInHole, FreeBody)")
+            raise InputError(f"supports: {s!r} is not a support (Fixed, FixedComponents, Symmetry, ShaftInHole, "
+                             "FreeBody)")
         fixed.append(dofs)
     fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
     _check_rigid(fm, fixed, springs)
