@@ -54,6 +54,8 @@ class BodyHistory:
     inertia_com_kg_mm2: float
     point_masses: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
     joint_local_mm: dict[str, np.ndarray] = field(default_factory=dict)
+    #: velocity of the frame origin (mm/s); None where the source does not give it
+    origin_vel_mm_s: np.ndarray | None = None
 
 
 @dataclass
