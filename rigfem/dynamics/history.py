@@ -237,6 +237,7 @@ def summary(h: ReactionHistory) -> dict:
     unit = h.meta.get("driver_unit", "N·m")
     return {
         "linkage": h.meta.get("type"), "lengths_mm": h.meta.get("lengths_mm"), "model": h.meta.get("model"),
+        "textbook": bool(h.meta.get("textbook", False)),
         "speed_hz": h.meta.get("speed_hz"), "samples": int(h.crank_deg.size),
         "rules": [{k: r.as_dict()[k] for k in ("name", "value", "limit", "ok", "relation", "unit")}
                   for r in rules_for(h.meta)],
