@@ -358,7 +358,14 @@ def motion_from_history(h) -> Motion:
                     bars[body].append(name)
     meta = {k: v for k, v in h.meta.items() if k in ("type", "lengths_mm", "branch")}
     w2 = 2 * np.pi * float(h.meta.get("speed_hz", 1.0))
-    return Motion(np.asarray(h.crank_deg, float), w2, 0.0, links, points, bars, meta=meta)
+    slider = None
+    for body in ("ram", "slider"):      # a body sliding along the ground's x axis
+        if body in h.bodies and h.bodies[body].origin_vel_mm_s is not None:
+            b = h.bodies[body]
+            slider = {"position_mm": b.origin_mm[:, 0], "velocity_mm_s": b.origin_vel_mm_s[:, 0],
+                      "acceleration_mm_s2": b.origin_acc_mm_s2[:, 0]}
+            links.pop(body)
+    return Motion(np.asarray(h.crank_deg, float), w2, 0.0, links, points, bars, slider=slider, meta=meta)
 
 
 def linkage_motion(lk, crank_deg, omega: float, alpha: float = 0.0) -> Motion:
@@ -382,10 +389,9 @@ def linkage_motion(lk, crank_deg, omega: float, alpha: float = 0.0) -> Motion:
     mo = motion_from_history(h)
     inv = np.argsort(order)
     mo.crank_deg = deg
-    for group in (mo.links, mo.points):
-        for v in group.values():
-            for k in v:
-                v[k] = v[k][inv]
+    for group in (*mo.links.values(), *mo.points.values(), mo.slider or {}):
+        for k in group:
+            group[k] = group[k][inv]
     return mo
 
 
