@@ -138,23 +138,25 @@ def fourbar_motion(b2: float, b3: float, b4: float, d: float, crank_deg, omega: 
     if branch not in BRANCHES:
         raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
     deg = np.atleast_1d(np.asarray(crank_deg, float))
-    ok = fourbar_closes(b2, b3, b4, d, deg)
-    if not ok.all():
-        grid = np.arange(0.0, 360.0, 0.1)
-        raise InputError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled at crank "
-                         f"{deg[~ok][0]:g} deg; it closes for crank angles "
-                         f"{_ranges_text(fourbar_closes(b2, b3, b4, d, grid), grid)}")
     th2 = np.radians(deg)
     k = fourbar_angles(b2, b3, b4, d, th2, w2, a2, BRANCHES[branch])
     th3, th4, w3, w4, a3, a4 = (k[n] for n in ("theta3", "theta4", "omega3", "omega4", "alpha3", "alpha4"))
+    bad = np.isnan(th3)
+    if bad.any():
+        grid = np.arange(0.0, 360.0, 0.1)
+        raise InputError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled at crank "
+                         f"{deg[bad][0]:g} deg; it closes for crank angles "
+                         f"{_ranges_text(fourbar_closes(b2, b3, b4, d, grid), grid)}")
     zero = np.zeros((deg.size, 2))
-    A = b2 * _e(th2)
-    vA = b2 * w2 * _eperp(th2)
-    aA = b2 * (a2 * _eperp(th2) - w2**2 * _e(th2))
-    O4 = np.tile([d, 0.0], (deg.size, 1))
-    B = O4 + b4 * _e(th4)
-    vB = (b4 * w4)[:, None] * _eperp(th4)
-    aB = b4 * (a4[:, None] * _eperp(th4) - (w4**2)[:, None] * _e(th4))
+    e2, n2, e4, n4 = _e(th2), _eperp(th2), _e(th4), _eperp(th4)
+    A = b2 * e2
+    vA = (b2 * w2) * n2
+    aA = (b2 * a2) * n2 - (b2 * w2**2) * e2
+    O4 = np.zeros((deg.size, 2))
+    O4[:, 0] = d
+    B = O4 + b4 * e4
+    vB = (b4 * w4)[:, None] * n4
+    aB = (b4 * a4)[:, None] * n4 - (b4 * w4**2)[:, None] * e4
     points = {"O2": _point(zero, zero, zero), "A": _point(A, vA, aA), "B": _point(B, vB, aB),
               "O4": _point(O4, zero, zero)}
     bars = {"crank": ["O2", "A"], "coupler": ["A", "B"], "rocker": ["O4", "B"], "ground": ["O2", "O4"]}
