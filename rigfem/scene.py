@@ -7,6 +7,9 @@ ignored here.  Keys (lengths mm, angles deg)::
     type = "four-bar"          # four-bar | slider-crank | inverted-slider-crank | quick-return
     b2 = 540.0                 # builder arguments (see rigfem.dynamics.mechanisms)
     speed_hz = 1.0             # or rpm = 20, or omega_rad_s = -3.12 (negative = clockwise)
+    alpha_rad_s2 = 0.0         # crank angular acceleration at the instant (0 = constant speed)
+    instant_deg = 60.0         # optional: the crank angle of the instant of interest
+    textbook = true            # a textbook linkage, not a rig configuration: no rig rules
     masses = "rig"             # "rig" (the catalogue) or "none" (massless unless [linkage.bodies])
     [linkage.bodies.rod]       # optional per-body mass data (with masses = "none")
     mass_kg = 6.8
@@ -34,7 +37,8 @@ from rigfem.errors import InputError, check_range
 _SPEED_KEYS = ("speed_hz", "rpm", "omega_rad_s")
 
 
-_INFO_KEYS = ("type", "title", "notes", "masses", "bodies", "gas", "instant_deg") + _SPEED_KEYS
+_INFO_KEYS = ("type", "title", "notes", "masses", "bodies", "gas", "instant_deg", "alpha_rad_s2",
+              "textbook") + _SPEED_KEYS
 
 
 _BODY_KEYS = ("mass_kg", "com_local_mm", "inertia_com_kg_mm2", "point_masses")
@@ -48,6 +52,11 @@ class Scene:
     linkage: Linkage
     speed_hz: float
     table: dict = field(default_factory=dict)
+    #: crank angular acceleration (rad/s²) and the crank angle of the instant of interest (deg)
+    alpha_rad_s2: float = 0.0
+    instant_deg: float | None = None
+    #: a textbook linkage (MECHANISMS.md), not a rig configuration: the rig rules do not apply
+    textbook: bool = False
 
 
 def builtin_scenes() -> dict[str, Path]:
@@ -134,6 +143,15 @@ def load_scene(path_or_name: str | Path) -> Scene:
         raise InputError(f"scene {str(p)!r} is not valid TOML: {exc}") from None
     if "linkage" not in data:
         raise InputError(f"scene {str(p)!r} has no [linkage] table")
-    lk, speed = linkage_from_table(data["linkage"])
+    t = data["linkage"]
+    lk, speed = linkage_from_table(t)
+    textbook = t.get("textbook", False)
+    if not isinstance(textbook, bool):
+        raise InputError(f"[linkage] textbook = {textbook!r} must be true or false")
+    alpha = check_range("[linkage] alpha_rad_s2", t.get("alpha_rad_s2", 0.0), -1e7, 1e7, "rad/s²")
+    instant = t.get("instant_deg")
+    if instant is not None:
+        instant = check_range("[linkage] instant_deg", instant, -360.0, 360.0, "deg")
     lk.meta["scene"] = p.stem
-    return Scene(p.stem, lk, speed, data["linkage"])
+    lk.meta["textbook"] = textbook
+    return Scene(p.stem, lk, speed, t, alpha, instant, textbook)

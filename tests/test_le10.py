@@ -18,7 +18,16 @@ import pytest
 
 from rigfem.io import export_model, run_ccx
 from rigfem.mesh import PartMesh
-from rigfem.studies.le10 import INNER, OUTER, PRESSURE, TARGET_SYY, le10_mesh, load, solve_le10, supports
+from rigfem.studies.le10 import (
+    INNER,
+    OUTER,
+    PRESSURE,
+    TARGET_SYY,
+    le10_mesh,
+    load,
+    solve_le10,
+    supports,
+)
 
 
 @pytest.fixture(scope="module")

@@ -21,6 +21,7 @@ from rigfem.errors import ComputeError, InputError
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
 COMMANDS: dict[str, str] = {
     "check": "check",
+    "kinematics": "kinematics",
     "convergence": "convergence",
     "mesh": "mesh",
     "parts": "parts",

@@ -40,7 +40,7 @@ def _lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
     return [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(names, values)]
 
 
-def _build(args) -> tuple[object, float]:
+def _build(args) -> tuple[object, float, str]:
     speed = None
     if args.speed_hz is not None:
         speed = check_range("--speed-hz", args.speed_hz, 0.0, 100.0, "Hz", lo_open=True)
@@ -63,13 +63,25 @@ def _build(args) -> tuple[object, float]:
     return lk, (1.0 if speed is None else speed)
 
 
+def massless_note(lk, scene: str) -> str | None:
+    """The message for a linkage with no mass and no external load (every reaction is zero),
+    pointing to ``rigfem kinematics``; None if it has masses or loads."""
+    if lk.loads or any(b.totals()[0] > 0 for b in lk.bodies):
+        return None
+    return (f"{scene} has no masses and no external loads, so every pin reaction and the driver torque "
+            f"are zero; for its motion (angles, velocities, accelerations, transmission angle) run "
+            f"`rigfem kinematics {scene}`")
+
+
 def format_table(res: dict) -> str:
     """Readable table of a result dict."""
     out = []
     L = res["lengths_mm"] or {}
     out.append(f"{res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
                f"   model={res['model']}  speed={res['speed_hz']:g} Hz  samples={res['samples']}")
-    if res["rules"]:
+    if res.get("textbook"):
+        out.append("\ntextbook linkage (not a rig configuration): the rig's mounting rules do not apply")
+    elif res["rules"]:
         out.append("")
         out.append(f"{'rule':58s} {'value':>10s} {'limit':>10s}  ok")
         for r in res["rules"]:
@@ -112,6 +124,11 @@ def run(args) -> int:
     if args.plot and not str(args.plot).lower().endswith(".png"):
         raise InputError(f"--plot = {args.plot!r} must be a .png path")
     lk, speed = _build(args)
+    note = massless_note(lk, args.scene or "this linkage")
+    if note:
+        print(json.dumps({"linkage": lk.meta.get("type"), "massless": True, "note": note}, indent=1)
+              if args.json else note)
+        return 0
     h = simulate(lk, samples=int(samples), speed_hz=speed, model=args.model)
     res = summary(h)
     if args.csv:

@@ -54,6 +54,8 @@ class BodyHistory:
     inertia_com_kg_mm2: float
     point_masses: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
     joint_local_mm: dict[str, np.ndarray] = field(default_factory=dict)
+    #: velocity of the frame origin (mm/s); None where the source does not give it
+    origin_vel_mm_s: np.ndarray | None = None
 
 
 @dataclass
@@ -230,6 +232,7 @@ def summary(h: ReactionHistory) -> dict:
     unit = h.meta.get("driver_unit", "N·m")
     return {
         "linkage": h.meta.get("type"), "lengths_mm": h.meta.get("lengths_mm"), "model": h.meta.get("model"),
+        "textbook": bool(h.meta.get("textbook", False)),
         "speed_hz": h.meta.get("speed_hz"), "samples": int(h.crank_deg.size),
         "rules": [{k: r.as_dict()[k] for k in ("name", "value", "limit", "ok", "relation", "unit")}
                   for r in rules_for(h.meta)],

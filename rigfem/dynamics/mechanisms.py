@@ -30,6 +30,7 @@ from rigfem.dynamics.history import (
     merge_ranges,
     singular_ranges,
 )
+from rigfem.dynamics.kinematics import fourbar_closes, transmission_angle_deg
 from rigfem.dynamics.linkage import (
     GROUND,
     Body,
@@ -95,13 +96,6 @@ def _ranges_text(deg: np.ndarray, bad: np.ndarray) -> str:
 
 
 # ----------------------------------------------------------------------------- four-bar
-def fourbar_closes(b2: float, b3: float, b4: float, d: float, deg: np.ndarray) -> np.ndarray:
-    """True where the four-bar loop closes at crank angle ``deg`` (O2 at 0, O4 at (d, 0))."""
-    th = np.radians(deg)
-    f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(th))
-    return (f <= b3 + b4 + 1e-12 * f) & (f >= abs(b3 - b4) - 1e-12 * f)
-
-
 def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = "rig",
              rails_mm: tuple[float, float, float] = RIG_RAILS_MM, branch: str = "open",
              coupler_point: tuple[float, float] | None = None, body_masses: dict | None = None,
@@ -164,8 +158,7 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
 
 def transmission_angle(bodies: dict[str, BodyHistory]) -> np.ndarray:
     """Four-bar transmission angle mu (deg, 0..180): the interior coupler–rocker angle at B."""
-    d = bodies["coupler"].angle_rad - bodies["rocker"].angle_rad
-    return np.degrees(np.arccos(np.clip(np.cos(d), -1.0, 1.0)))
+    return transmission_angle_deg(bodies["coupler"].angle_rad, bodies["rocker"].angle_rad)
 
 
 def coupler_point_path(h: ReactionHistory) -> np.ndarray:

@@ -14,45 +14,27 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigfem.dynamics.kinematics import fourbar_angles, transmission_angle_deg
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
 
 
 def fourbar_kinematics(b2: float, b3: float, b4: float, d: float, theta2: np.ndarray, omega2: float,
                        branch: int = 1) -> dict[str, np.ndarray]:
-    """Closed-form four-bar positions, velocities, accelerations (SI), O2 at 0, O4 at (d, 0).
+    """Closed-form four-bar positions, velocities, accelerations (SI), O2 at 0, O4 at (d, 0),
+    in the 2013 program's layout (the closed form itself: ``rigfem.dynamics.kinematics``).
 
     ``branch`` = +1 is the open circuit (coupler turned counter-clockwise from A->O4),
     -1 the crossed one.  Angles in rad; raises ValueError where the loop cannot close.
     """
     th2 = np.asarray(theta2, dtype=float)
-    ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
-    dx, dy = d - ax, -ay
-    f2 = dx * dx + dy * dy
-    f = np.sqrt(f2)
-    cpsi = (b3 * b3 + f2 - b4 * b4) / (2 * b3 * f)
-    if np.any(np.abs(cpsi) > 1.0 + 1e-12):
+    k = fourbar_angles(b2, b3, b4, d, th2, omega2, 0.0, branch)
+    if np.any(np.isnan(k["theta3"])):
         raise ValueError("four-bar loop cannot close at some crank angles")
-    psi = np.arccos(np.clip(cpsi, -1.0, 1.0))
-    th3 = np.arctan2(dy, dx) + branch * psi
-    bx, by = ax + b3 * np.cos(th3), ay + b3 * np.sin(th3)
-    th4 = np.arctan2(by, bx - d)
-    # velocity loop: b2 w2 e2' + b3 w3 e3' - b4 w4 e4' = 0  (e' = d e / d theta)
-    s2, c2, s3, c3, s4, c4 = np.sin(th2), np.cos(th2), np.sin(th3), np.cos(th3), np.sin(th4), np.cos(th4)
-    det = b3 * b4 * np.sin(th4 - th3)
+    th3, th4, w3, w4, a3, a4 = (k[n] for n in ("theta3", "theta4", "omega3", "omega4", "alpha3", "alpha4"))
     w2 = omega2
-    w3 = b2 * w2 * b4 * np.sin(th2 - th4) / det
-    w4 = b2 * w2 * b3 * np.sin(th2 - th3) / det
-    # acceleration loop (alpha2 = 0): b3 a3 e3' - b4 a4 e4' = b2 w2^2 e2 + b3 w3^2 e3 - b4 w4^2 e4
-    rx = b2 * w2**2 * c2 + b3 * w3**2 * c3 - b4 * w4**2 * c4
-    ry = b2 * w2**2 * s2 + b3 * w3**2 * s3 - b4 * w4**2 * s4
-    # [ -b3 s3   b4 s4 ] [a3]   [rx]
-    # [  b3 c3  -b4 c4 ] [a4] = [ry]
-    m11, m12, m21, m22 = -b3 * s3, b4 * s4, b3 * c3, -b4 * c4
-    detm = m11 * m22 - m12 * m21
-    a3 = (rx * m22 - m12 * ry) / detm
-    a4 = (m11 * ry - m21 * rx) / detm
-    cos_mu = (b3 * b3 + b4 * b4 - f2) / (2 * b3 * b4)
-    mu = np.arccos(np.clip(cos_mu, -1.0, 1.0))
+    ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
+    bx, by = ax + b3 * np.cos(th3), ay + b3 * np.sin(th3)
+    mu = np.radians(transmission_angle_deg(th3, th4))
     return dict(theta2=th2, theta3=th3, theta4=th4, omega2=np.full_like(th2, w2), omega3=w3, omega4=w4,
                 alpha2=np.zeros_like(th2), alpha3=a3, alpha4=a4, mu=mu,
                 A=np.stack([ax, ay], -1), B=np.stack([bx, by], -1))

@@ -477,7 +477,8 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
         Q[:, i + 2] += _cross(rc, f) - inertia * al
         bodies_out[b.name] = BodyHistory(
             b.name, phi, w, al, r * 1000, a * 1000, b.mass_kg, np.asarray(b.com_local_mm, float),
-            b.inertia_com_kg_mm2, [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in b.point_masses], {})
+            b.inertia_com_kg_mm2, [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in b.point_masses], {},
+            qd[:, i:i + 2] * 1000)
     for ld in lk.loads:
         i = 3 * model.index[ld.body]
         r, phi = q[:, i:i + 2], q[:, i + 2]

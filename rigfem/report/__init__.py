@@ -10,6 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "document": ["finite", "write_json", "render_markdown", "MODE_TEXT"],
         "folder": ["check_writable", "atomic_dir"],
+        "motion": ["motion_plot", "motion_gif"],
         "pictures": ["field_picture", "reactions_plot"],
         "vtu": ["SAFETY_CAP", "write_vtu"],
     },

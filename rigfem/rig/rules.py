@@ -87,7 +87,10 @@ def slider_crank_rules(b2: float, b3: float, offset: float = 0.0) -> list[Rule]:
 
 
 def rules_for(meta: dict) -> list[Rule]:
-    """Rules of a linkage from its ``meta`` (four-bar and slider-crank; others have none)."""
+    """Rules of a linkage from its ``meta`` (four-bar and slider-crank; others have none, nor
+    has a textbook linkage, ``meta["textbook"]``, which is not a rig configuration)."""
+    if meta.get("textbook"):
+        return []
     L = meta.get("lengths_mm", {})
     if meta.get("type") == "four-bar":
         return fourbar_rules(L["b2"], L["b3"], L["b4"], L["d"])

@@ -22,9 +22,9 @@ nodes the two outer half-faces share (:class:`rigfem.fe.FixedComponents` with ``
 
 from __future__ import annotations
 
-import numpy as np
-
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.material import Material

@@ -1,0 +1,280 @@
+"""``rigfem kinematics``: how a linkage moves — link angles and rates, point paths, velocities
+and accelerations, transmission angle, mechanical advantage; over a turn the Grashof class,
+dead points, toggles, limit positions and time ratio; curves (--plot) and a GIF (--animate).
+
+Crank angles in degrees counter-clockwise from the ground line; rates in rad/s, rad/s²;
+points in mm, mm/s, mm/s².  Closed form for the four-bar and slider-crank, the general
+planar solver for the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rigfem.dynamics.kinematics import Motion, linkage_motion, linkage_turn
+from rigfem.dynamics.mechanisms import crank_angles, four_bar, slider_crank
+from rigfem.errors import InputError, check_range
+from rigfem.rig.rules import MU_LIMITS_DEG
+
+HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
+                   help="four-bar crank, coupler, rocker, ground lengths (mm)")
+    g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
+    p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
+    p.add_argument("--branch", metavar="open|crossed", help="four-bar assembly branch (default open)")
+    p.add_argument("--coupler-point", nargs=2, metavar=("DIST", "ANGLE"),
+                   help="four-bar coupler point: distance from A (mm), angle from the coupler line (deg)")
+    p.add_argument("--omega", metavar="RAD_S", help="crank angular velocity (rad/s, negative = clockwise; "
+                                                    "default the scene's, else 2π = 1 Hz)")
+    p.add_argument("--alpha", metavar="RAD_S2", help="crank angular acceleration (rad/s², default 0 or the scene's)")
+    p.add_argument("--at", nargs="+", metavar="DEG", help="crank angles (deg); default the scene's instant, else a turn")
+    p.add_argument("--samples", metavar="N", help="crank angles over a turn (default 360)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    p.add_argument("--csv", metavar="PATH", help="write one row per crank angle")
+    p.add_argument("--plot", metavar="PATH.png", help="angle, velocity, acceleration and transmission-angle curves")
+    p.add_argument("--animate", metavar="PATH.gif", help="GIF of the linkage over one turn")
+    p.add_argument("--force", action="store_true", help="overwrite existing --csv/--plot/--animate files")
+
+
+def _build(args):
+    """(linkage, name, omega rad/s, alpha rad/s², instant deg or None, textbook)."""
+    if args.scene and (args.four_bar or args.slider_crank):
+        raise InputError("give either a scene or --four-bar/--slider-crank, not both")
+    if args.offset is not None and not args.slider_crank:
+        raise InputError("--offset applies only with --slider-crank")
+    if (args.branch or args.coupler_point) and not args.four_bar:
+        raise InputError("--branch and --coupler-point apply only with --four-bar (a scene gives its own)")
+    omega, alpha, instant, textbook = 2 * math.pi, 0.0, None, False
+    if args.four_bar:
+        L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3", "B4", "D"), args.four_bar)]
+        cp = None
+        if args.coupler_point:
+            cp = (check_range("--coupler-point DIST", args.coupler_point[0], 0.0, 1e5, "mm"),
+                  check_range("--coupler-point ANGLE", args.coupler_point[1], -360.0, 360.0, "deg"))
+        lk = four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp)
+        name = "four-bar " + " ".join(args.four_bar)
+    elif args.slider_crank:
+        L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
+        off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
+        lk = slider_crank(*L, off, masses=None)
+        name = "slider-crank " + " ".join(args.slider_crank)
+    elif args.scene:
+        from rigfem.scene import load_scene
+
+        sc = load_scene(args.scene)
+        lk, name = sc.linkage, sc.name
+        omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
+    else:
+        raise InputError("give a scene (rigfem check --list shows the built-in ones), --four-bar B2 B3 B4 D "
+                         "or --slider-crank B2 B3")
+    if args.omega is not None:
+        omega = check_range("--omega", args.omega, -1e4, 1e4, "rad/s")
+        if omega == 0:
+            raise InputError("--omega must be non-zero (rad/s)")
+    if args.alpha is not None:
+        alpha = check_range("--alpha", args.alpha, -1e7, 1e7, "rad/s²")
+    return lk, name, omega, alpha, instant, textbook
+
+
+def _refuse_existing(args) -> None:
+    for flag, path, suffix in (("--csv", args.csv, ".csv"), ("--plot", args.plot, ".png"),
+                               ("--animate", args.animate, ".gif")):
+        if path is None:
+            continue
+        if not str(path).lower().endswith(suffix):
+            raise InputError(f"{flag} = {path!r} must be a {suffix} path")
+        if Path(path).exists() and not args.force:
+            raise InputError(f"{flag}: {path} already exists; pass --force to overwrite it")
+
+
+def _num(x) -> float | None:
+    """A plain float, or None for an unbounded value (exactly at a toggle)."""
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _records(m: Motion) -> list[dict]:
+    out = []
+    for i, deg in enumerate(m.crank_deg):
+        r = {"crank_deg": float(deg),
+             "links": {n: {k: _num(v[k][i]) for k in v} for n, v in m.links.items()},
+             "points": {n: {k: [_num(c) for c in v[k][i]] for k in v} for n, v in m.points.items()}}
+        if m.slider is not None:
+            r["slider"] = {k: _num(v[i]) for k, v in m.slider.items()}
+        if m.transmission_deg is not None:
+            r["transmission_angle_deg"] = _num(m.transmission_deg[i])
+            r["mechanical_advantage"] = _num(m.mechanical_advantage[i])
+        out.append(r)
+    return out
+
+
+def result(lk, name: str, textbook: bool, m: Motion, turn: dict | None, mu_turn: Motion | None) -> dict:
+    """The JSON object: the linkage, its turn analysis and the motion at every requested angle."""
+    res = {"scene": name, "linkage": lk.meta.get("type"), "lengths_mm": lk.meta.get("lengths_mm"),
+           "textbook": textbook, "branch": lk.meta.get("branch", m.meta.get("branch")),
+           "method": "closed form" if m.meta.get("type") in ("four-bar", "slider-crank") else "general solver",
+           "omega_rad_s": m.omega_rad_s, "alpha_rad_s2": m.alpha_rad_s2, "turn": turn}
+    if mu_turn is not None and mu_turn.transmission_deg is not None:
+        mu = mu_turn.transmission_deg
+        res["transmission_angle_deg"] = {"min": float(mu.min()), "max": float(mu.max()),
+                                         "rig_band": list(MU_LIMITS_DEG),
+                                         "within_band": bool(mu.min() > MU_LIMITS_DEG[0] and mu.max() < MU_LIMITS_DEG[1])}
+    for k in ("mechanical_advantage", "transmission_angle"):
+        if k in m.meta:
+            res[f"{k}_definition"] = m.meta[k]
+    res["angles"] = _records(m)
+    return res
+
+
+def _fmt(x, w=11, p=4) -> str:
+    return f"{'unbounded':>{w}s}" if x is None else f"{x:{w}.{p}f}"
+
+
+def format_table(res: dict, max_rows: int = 24) -> str:
+    """Readable summary and a table of the motion (at most ``max_rows`` evenly chosen angles)."""
+    L = res["lengths_mm"] or {}
+    out = [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
+           + (f"  branch={res['branch']}" if res.get("branch") else "")
+           + f"   crank omega={res['omega_rad_s']:g} rad/s alpha={res['alpha_rad_s2']:g} rad/s²  ({res['method']})"]
+    if res["textbook"]:
+        out.append("textbook linkage (not a rig configuration): the rig's mounting rules do not apply")
+    t = res["turn"]
+    if t is None:
+        out.append("turn analysis (dead points, limit positions, time ratio): closed form for the four-bar and "
+                   "slider-crank only")
+    else:
+        if "grashof" in t:
+            out.append(f"Grashof class: {t['grashof']}; crank turns fully: {'yes' if t['crank_turns_fully'] else 'no'}")
+            for tg in t["toggles"]:
+                out.append(f"toggle ({tg['kind']}, crank and coupler collinear): crank {tg['crank_deg']:.4f} deg, "
+                           f"rocker at its limit {tg['rocker_deg']:.4f} deg")
+            if t["rocker_swing_deg"] is not None:
+                out.append(f"rocker swing {t['rocker_swing_deg']:.4f} deg between {t['rocker_limits_deg'][0]:.4f} and "
+                           f"{t['rocker_limits_deg'][1]:.4f} deg")
+        else:
+            for lim in t["limits"]:
+                out.append(f"{lim['kind']}: crank {lim['crank_deg']:.4f} deg, slider at {lim['slider_mm']:.4f} mm")
+            if t["stroke_mm"] is not None:
+                out.append(f"slider stroke {t['stroke_mm']:.4f} mm")
+        if t["dead_points_deg"]:
+            out.append("dead points (the crank cannot drive past): " + ", ".join(f"{a:.4f}" for a in t["dead_points_deg"])
+                       + " deg" + (f"; crank range {t['crank_range_deg'][0]:.4f} to {t['crank_range_deg'][1]:.4f} deg"
+                                   if t.get("crank_range_deg") else ""))
+        if t["time_ratio"] is not None:
+            a, b = t["stroke_crank_deg"]
+            out.append(f"time ratio {t['time_ratio']:.4f} (strokes over {a:.4f} and {b:.4f} deg of crank)")
+    mu = res.get("transmission_angle_deg")
+    if mu:
+        out.append(f"transmission angle over the turn: min {mu['min']:.4f} deg, max {mu['max']:.4f} deg "
+                   f"({'inside' if mu['within_band'] else 'OUTSIDE'} the rig's {mu['rig_band'][0]:g}–{mu['rig_band'][1]:g} deg band)")
+    if "mechanical_advantage_definition" in res:
+        out.append(f"mechanical advantage = {res['mechanical_advantage_definition']}")
+    rows = res["angles"]
+    if len(rows) > max_rows:
+        out.append(f"\n(every {math.ceil(len(rows) / max_rows)}th of {len(rows)} angles; --json or --csv for all)")
+        rows = rows[::math.ceil(len(rows) / max_rows)]
+    links = [n for n in rows[0]["links"] if n != "crank"]
+    head = f"{'crank deg':>9s}"
+    for n in links:
+        head += f" {n[:7] + ' deg':>11s} {'w rad/s':>11s} {'a rad/s²':>11s}"
+    has_mu = "transmission_angle_deg" in rows[0]
+    if "slider" in rows[0]:
+        head += f" {'slider mm':>11s} {'v mm/s':>11s} {'a mm/s²':>11s}"
+    if has_mu:
+        head += f" {'mu deg':>8s} {'MA':>10s}"
+    out += ["", head]
+    for r in rows:
+        line = f"{r['crank_deg']:9.3f}"
+        for n in links:
+            v = r["links"][n]
+            line += f" {_fmt(v['angle_deg'], 11, 3)} {_fmt(v['omega_rad_s'])} {_fmt(v['alpha_rad_s2'])}"
+        if "slider" in r:
+            s = r["slider"]
+            line += f" {_fmt(s['position_mm'], 11, 3)} {_fmt(s['velocity_mm_s'], 11, 3)} {_fmt(s['acceleration_mm_s2'], 11, 1)}"
+        if has_mu:
+            line += f" {_fmt(r['transmission_angle_deg'], 8, 3)} {_fmt(r['mechanical_advantage'], 10, 4)}"
+        out.append(line)
+    return "\n".join(out)
+
+
+def write_csv(m: Motion, path: str | Path) -> None:
+    """One row per crank angle: link angles and rates, point positions, velocities, accelerations."""
+    cols = {"crank_deg": m.crank_deg}
+    for n, v in m.links.items():
+        for k, a in v.items():
+            cols[f"{n}_{k}"] = a
+    for n, v in m.points.items():
+        for k, a in v.items():
+            q, unit = k.split("_", 1)
+            cols[f"{n}_x_{q}_{unit}"], cols[f"{n}_y_{q}_{unit}"] = a[:, 0], a[:, 1]
+    if m.slider is not None:
+        for k, a in m.slider.items():
+            cols[f"slider_{k}"] = a
+    if m.transmission_deg is not None:
+        cols["transmission_angle_deg"] = m.transmission_deg
+        cols["mechanical_advantage"] = m.mechanical_advantage
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        for i in range(m.crank_deg.size):
+            w.writerow(["" if not np.isfinite(c[i]) else f"{c[i]:.10g}" for c in cols.values()])
+
+
+def run(args) -> int:
+    _refuse_existing(args)
+    lk, name, omega, alpha, instant, textbook = _build(args)
+    samples = 360
+    if args.samples is not None:
+        samples = check_range("--samples", args.samples, 8, 1_000_000)
+        if samples != int(samples):
+            raise InputError(f"--samples = {args.samples!r} must be a whole number in [8, 1000000]")
+    samples = int(samples)
+    turn = linkage_turn(lk)
+    if turn is not None and not turn["crank_turns_fully"]:
+        a, b = turn.get("crank_range_deg") or (None, None)
+        raise InputError(f"{name}: the crank cannot turn fully (dead points at "
+                         f"{', '.join(f'{x:.4f}' for x in turn['dead_points_deg'])} deg"
+                         + (f"; it moves between {a:.4f} and {b:.4f} deg)" if a is not None else ")"))
+    full = crank_angles(samples)
+    if args.at:
+        deg = np.array([check_range("--at", v, -3600.0, 3600.0, "deg") for v in args.at])
+    elif instant is not None and args.samples is None:
+        deg = np.array([instant])
+    else:
+        deg = full
+    m = linkage_motion(lk, deg, omega, alpha)
+    mu_turn = m if deg is full else (linkage_motion(lk, full, omega, alpha) if turn is not None else None)
+    res = result(lk, name, textbook, m, turn, mu_turn)
+    title = f"{name}: {lk.meta.get('type')} " + ", ".join(f"{k} {v:g}" for k, v in (lk.meta.get("lengths_mm") or {}).items()) + " mm"
+    try:
+        if args.csv:
+            write_csv(m, args.csv)
+        if args.plot:
+            from rigfem.report.motion import motion_plot
+
+            motion_plot(m if deg is full else linkage_motion(lk, full, omega, alpha), args.plot, title)
+        if args.animate:
+            from rigfem.report.motion import motion_gif
+
+            marks = []
+            if turn is not None:
+                marks = [t["crank_deg"] for t in turn.get("toggles", [])] + [t["crank_deg"] for t in turn.get("limits", [])]
+            motion_gif(linkage_motion(lk, crank_angles(72), omega, alpha), args.animate, title, marks)
+    except OSError as exc:
+        raise InputError(f"cannot write an output file: {exc.filename}: {exc.strerror}") from None
+    if args.json:
+        print(json.dumps(res, indent=1))
+    else:
+        print(format_table(res))
+    return 0
