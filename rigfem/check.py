@@ -39,9 +39,15 @@ from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
 from rigfem.loads.cases import part_cases
-from rigfem.report.document import render_markdown, write_json
+from rigfem.report.document import REPORT_SCHEMA, render_markdown, write_json
 from rigfem.report.folder import atomic_dir, check_writable
-from rigfem.report.pictures import _plot_peaks, field_picture, reactions_plot
+from rigfem.report.html import write_html
+from rigfem.report.pictures import (
+    _plot_peaks,
+    reactions_plot,
+    render_field,
+    utilisation_plot,
+)
 from rigfem.report.vtu import write_vtu
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.settings import CheckSettings, check_settings
@@ -189,10 +195,11 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
                          heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
             files.append(f"{stem}.inp")
         if worst[r.case.name] is r:
-            fm = r.solution.model.mesh
-            field_picture(fm.nodes, fm.elements, r.solution.von_mises(c), d / f"{r.case.name}.png",
-                          f"{r.case.name} ({r.mode} mode): von Mises at crank {r.case.rows[r.row]:.1f}°")
+            render_field(r, c, limit, d / f"{r.case.name}.png")
             files.append(f"{r.case.name}.png")
+        if r.mode == "cycle":
+            utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png")
+            files.append(f"{r.case.name}_utilisation.png")
         if r.mode == "cycle" and frames:
             rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
             series = []
@@ -245,7 +252,8 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     else:
         parts = [verdict_of(r, s) for r in results]
     report = {
-        "scene": cs.scene.name, "description": cs.description, "rigfem_version": __version__,
+        "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
+        "rigfem_version": __version__,
         "verdict": overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],
@@ -264,9 +272,10 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
         if results:
             _plot_peaks(results, limit, d / "peak_von_mises.png")
             files += ["peak_von_mises.png"] + _write_outputs(d, results, limit, cs.frames, export_inp)
-        report["files"] = files
+        report["files"] = files + ["report.html"]
         write_json(report, d / "report.json")
         (d / "report.md").write_text(render_markdown(report))
+        write_html(report, d)
     return report
 
 

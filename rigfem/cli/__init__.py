@@ -28,6 +28,7 @@ COMMANDS: dict[str, str] = {
     "reactions": "reactions",
     "verify": "verify",
     "sweep": "sweep",
+    "show": "show",
 }
 
 

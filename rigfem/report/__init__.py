@@ -8,10 +8,11 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "document": ["finite", "write_json", "render_markdown", "MODE_TEXT"],
+        "document": ["REPORT_SCHEMA", "finite", "write_json", "render_markdown", "MODE_TEXT"],
         "folder": ["check_writable", "atomic_dir"],
+        "html": ["render_html", "write_html"],
         "motion": ["motion_plot", "motion_gif"],
-        "pictures": ["field_picture", "reactions_plot"],
+        "pictures": ["field_picture", "reactions_plot", "utilisation_plot", "render_field"],
         "vtu": ["SAFETY_CAP", "write_vtu"],
     },
 )

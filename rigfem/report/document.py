@@ -10,6 +10,9 @@ import json
 import math
 from pathlib import Path
 
+#: version of report.json's layout (docs/report-json.md); raised when a field changes meaning or goes
+REPORT_SCHEMA = 2
+
 
 def finite(obj, where: str = "report"):
     """Return ``obj`` with numpy scalars made plain; raise if any number is NaN or infinite."""

@@ -67,7 +67,9 @@ def reactions_plot(h, path: str | Path) -> None:
     for a, b in h.meta.get("singular") or []:
         for ax in (a1, a2):
             ax.axvspan(a, b, color="r", alpha=0.2)
-    a1.set_title(f"{h.meta.get('type')} {h.meta.get('lengths_mm')} ({h.meta.get('model')})", fontsize="small")
+    lengths = ", ".join(f"{k} = {v:g}" for k, v in (h.meta.get("lengths_mm") or {}).items())
+    a1.set_title(f"{h.meta.get('type', 'linkage')} ({lengths} mm), {h.meta.get('model', '')} dynamics: "
+                 f"pin reactions and driver over one crank turn", fontsize="small")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -88,3 +90,122 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def utilisation_plot(r: CaseResult, limit: float, path: str | Path) -> Path:
+    """Peak von Mises of a part over the crank cycle (cycle mode) with the allowable stress."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.plot(r.case.rows, r.vm_rows, color="#1565c0", label="peak von Mises of the part")
+    ax.axhline(limit, color="#c62828", ls="--", label=f"allowable σu/2 = {limit:.0f} MPa")
+    i = int(np.argmax(r.vm_rows))
+    ax.plot(r.case.rows[i], r.vm_rows[i], "o", color="k")
+    ax.annotate(f"{r.vm_rows[i]:.1f} MPa at {r.case.rows[i]:.0f}° ({100 * r.vm_rows[i] / limit:.1f} %)",
+                (r.case.rows[i], r.vm_rows[i]), textcoords="offset points", xytext=(8, 8), fontsize=9)
+    ax.set_ylim(0, max(limit, float(r.vm_rows.max())) * 1.08)
+    ax.set_xlim(0, 360)
+    ax.set_xlabel("crank angle (°)")
+    ax.set_ylabel("peak von Mises (MPa)")
+    ax.set_title(f"{r.case.name}: peak von Mises over the crank cycle against the allowable stress")
+    ax.legend(loc="upper right", fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def render_field(r: CaseResult, c: np.ndarray, limit: float, path: str | Path,
+                 size: tuple[int, int] = (1600, 1000), zoom_mm: float = 30.0) -> str:
+    """von Mises on the deformed part (PyVista, off-screen): the whole part and a close-up of the
+    peak with the mesh edges; supports and loaded surfaces outlined, the peak marked.
+
+    Returns ``"pyvista"``, or ``"matplotlib"`` where no 3-D renderer can run (the picture is then
+    the simpler matplotlib view).
+    """
+    title = f"{r.case.name} ({r.mode} mode): von Mises at crank {r.case.rows[r.row]:.1f}°"
+    fm = r.solution.model.mesh
+    vm = r.solution.von_mises(c)
+    try:
+        import pyvista as pv
+    except ImportError:  # pragma: no cover - pyvista is a dependency; kept for broken GL stacks
+        field_picture(fm.nodes, fm.elements, vm, path, title)
+        return "matplotlib"
+    pv.OFF_SCREEN = True
+    u = r.solution.displacement(c)
+    span = float(np.ptp(fm.nodes, axis=0).max())
+    umax = float(np.linalg.norm(u, axis=1).max())
+    scale = _nice(0.04 * span / umax) if umax > 0 else 1.0
+    peak = int(np.argmax(vm))
+    top = limit if vm[peak] >= 0.5 * limit else float(vm[peak])
+    grid = pv.UnstructuredGrid({pv.CellType.TETRA: np.asarray(fm.elements[:, :4], np.int64)},
+                               fm.nodes + scale * u)
+    grid.point_data["von Mises (MPa)"] = vm
+    surf = grid.extract_surface(algorithm="dataset_surface")
+    marked = {}
+    for kind, groups in r.case.supports:
+        for g in groups:
+            marked.setdefault(g, "support")
+    for ld in r.case.loads:
+        if ld.kind == "bearing" and ld.group:
+            marked[ld.group] = "loaded"
+    colours = {"support": "black", "loaded": "magenta"}
+    try:
+        p = pv.Plotter(off_screen=True, window_size=list(size), shape=(1, 2), border=False)
+    except Exception:  # noqa: BLE001 - no OpenGL context on this machine
+        field_picture(fm.nodes, fm.elements, vm, path, title)
+        return "matplotlib"
+    bar = dict(title="von Mises (MPa)", n_labels=6, fmt="%.0f" if top >= 20 else "%.1f",
+               vertical=False, position_x=0.2, position_y=0.04, height=0.06, width=0.6)
+    x_peak = fm.nodes[peak] + scale * u[peak]
+    normal = _normal_at(surf, x_peak)
+    for col, close in ((0, False), (1, True)):
+        p.subplot(0, col)
+        mesh = surf
+        if close:
+            lo, hi = x_peak - zoom_mm, x_peak + zoom_mm
+            mesh = surf.clip_box([lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]], invert=False)
+        p.add_mesh(mesh, scalars="von Mises (MPa)", cmap="turbo", clim=[0.0, top], show_edges=close,
+                   edge_color="#444444", line_width=0.5, above_color="#7f0000",
+                   scalar_bar_args={**bar, "title": "von Mises (MPa)" + " " * col})  # one bar title per view
+        for g, kind in marked.items():
+            tri = fm.surfaces.get(g)
+            if tri is None or len(tri) == 0:
+                continue
+            faces = np.hstack([np.full((len(tri), 1), 3), np.asarray(tri)[:, :3]]).ravel()
+            patch = pv.PolyData(fm.nodes + scale * u, faces)
+            p.add_mesh(patch.extract_feature_edges(boundary_edges=True, feature_edges=False,
+                                                   manifold_edges=False, non_manifold_edges=False),
+                       color=colours[kind], line_width=3)
+        p.add_point_labels(pv.PolyData(x_peak[None, :]), [f"peak {vm[peak]:.1f} MPa"], point_size=14,
+                           point_color="white", font_size=20 if close else 16, shape_opacity=0.7,
+                           always_visible=True)
+        d = normal + 0.35 * np.array([0.0, 0.0, 1.0]) + 0.25 * np.array([1.0, -1.0, 0.0])
+        d /= np.linalg.norm(d)
+        p.view_vector(d, viewup=(0.0, 0.0, 1.0) if abs(d[2]) < 0.9 else (0.0, 1.0, 0.0))
+        p.reset_camera(bounds=mesh.bounds)
+        p.camera.zoom(1.15 if close else 0.9)
+        if close:
+            p.add_text(f"close-up ±{zoom_mm:g} mm around the peak, mesh edges shown", font_size=11,
+                       position="upper_left")
+        else:
+            p.add_text(f"{title}\ndeformation ×{scale:g}; colour bar top = "
+                       f"{'allowable' if top == limit else 'peak'} {top:.0f} MPa (allowable {limit:.0f} MPa)\n"
+                       f"black: supports, magenta: loaded holes", font_size=11, position="upper_left")
+    p.screenshot(str(path))
+    p.close()
+    return "pyvista"
+
+
+def _nice(x: float) -> float:
+    """x rounded down to 1, 2 or 5 × a power of ten."""
+    e = 10.0 ** np.floor(np.log10(x))
+    return float(max(m for m in (1.0, 2.0, 5.0) if m * e <= x) * e) if x > 0 else 1.0
+
+
+def _normal_at(surf, x: np.ndarray) -> np.ndarray:
+    """Outward unit normal of the surface point nearest to ``x``."""
+    n = surf.compute_normals(auto_orient_normals=True, cell_normals=False)
+    i = int(np.argmin(np.linalg.norm(n.points - x, axis=1)))
+    v = np.asarray(n.point_data["Normals"][i], float)
+    return v / (np.linalg.norm(v) or 1.0)

@@ -1,0 +1,89 @@
+"""The HTML report: self-contained, every picture embedded and not blank, the numbers of
+report.json, user text escaped; the pictures' size; ``rigfem show``."""
+
+import base64
+import io
+import json
+from html.parser import HTMLParser
+
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+
+from rigfem.check import run_check
+from rigfem.cli import main
+from rigfem.report.html import render_html
+
+
+class _Page(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.images, self.links, self.text = [], [], []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.images.append(a)
+        if tag == "a":
+            self.links.append(a.get("href"))
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+@pytest.fixture(scope="module")
+def checked(tmp_path_factory):
+    out = tmp_path_factory.mktemp("html") / "final-cm"
+    report = run_check("final-cm", out=out, quiet=True,
+                       overrides={"fidelity": "draft", "parts": ["plate_A"], "frames": 2})
+    return report, out
+
+
+def _png(data: bytes) -> np.ndarray:
+    return mpimg.imread(io.BytesIO(data), format="png")
+
+
+def test_html_embeds_every_picture_and_carries_the_json_numbers(checked):
+    report, out = checked
+    assert json.loads((out / "report.json").read_text()) == json.loads(json.dumps(report))
+    page = _Page()
+    page.feed((out / "report.html").read_text())
+    pngs = sorted(f for f in report["files"] if f.endswith(".png"))
+    assert sorted(i["data-file"] for i in page.images) == pngs
+    for img in page.images:
+        assert img["src"].startswith("data:image/png;base64,")
+        pix = _png(base64.b64decode(img["src"].split(",", 1)[1]))
+        assert pix[..., :3].std() > 0.02, img["data-file"]  # not blank
+    text = " ".join(page.text)
+    for p in report["parts"]:
+        assert f"{p['peak_mpa']:.1f}" in text and f"{p['utilisation_pct']:.1f} %" in text
+        assert p["verdict"].upper() in text
+    assert f"{report['limit_mpa']:.0f} MPa" in text
+    assert {f for f in report["files"] if f.endswith((".vtu", ".pvd"))} <= set(page.links)
+
+
+def test_field_picture_size_and_content(checked):
+    report, out = checked
+    pix = _png((out / "plate_A.png").read_bytes())
+    assert pix.shape[:2] == (1000, 1600)
+    assert pix[..., :3].std() > 0.05
+    util = _png((out / "plate_A_utilisation.png").read_bytes())
+    assert util[..., :3].std() > 0.02
+
+
+def test_user_text_is_escaped(checked):
+    report, out = checked
+    evil = dict(report, description='<script>alert("x")</script> & <b>bold</b>',
+                warnings=["<img src=x onerror=alert(1)>"])
+    page = render_html(evil, out)
+    assert "<script>" not in page and "<img src=x" not in page
+    assert "&lt;script&gt;" in page and "&amp;" in page
+
+
+def test_show(checked, capsys, tmp_path):
+    _, out = checked
+    assert main(["show", str(out), "--print"]) == 0
+    assert capsys.readouterr().out.strip().endswith("report.html")
+    assert main(["show", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "RESULT_FOLDER" in err and len(err.strip().splitlines()) == 1
