@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,9 +31,9 @@ from rigfem.dynamics.history import (
     spline_evaluator,
     summary,
 )
-from rigfem.dynamics.mechanisms import MODELS, simulate
+from rigfem.dynamics.mechanisms import simulate
 from rigfem.dynamics.solver import solve
-from rigfem.errors import InputError, check_range
+from rigfem.errors import InputError, plain
 from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
@@ -44,6 +43,7 @@ from rigfem.report.folder import atomic_dir, check_writable
 from rigfem.report.pictures import _plot_peaks, field_picture, reactions_plot
 from rigfem.report.vtu import write_vtu
 from rigfem.scene import Scene, load_scene, resolve
+from rigfem.schema import validate_check
 from rigfem.settings import CheckSettings, check_settings
 from rigfem.verdict.criterion import allowable_stress, overall
 from rigfem.verdict.part import verdict_of
@@ -70,25 +70,28 @@ class CheckScene:
 
 
 def load_check_scene(name: str | Path, overrides: dict | None = None) -> CheckScene:
-    """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win."""
+    """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win.
+
+    The file and the merged ``[check]`` table are validated by :mod:`rigfem.schema` before
+    anything is built; the reactions CSV (if any) is read and checked here too, before any
+    long computation.
+    """
     path = resolve(name)
-    data = tomllib.loads(path.read_text())
     sc = load_scene(path)
+    data = sc.raw
     table = {**data.get("check", {}), **(overrides or {})}
+    validate_check(table, path.name)
     dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
-    samples = int(check_range("[check] samples", dyn["samples"], 36, 100_000))
-    if dyn["mass_model"] not in MODELS:
-        raise InputError(f"[check] mass_model = {dyn['mass_model']!r} must be one of {', '.join(MODELS)}")
-    frames = int(check_range("[check] frames", dyn["frames"], 0, 360))
     settings = check_settings(table, sc.linkage.meta["type"], sc.linkage.meta.get("rails_mm"))
     desc = data.get("description", data["linkage"].get("title", ""))
     csv_path = None
     if dyn["reactions_csv"] is not None:
         csv_path = path.parent / str(dyn["reactions_csv"])
         if not csv_path.is_file():
-            raise InputError(f"[check] reactions_csv = {str(dyn['reactions_csv'])!r}: no such file next to "
-                             f"the scene ({csv_path})")
-    return CheckScene(sc, settings, desc, samples, dyn["mass_model"], frames, csv_path)
+            raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
+                             f"next to the scene ({plain(str(csv_path), 120)})")
+        read_csv(csv_path)  # coverage, sampling and units refused now, not after the dynamics
+    return CheckScene(sc, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path)
 
 
 def imported_history(cs: CheckScene) -> ReactionHistory:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
+from rigfem.errors import plain
 from rigfem.scene import builtin_scenes
 
 HELP = "stress verdict (σu/2) per part of a rig configuration, with report, VTK files and plots"
@@ -51,7 +52,7 @@ def _overrides(a: argparse.Namespace) -> dict:
 
 
 def _summary(r: dict) -> str:
-    lines = [f"{r['scene']}: {r['description']}",
+    lines = [f"{plain(r['scene'])}: {plain(r['description'])}",
              f"{'part':14s} {'mode':9s} {'peak σvm':>9s} {'crank°':>7s} {'error':>7s} {'util.':>7s}  verdict  where"]
     for p in r["parts"]:
         if p.get("peak_mpa") is None:
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.list:
         for name, path in sorted(builtin_scenes().items()):
             data = tomllib.loads(path.read_text())
-            print(f"{name:32s} {data.get('description', data['linkage'].get('title', ''))}")
+            print(f"{name:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
         return 0
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp)
