@@ -67,7 +67,8 @@ def test_failing_part_exits_1(tmp_path, capsys):
 def test_toggle_configuration_is_never_given_a_number(tmp_path):
     scene = tmp_path / "toggle.toml"  # d + b2 = 1199 ≈ b3 + b4: μ reaches 175°
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 300.0\nb3 = 600.0\nb4 = 600.0\nd = 899.0\n')
-    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True)
+    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True,
+                  allow_rule_violations=True)  # it breaks the crank-turns and hole-grid rules
     assert r["verdict"] == "fail" and r["singular"]
     assert all(p["peak_mpa"] is None and "toggle" in p["notes"][0] for p in r["parts"])
     assert "toggle" in (tmp_path / "o" / "report.md").read_text()

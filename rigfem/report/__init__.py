@@ -9,7 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "document": ["finite", "write_json", "render_markdown", "MODE_TEXT"],
-        "folder": ["check_writable", "atomic_dir"],
+        "folder": ["check_writable", "check_target", "atomic_dir", "folder_lock", "MARKER"],
         "pictures": ["field_picture", "reactions_plot"],
         "vtu": ["SAFETY_CAP", "write_vtu"],
     },

@@ -52,7 +52,12 @@ def _fmt(x, nd: int = 1) -> str:
 def render_markdown(r: dict) -> str:
     """Human-readable report: configuration, rules, reactions, one table per mode."""
     cfg = r["configuration"]
-    lines = [f"# rigfem check: {md_text(r['scene'])}", "",
+    lines = [f"# rigfem check: {md_text(r['scene'])}", ""]
+    if r.get("rule_violations"):
+        lines += ["**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
+                  "checked only because --allow-rule-violations was passed:**", ""]
+        lines += [f"- {md_text(v)}" for v in r["rule_violations"]] + [""]
+    lines += [
              md_text(r.get("description", "")).strip(), "",
              f"**Overall verdict: {r['verdict'].upper()}** — criterion σvm,peak < "
              f"{r['settings']['limit_factor']:g}·σu = {r['limit_mpa']:.0f} MPa "
