@@ -109,7 +109,8 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     chosen = table.get("parts") or list(catalogue)
     for p in chosen:
         if p not in catalogue:
-            near = difflib.get_close_matches(str(p), list(catalogue), n=1)
+            near = ([k for k in catalogue if k.lower() == str(p).lower()]
+                    or difflib.get_close_matches(str(p), list(catalogue), n=1))
             hint = f"; did you mean {near[0]!r}?" if near else ""
             raise InputError(f"[check].parts: {str(p)[:40]!r} is not a part of a {linkage_type}{hint} "
                              f"(parts: {', '.join(catalogue)})")

@@ -57,9 +57,10 @@ MAX_STEP_DEG = 10.0
 MAX_MIDPOINT_PCT = 5.0
 
 
-#: the largest joint force of a real rig linkage (N): below MIN it is not in N (kN?), above
-#: MAX it is not a mountable rig (a toggle, or the wrong unit)
-FORCE_RANGE_N = (1.0, 1e6)
+#: the largest joint force of a real rig linkage (N): below MIN it is not in N (kN?): the
+#: lightest rig crank (a 700 mm rail, 1.9 kg, at 1 Hz) already carries ~15 N; above MAX it is not
+#: a mountable rig (a toggle, or the wrong unit)
+FORCE_RANGE_N = (5.0, 1e6)
 
 
 def _check_turn(where: str, column: str, raw: np.ndarray, deg: np.ndarray) -> None:
@@ -155,6 +156,8 @@ def read_csv(path: str | Path) -> ReactionHistory:
             data.append([float(c) if c.strip() else np.nan for c in r])
         except ValueError:
             raise InputError(f"reaction CSV {str(p)!r} line {k}: non-numeric value") from None
+    if any(len(r) != len(head) for r in data):
+        raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
     arr = np.array(data, float)
     if arr.ndim != 2 or arr.shape[1] != len(head):
         raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
