@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,15 +31,15 @@ from rigfem.dynamics.history import (
     spline_evaluator,
     summary,
 )
-from rigfem.dynamics.mechanisms import MODELS, simulate
+from rigfem.dynamics.mechanisms import simulate
 from rigfem.dynamics.solver import solve
-from rigfem.errors import InputError, check_range
+from rigfem.errors import InputError, plain
 from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
 from rigfem.loads.cases import part_cases
 from rigfem.report.document import REPORT_SCHEMA, render_markdown, write_json
-from rigfem.report.folder import atomic_dir, check_writable
+from rigfem.report.folder import atomic_dir, check_writable, folder_lock
 from rigfem.report.html import write_html
 from rigfem.report.pictures import (
     _plot_peaks,
@@ -49,7 +48,9 @@ from rigfem.report.pictures import (
     utilisation_plot,
 )
 from rigfem.report.vtu import write_vtu
+from rigfem.rig.rules import rules_for
 from rigfem.scene import Scene, load_scene, resolve
+from rigfem.schema import validate_check
 from rigfem.settings import CheckSettings, check_settings
 from rigfem.verdict.criterion import allowable_stress, overall
 from rigfem.verdict.part import verdict_of
@@ -73,28 +74,53 @@ class CheckScene:
     mass_model: str
     frames: int  #: VTU frames of the cycle animation (0: none)
     reactions_csv: Path | None  #: external reaction history replacing the dynamics' forces
+    rule_violations: list[str] = dataclasses.field(default_factory=list)  #: broken rig rules (allowed explicitly)
 
 
-def load_check_scene(name: str | Path, overrides: dict | None = None) -> CheckScene:
-    """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win."""
+def rule_violations(sc: Scene) -> list[str]:
+    """The rig rules (rigfem.rig.rules) a rig scene breaks, each with its numbers.
+
+    A rig scene is one built from the rig's catalogue (``masses = "rig"``); the textbook
+    linkages (``masses = "none"``) are not mounted on the rig and have no rig rules.
+    """
+    if sc.raw.get("linkage", {}).get("masses", "rig") != "rig":
+        return []
+    return [f"{r.name}: {r.value:.6g} {r.unit} must be {r.relation} {r.limit:.6g} {r.unit}"
+            for r in rules_for(sc.linkage.meta) if not r.ok]
+
+
+def load_check_scene(name: str | Path, overrides: dict | None = None,
+                     allow_rule_violations: bool = False) -> CheckScene:
+    """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win.
+
+    The file and the merged ``[check]`` table are validated by :mod:`rigfem.schema` before
+    anything is built; the reactions CSV (if any) is read and checked here too, before any
+    long computation.  A rig scene that breaks a rig rule is refused (InputError naming the
+    rule and its numbers) unless ``allow_rule_violations``; then the violations are kept for
+    the report.
+    """
     path = resolve(name)
-    data = tomllib.loads(path.read_text())
     sc = load_scene(path)
+    broken = rule_violations(sc)
+    if broken and not allow_rule_violations:
+        raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
+                         f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "
+                         f"mounted as given; pass --allow-rule-violations to check it anyway")
+    data = sc.raw
     table = {**data.get("check", {}), **(overrides or {})}
+    validate_check(table, path.name)
     dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
-    samples = int(check_range("[check] samples", dyn["samples"], 36, 100_000))
-    if dyn["mass_model"] not in MODELS:
-        raise InputError(f"[check] mass_model = {dyn['mass_model']!r} must be one of {', '.join(MODELS)}")
-    frames = int(check_range("[check] frames", dyn["frames"], 0, 360))
     settings = check_settings(table, sc.linkage.meta["type"], sc.linkage.meta.get("rails_mm"))
     desc = data.get("description", data["linkage"].get("title", ""))
     csv_path = None
     if dyn["reactions_csv"] is not None:
         csv_path = path.parent / str(dyn["reactions_csv"])
         if not csv_path.is_file():
-            raise InputError(f"[check] reactions_csv = {str(dyn['reactions_csv'])!r}: no such file next to "
-                             f"the scene ({csv_path})")
-    return CheckScene(sc, settings, desc, samples, dyn["mass_model"], frames, csv_path)
+            raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
+                             f"next to the scene ({plain(str(csv_path), 120)})")
+        read_csv(csv_path)  # coverage, sampling and units refused now, not after the dynamics
+    return CheckScene(sc, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
+                      broken)
 
 
 def imported_history(cs: CheckScene) -> ReactionHistory:
@@ -231,16 +257,24 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
               overrides: dict | None = None, quiet: bool = False, solver: str = "auto",
-              export_inp: bool = False) -> dict:
+              export_inp: bool = False, allow_rule_violations: bool = False) -> dict:
     """Check a scene; write the report folder ``out`` (default results/<scene>); return the report.
 
     ``export_inp`` also writes each part case's model at its critical crank angle as a
     CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
+    Everything checkable is checked before the computation (scene, options, rig rules unless
+    ``allow_rule_violations``, reactions CSV, output folder); the folder is locked while the
+    check runs (a second run on it is refused).
     """
-    cs = load_check_scene(name, overrides)
-    s = cs.settings
+    cs = load_check_scene(name, overrides, allow_rule_violations)
     out = Path(out) if out is not None else Path("results") / cs.scene.name
     check_writable(out, force)
+    with folder_lock(out):
+        return _check(cs, out, force, quiet, solver, export_inp)
+
+
+def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool) -> dict:
+    s = cs.settings
     h, results = solve_scene(cs, solver, quiet)
     reactions = summary(h)
     limit = allowable_stress(s.material.sigma_u, s.limit_factor)
@@ -254,6 +288,7 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     report = {
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
+        "rule_violations": cs.rule_violations,
         "verdict": overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],

@@ -3,6 +3,21 @@
 The CLI maps them to exit codes 2 and 3; nothing below the CLI knows about exit codes.
 """
 
+import re
+
+_CONTROL = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)?|[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def plain(text: object, limit: int = 200) -> str:
+    r"""``text`` on one line without ANSI escapes or control characters, at most ``limit``
+    characters: user text (file names, descriptions, keys) safe for a terminal or an error line.
+
+    >>> plain("\x1b[31mred\x1b[0m\nline")
+    'red line'
+    """
+    s = _CONTROL.sub("", str(text).replace("\r\n", " ").replace("\n", " ").replace("\t", " "))
+    return s if len(s) <= limit else s[: limit - 1] + "…"
+
 
 class InputError(ValueError):
     """Bad user input: the message names the field, the value and the allowed range."""

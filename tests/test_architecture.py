@@ -24,7 +24,7 @@ LAYERS = [
     ("rigfem.verdict",),
     ("rigfem.report",),
     ("rigfem.io",),
-    ("rigfem.scene",),
+    ("rigfem.schema", "rigfem.scene"),
     ("rigfem.check",),
     ("rigfem.studies",),
     ("rigfem.cli", "rigfem.__main__"),

@@ -67,17 +67,18 @@ def test_failing_part_exits_1(tmp_path, capsys):
 def test_toggle_configuration_is_never_given_a_number(tmp_path):
     scene = tmp_path / "toggle.toml"  # d + b2 = 1199 ≈ b3 + b4: μ reaches 175°
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 300.0\nb3 = 600.0\nb4 = 600.0\nd = 899.0\n')
-    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True)
+    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True,
+                  allow_rule_violations=True)  # it breaks the crank-turns and hole-grid rules
     assert r["verdict"] == "fail" and r["singular"]
     assert all(p["peak_mpa"] is None and "toggle" in p["notes"][0] for p in r["parts"])
     assert "toggle" in (tmp_path / "o" / "report.md").read_text()
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--parts", "wing"], "parts ['wing'] not allowed"),
-    (["--fidelity", "ultra"], "fidelity = 'ultra' must be one of draft, standard, fine"),
-    (["--size", "-1"], "size_mm = -1.0 mm is outside the allowed range"),
-    (["--model", "newtonian"], "mass_model = 'newtonian' must be one of"),
+    (["--parts", "wing"], "[check].parts: 'wing' is not a part of a four-bar"),
+    (["--fidelity", "ultra"], "[check].fidelity = 'ultra': Input should be 'draft', 'standard' or 'fine'"),
+    (["--size", "-1"], "[check].size_mm = -1.0: Input should be greater than or equal to 0.1"),
+    (["--model", "newtonian"], "[check].mass_model = 'newtonian': Input should be"),
     (["no-such-scene"], "neither a file nor a built-in scene"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, args, message):

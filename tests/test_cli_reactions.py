@@ -87,7 +87,10 @@ def test_bad_scene_file(capsys, tmp_path):
     p = tmp_path / "s.toml"
     p.write_text('[linkage]\ntype = "four-bar"\nb2 = 540\nb3 = 840\nb4 = 780\nd = "wide"\n[check]\nx = 1\n')
     rc, _, err = _run(capsys, str(p))
-    assert rc == 2 and "d must be a number" in err
+    assert rc == 2 and "[linkage].d = 'wide': Input should be a valid number" in err
     p.write_text('[linkage]\ntype = "four-bar"\nb2 = 540\nb3 = 840\nb4 = 780\nd = 1020\n[check]\nx = 1\n')
+    rc, _, err = _run(capsys, str(p))  # the whole file is checked: unknown keys anywhere are refused
+    assert rc == 2 and "[check].x: unknown key 'x'" in err
+    p.write_text('[linkage]\ntype = "four-bar"\nb2 = 540\nb3 = 840\nb4 = 780\nd = 1020\n')
     rc, out, _ = _run(capsys, str(p))
     assert rc == 0 and "b2=540" in out

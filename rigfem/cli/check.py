@@ -12,6 +12,7 @@ from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
+from rigfem.errors import plain
 from rigfem.scene import builtin_scenes
 
 HELP = "stress verdict (σu/2) per part of a rig configuration, with report, VTK files and plots"
@@ -22,7 +23,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"scene file (TOML) or built-in scene name (default {REFERENCE_SCENE})")
     p.add_argument("--list", action="store_true", help="list the built-in scenes and exit")
     p.add_argument("--out", metavar="DIR", help="result folder (default results/<scene>)")
-    p.add_argument("--force", action="store_true", help="replace an existing result folder")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing result folder (only one rigfem wrote: it holds .rigfem-result)")
+    p.add_argument("--allow-rule-violations", action="store_true",
+                   help="check a rig scene that breaks a rig rule (refused by default); the report says so at the top")
     p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene)")
     p.add_argument("--order", type=int, help="element order 1 | 2")
     p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
@@ -42,16 +46,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _list(text: str | None) -> list[str] | None:
+    """A comma list option: None if not given; an empty one stays empty (the schema refuses it)."""
+    return None if text is None else [x.strip() for x in text.split(",") if x.strip()]
+
+
 def _overrides(a: argparse.Namespace) -> dict:
     o = {"fidelity": a.fidelity, "order": a.order, "size_mm": a.size, "local_size_mm": a.local_size,
          "samples": a.samples, "mass_model": a.model, "frames": a.frames,
          "reactions_csv": str(Path(a.reactions_csv).resolve()) if a.reactions_csv else None,
-         "modes": a.modes.split(",") if a.modes else None, "parts": a.parts.split(",") if a.parts else None}
+         "modes": _list(a.modes), "parts": _list(a.parts)}
     return {k: v for k, v in o.items() if v is not None}
 
 
 def _summary(r: dict) -> str:
-    lines = [f"{r['scene']}: {r['description']}",
+    lines = [f"{plain(r['scene'])}: {plain(r['description'])}",
              f"{'part':14s} {'mode':9s} {'peak σvm':>9s} {'crank°':>7s} {'error':>7s} {'util.':>7s}  verdict  where"]
     for p in r["parts"]:
         if p.get("peak_mpa") is None:
@@ -61,6 +70,7 @@ def _summary(r: dict) -> str:
         lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:9.1f} {p['crank_deg']:7.1f} "
                      f"{p['error_pct']:6.1f}% {p['utilisation_pct']:6.1f}%  {p['verdict'].upper():7s}  "
                      f"{p['surface']}")
+    lines[1:1] = [f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
     lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa)")
     return "\n".join(lines)
 
@@ -69,9 +79,10 @@ def run(args: argparse.Namespace) -> int:
     if args.list:
         for name, path in sorted(builtin_scenes().items()):
             data = tomllib.loads(path.read_text())
-            print(f"{name:32s} {data.get('description', data['linkage'].get('title', ''))}")
+            print(f"{name:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
         return 0
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
-                       quiet=args.quiet, solver=args.solver, export_inp=args.export_inp)
+                       quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
+                       allow_rule_violations=args.allow_rule_violations)
     print(json.dumps(report, indent=2) if args.json else _summary(report))
     return EXIT[report["verdict"]]

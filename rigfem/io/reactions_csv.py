@@ -47,6 +47,76 @@ def write_csv(h: ReactionHistory, path: str | Path) -> None:
             w.writerow(row)
 
 
+#: largest crank-angle step (deg) an imported history may have: 36 samples per turn, the least
+#: rigfem's own dynamics accepts ([check].samples)
+MAX_STEP_DEG = 10.0
+
+
+#: largest gap (% of the peak force) between the cubic and the linear estimate of a force
+#: half-way between two samples: above it the sampling does not resolve the curve
+MAX_MIDPOINT_PCT = 5.0
+
+
+#: the largest joint force of a real rig linkage (N): below MIN it is not in N (kN?): the
+#: lightest rig crank (a 700 mm rail, 1.9 kg, at 1 Hz) already carries ~15 N; above MAX it is not
+#: a mountable rig (a toggle, or the wrong unit)
+FORCE_RANGE_N = (5.0, 1e6)
+
+
+def _check_turn(where: str, column: str, raw: np.ndarray, deg: np.ndarray) -> None:
+    """The crank angles span one full turn (no more) in steps of at most MAX_STEP_DEG, in the
+    unit the column declares (a ``*_deg`` column spanning at most 2π looks like radians)."""
+    span = float(deg[-1] - deg[0])
+    raw_span = float(raw[-1] - raw[0])
+    if not column.lower().endswith("_rad") and raw_span <= 2 * np.pi + 1e-6 and raw.size > 3:
+        raise InputError(f"reaction CSV {where!r}: column {column} spans {raw_span:.4g}, at most 2π: the angles look "
+                         f"like radians; name the column crank_rad or give degrees")
+    if column.lower().endswith("_rad") and raw_span > 2 * np.pi + 1e-6:
+        raise InputError(f"reaction CSV {where!r}: column {column} spans {raw_span:.4g} rad, more than one turn (2π): "
+                         f"the angles look like degrees; name the column crank_deg")
+    if span >= 360.0 - 1e-9 * 360 and not np.isclose(span, 360.0):
+        raise InputError(f"reaction CSV {where!r}: crank angles span {span:g} deg, more than one turn (360 deg)")
+    gaps = np.append(np.diff(deg), 360.0 - span)  # the last gap closes the turn
+    worst = int(np.argmax(gaps))
+    if gaps[worst] > MAX_STEP_DEG + 1e-9:
+        at = deg[worst] if worst < deg.size - 1 else deg[-1]
+        raise InputError(f"reaction CSV {where!r}: does not cover a full turn in steps of at most {MAX_STEP_DEG:g} deg "
+                         f"(a gap of {gaps[worst]:.4g} deg after crank {at:g} deg; angles span {deg[0]:g}..{deg[-1]:g} deg)")
+
+
+def _check_forces(where: str, deg: np.ndarray, forces: dict[str, np.ndarray], sing: np.ndarray) -> None:
+    """Force magnitudes in N and sampled finely enough to bracket their peaks.
+
+    Why this rule: a peak read from samples (refined on a spline) is only right when the
+    samples resolve the curve.  Half-way between two samples the cubic estimate
+    (-f[i-1] + 9 f[i] + 9 f[i+1] - f[i+2]) / 16 and the linear one (f[i] + f[i+1]) / 2
+    differ by (-f[i-1] + f[i] + f[i+1] - f[i+2]) / 16, the local curvature times the step²;
+    when that exceeds MAX_MIDPOINT_PCT of the peak the samples straddle a peak they do not
+    resolve (the issue's example, 12 samples per turn, read 290 N for a 472 N peak).  For a
+    resolved history (rigfem's 360 samples) it is below 0.01 %.
+    """
+    ok = ~sing
+    mags = {n: np.hypot(f[:, 0], f[:, 1]) for n, f in forces.items()}
+    peak = max((float(np.max(m[ok])) for m in mags.values() if ok.any()), default=0.0)
+    lo, hi = FORCE_RANGE_N
+    if peak < lo:
+        raise InputError(f"reaction CSV {where!r}: largest joint force {peak:.4g} N is below {lo:g} N: "
+                         f"forces must be in N (kN given?)")
+    if peak > hi:
+        raise InputError(f"reaction CSV {where!r}: largest joint force {peak:.4g} N is above {hi:g} N: "
+                         f"forces must be in N and the history bounded")
+    if sing.any():
+        return  # around a toggle the curve is not meant to be smooth
+    for n, m in mags.items():
+        f = np.concatenate([m[-1:], m, m[:2]])  # one turn, closed
+        gap = np.abs(-f[:-3] + f[1:-2] + f[2:-1] - f[3:]) / 16.0
+        k = int(np.argmax(gap))
+        if gap[k] > MAX_MIDPOINT_PCT / 100 * peak:
+            raise InputError(f"reaction CSV {where!r}: joint {n} is sampled too coarsely to bracket its peaks "
+                             f"(between crank {deg[k]:g} deg and the next sample the force curve is not resolved: "
+                             f"{100 * gap[k] / peak:.2g} % of the peak > {MAX_MIDPOINT_PCT:g} %); give more crank angles")
+
+
 def read_csv(path: str | Path) -> ReactionHistory:
     """Import a reaction history (rigfem's own CSV or an external one, e.g. from MATLAB).
 
@@ -54,7 +124,10 @@ def read_csv(path: str | Path) -> ReactionHistory:
     ``theta_deg``, ``angle_deg``, ``theta``, ``angle``) or radians (``crank_rad``, ``theta_rad``,
     ``angle_rad``), and per joint ``<J>_fx_N``/``<J>_fy_N`` (also ``<J>_fx``/``<J>_fy`` or
     ``<J>x``/``<J>y``) in N; optional torque column in N·m (``torque_Nm``, ``torque``, ``M2``).
-    Lines starting with ``#`` are comments.  Raises InputError naming the problem.
+    Lines starting with ``#`` are comments.  Refused (InputError naming the problem): angles
+    that do not cover one full turn in steps of at most :data:`MAX_STEP_DEG`, angles or forces
+    that do not fit their declared unit (radians in a degree column, kN), and sampling too
+    coarse to bracket the peaks (see :func:`_check_forces`).
     """
     p = Path(path)
     if not p.is_file():
@@ -83,6 +156,8 @@ def read_csv(path: str | Path) -> ReactionHistory:
             data.append([float(c) if c.strip() else np.nan for c in r])
         except ValueError:
             raise InputError(f"reaction CSV {str(p)!r} line {k}: non-numeric value") from None
+    if any(len(r) != len(head) for r in data):
+        raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
     arr = np.array(data, float)
     if arr.ndim != 2 or arr.shape[1] != len(head):
         raise InputError(f"reaction CSV {str(p)!r}: rows do not all have {len(head)} columns")
@@ -110,6 +185,8 @@ def read_csv(path: str | Path) -> ReactionHistory:
         raise InputError(f"reaction CSV {str(p)!r}: empty or non-finite crank angle")
     if np.any(np.diff(deg) <= 0):
         raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
+    _check_turn(str(p), head[ang], arr[:, ang], deg)
+    _check_forces(str(p), deg, {n: j.force_N for n, j in joints.items()}, sing)
     for j in joints.values():
         j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)        # blank singular rows
     meta = {"source": str(p), "model": "imported"}

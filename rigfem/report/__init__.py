@@ -8,8 +8,8 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "document": ["REPORT_SCHEMA", "finite", "write_json", "render_markdown", "MODE_TEXT"],
-        "folder": ["check_writable", "atomic_dir"],
+        "document": ["REPORT_SCHEMA", "finite", "write_json", "md_text", "render_markdown", "MODE_TEXT"],
+        "folder": ["MARKER", "check_target", "check_writable", "folder_lock", "atomic_dir"],
         "html": ["render_html", "write_html"],
         "motion": ["motion_plot", "motion_gif"],
         "pictures": ["field_picture", "reactions_plot", "utilisation_plot", "render_field"],

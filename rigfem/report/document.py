@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
-#: version of report.json's layout (docs/report-json.md); raised when a field changes meaning or goes
+from rigfem.errors import plain
+
+#: version of report.json's layout (README: report.json); raised when a field changes meaning or goes
 REPORT_SCHEMA = 2
 
 
@@ -31,6 +34,20 @@ def write_json(report: dict, path: Path) -> None:
     path.write_text(json.dumps(finite(report), indent=2) + "\n")
 
 
+_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-.!|~>])")
+
+
+def md_text(text: object) -> str:
+    """User text (a scene's description, names) safe in Markdown and HTML: one line, no
+    control characters, Markdown punctuation backslash-escaped, ``<``/``&`` as entities.
+
+    >>> print(md_text("<b>*PASS*</b>"))
+    &lt;b\\>\\*PASS\\*&lt;/b\\>
+    """
+    s = plain(text, 2000).replace("&", "&amp;").replace("<", "&lt;")
+    return _MD_SPECIAL.sub(r"\\\1", s)
+
+
 def _fmt(x, nd: int = 1) -> str:
     return "–" if x is None else f"{x:.{nd}f}"
 
@@ -38,11 +55,16 @@ def _fmt(x, nd: int = 1) -> str:
 def render_markdown(r: dict) -> str:
     """Human-readable report: configuration, rules, reactions, one table per mode."""
     cfg = r["configuration"]
-    lines = [f"# rigfem check: {r['scene']}", "",
-             f"{r.get('description', '')}".strip(), "",
+    lines = [f"# rigfem check: {md_text(r['scene'])}", ""]
+    if r.get("rule_violations"):
+        lines += ["**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
+                  "checked only because --allow-rule-violations was passed:**", ""]
+        lines += [f"- {md_text(v)}" for v in r["rule_violations"]] + [""]
+    lines += [
+             md_text(r.get("description", "")).strip(), "",
              f"**Overall verdict: {r['verdict'].upper()}** — criterion σvm,peak < "
              f"{r['settings']['limit_factor']:g}·σu = {r['limit_mpa']:.0f} MPa "
-             f"({r['settings']['material']}).", ""]
+             f"({md_text(r['settings']['material'])}).", ""]
     lines += ["## Configuration", "",
               f"- linkage: {cfg['type']}, lengths (mm): "
               + ", ".join(f"{k} = {v:g}" for k, v in cfg["lengths_mm"].items()),

@@ -49,6 +49,7 @@ from rigfem.rig.rules import (
     fourbar_rules,
     slider_crank_rules,
 )
+from rigfem.schema import validate_check
 from rigfem.settings import (
     FIDELITY,
     PARTS,
@@ -126,8 +127,9 @@ class SweepParams:
         return tuple(self.rails_mm[:3] if self.linkage_type == "four-bar" else self.rails_mm[:2])
 
     def settings(self) -> CheckSettings:
-        return check_settings({"fidelity": self.fidelity, **dict(self.check)}, self.linkage_type,
-                              list(self.rails))
+        table = {"fidelity": self.fidelity, **dict(self.check)}
+        validate_check(table, "sweep")
+        return check_settings(table, self.linkage_type, list(self.rails))
 
     def key(self) -> str:
         """Short hash of the parameters and of everything else a stored chunk depends on: the
