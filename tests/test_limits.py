@@ -46,7 +46,7 @@ LIMITS = {
 def test_reference_scene_limits(scene, tmp_path):
     # final-nc and final-nm break rig rules (transmission angle, hole grid): checked on request only
     r = run_check(scene, out=tmp_path / scene, overrides=FAST, quiet=True, allow_rule_violations=True)
-    assert bool(r["rule_violations"]) == scene in ("final-nc", "final-nm")
+    assert bool(r["rule_violations"]) == (scene in ("final-nc", "final-nm"))
     got = {(p["name"], p["mode"]): p for p in r["parts"]}
     assert set(got) == set(LIMITS[scene])
     assert r["verdict"] == "pass"

@@ -3,7 +3,7 @@
 import pytest
 
 from rigfem.errors import InputError
-from rigfem.report import atomic_dir
+from rigfem.report import MARKER, atomic_dir
 
 
 def test_atomic_dir_commits_on_success(tmp_path):
@@ -26,12 +26,12 @@ def test_atomic_dir_leaves_nothing_on_failure(tmp_path):
 
 def test_existing_needs_force(tmp_path):
     out = tmp_path / "res"
-    out.mkdir()
-    (out / "old.txt").write_text("old")
+    with atomic_dir(out) as d:  # a folder rigfem wrote (it carries the marker)
+        (d / "old.txt").write_text("old")
     with pytest.raises(InputError, match="--force"):
         with atomic_dir(out):
             pass
     assert (out / "old.txt").exists()
     with atomic_dir(out, force=True) as d:
         (d / "new.txt").write_text("new")
-    assert sorted(p.name for p in out.iterdir()) == ["new.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [MARKER, "new.txt"]

@@ -127,7 +127,8 @@ class SweepParams:
         return tuple(self.rails_mm[:3] if self.linkage_type == "four-bar" else self.rails_mm[:2])
 
     def settings(self) -> CheckSettings:
-        table = {"fidelity": self.fidelity, **dict(self.check)}
+        # tuples keep the params hashable; the scene schema takes lists
+        table = {"fidelity": self.fidelity, **{k: list(v) if isinstance(v, tuple) else v for k, v in self.check}}
         validate_check(table, "sweep")
         return check_settings(table, self.linkage_type, list(self.rails))
 

@@ -16,6 +16,8 @@ from rigfem.studies.sweep import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
 WORST = 15
+#: the 2013 study's final design (RIG.md §3), marked on the maps
+FINAL_DESIGN = {"b2": 480.0, "b3": 840.0, "b4": 780.0, "d": 1020.0}
 
 
 def _ok(table: pd.DataFrame) -> pd.DataFrame:
@@ -43,7 +45,7 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     ok = _ok(table)
     if ok.empty or "config_util_pct" not in ok:
         return []
-    vmax = max(1.0, float(ok["config_util_pct"].max()))
+    vmax = min(150.0, max(1.0, float(ok["config_util_pct"].max())))  # beyond 150 % all reads "fails"
     fixed = ", ".join(f"{k} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
     note = f" (not shown, the same everywhere: {fixed})" if fixed else ""
     files = []
@@ -62,6 +64,18 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
                                cmap="viridis", extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
                 if np.nanmax(np.nan_to_num(grid, nan=0.0)) >= 100.0:
                     ax.contour(xs, ys, np.nan_to_num(grid, nan=0.0), levels=[100.0], colors="r")
+                # computed but not mountable (a rig rule broken): hatched; failing: red outline
+                bad = ok[(ok["b2"] == b2) & ~ok["rules_ok"].astype(bool)].groupby([y, x]).size().unstack()
+                bad = bad.reindex(index=ys, columns=xs).notna().to_numpy()
+                fail = ok[(ok["b2"] == b2) & (ok["verdict"] != "pass")].groupby([y, x]).size().unstack()
+                fail = fail.reindex(index=ys, columns=xs).notna().to_numpy()
+                for (i, j) in zip(*np.nonzero(bad)):
+                    ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, hatch="///",
+                                               edgecolor="white", lw=0))
+                for (i, j) in zip(*np.nonzero(fail)):
+                    ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, edgecolor="red", lw=1.2))
+                if b2 == FINAL_DESIGN["b2"]:
+                    ax.plot(FINAL_DESIGN[x], FINAL_DESIGN[y], marker="*", ms=14, color="white", mec="k")
                 ax.set_facecolor("0.85")
                 ax.set_title(f"b2 = {b2:g} mm", fontsize="small")
             for ax in axes.flat[len(b2s):]:
@@ -70,9 +84,11 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
                 ax.set_xlabel(f"{x} (mm)")
             for ax in axes[:, 0]:
                 ax.set_ylabel(f"{y} (mm)")
-            fig.colorbar(im, ax=axes, shrink=0.6, label=f"peak utilisation (%), max over {over}")
-            fig.suptitle(f"four-bar: peak part utilisation vs σu/2 (grey: cannot assemble or toggle), "
-                         f"{p.speed_hz:g} Hz, {p.model}, {p.fidelity}{note}", fontsize="small")
+            fig.colorbar(im, ax=axes, shrink=0.6, extend="max" if vmax >= 150.0 else "neither",
+                         label=f"peak utilisation (%), max over {over}")
+            fig.suptitle(f"four-bar: peak part utilisation vs σu/2 ({p.speed_hz:g} Hz, {p.model}, {p.fidelity}){note}\n"
+                         f"grey: cannot assemble or toggle; hatched: breaks a rig rule (not mountable); "
+                         f"red outline: fails or undecided; ★ the study's final design", fontsize="small")
             f = f"map_four-bar_{name}.png"
             fig.savefig(out / f, dpi=90)
             plt.close(fig)
@@ -203,7 +219,43 @@ def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float 
     csv = f"sweep_{p.linkage_type}.csv.gz"  # gzip: most rows are configurations that cannot assemble
     table.to_csv(out / csv, index=False, float_format="%.6g", na_rep="",
                  compression={"method": "gzip", "mtime": 0})
-    files = [csv] + write_maps(table, p, out)
+    maps = write_maps(table, p, out)
     md = f"worst_{p.linkage_type}.md"
-    (out / md).write_text(worst_markdown(table, p, seconds))
-    return files + [md]
+    text = worst_markdown(table, p, seconds)
+    (out / md).write_text(text)
+    page = f"sweep_{p.linkage_type}.html"
+    (out / page).write_text(summary_html(text, maps, out, p), encoding="utf-8")
+    return [csv] + maps + [md, page]
+
+
+def summary_html(markdown: str, maps: list[str], out: Path, p: SweepParams) -> str:
+    """One self-contained page: the sweep's counts and worst configurations, and its maps embedded."""
+    import base64
+    import html
+
+    rows, table = [], []
+    for line in markdown.splitlines():
+        if line.startswith("|") and not set(line) <= set("|-: "):
+            cells = [html.escape(c.strip()) for c in line.strip("|").split("|")]
+            tag = "th" if not table else "td"
+            table.append("<tr>" + "".join(f"<{tag}>{c}</{tag}>" for c in cells) + "</tr>")
+            continue
+        if table:
+            rows.append("<table>" + "".join(table) + "</table>")
+            table = []
+        if line.startswith("#"):
+            level = min(len(line) - len(line.lstrip("#")), 3)
+            rows.append(f"<h{level}>{html.escape(line.lstrip('#').strip())}</h{level}>")
+        elif line.strip():
+            rows.append(f"<p>{html.escape(line.lstrip('- '))}</p>")
+    if table:
+        rows.append("<table>" + "".join(table) + "</table>")
+    for f in maps:
+        data = base64.b64encode((out / f).read_bytes()).decode("ascii")
+        rows.append(f'<img src="data:image/png;base64,{data}" alt="{html.escape(f)}" data-file="{html.escape(f)}">')
+    css = ("body{font-family:system-ui,sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
+           "table{border-collapse:collapse;font-size:.85em}td,th{border:1px solid #ccc;padding:.2em .5em}"
+           "th{background:#f3f3f3}img{max-width:100%;border:1px solid #ddd;margin:.5em 0}")
+    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>rigfem sweep: '
+            f"{html.escape(p.linkage_type)}</title><style>{css}</style></head><body>" + "\n".join(rows)
+            + "</body></html>")
