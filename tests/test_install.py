@@ -1,0 +1,37 @@
+"""A regular (non-editable) install works from any folder: the wheel carries the part
+definitions of geometry/ and the built-in scenes."""
+
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_wheel_runs_from_another_folder(tmp_path):
+    """Build the wheel, install it alone into a folder and run ``rigfem parts`` and ``rigfem mesh``
+    from another folder with it first on the path (the dependencies come from this environment)."""
+    wheels = tmp_path / "wheels"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels), str(ROOT)],
+                   check=True, capture_output=True)
+    wheel = next(wheels.glob("rigfem-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "rigfem/geometry/rail_size25.toml" in names and "rigfem/scenes/final-cm.toml" in names
+    site = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(site), str(wheel)],
+                   check=True, capture_output=True)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    where = subprocess.run([sys.executable, "-c", "import rigfem; print(rigfem.__file__)"], cwd=elsewhere,
+                           env=env, capture_output=True, text=True, check=True).stdout
+    assert where.startswith(str(site))
+    parts = subprocess.run([sys.executable, "-m", "rigfem", "parts"], cwd=elsewhere, env=env,
+                           capture_output=True, text=True)
+    assert parts.returncode == 0 and "PF_4b_006" in parts.stdout and str(site) in parts.stdout
+    mesh = subprocess.run([sys.executable, "-m", "rigfem", "mesh", "PF_4b_006", "--size", "12", "--out",
+                           str(elsewhere / "plate.vtu")], cwd=elsewhere, env=env, capture_output=True, text=True)
+    assert mesh.returncode == 0, mesh.stderr
+    assert (elsewhere / "plate.vtu").stat().st_size > 0
