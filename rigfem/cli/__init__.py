@@ -29,6 +29,7 @@ COMMANDS: dict[str, str] = {
     "verify": "verify",
     "sweep": "sweep",
     "show": "show",
+    "synthesize": "synthesize",
 }
 
 

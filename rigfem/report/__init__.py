@@ -11,7 +11,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "document": ["REPORT_SCHEMA", "finite", "write_json", "md_text", "render_markdown", "MODE_TEXT"],
         "folder": ["MARKER", "check_target", "check_writable", "folder_lock", "atomic_dir"],
         "html": ["render_html", "write_html"],
-        "motion": ["motion_plot", "motion_gif"],
+        "motion": ["motion_plot", "motion_gif", "structural_error_plot"],
         "pictures": ["field_picture", "reactions_plot", "utilisation_plot", "render_field"],
         "vtu": ["SAFETY_CAP", "write_vtu"],
     },

@@ -1,0 +1,92 @@
+"""``rigfem synthesize function``: a four-bar that generates y = f(x) (Freudenstein's equation,
+Chebyshev precision points), its structural error over the range and its defects.
+
+Angles in degrees counter-clockwise from the ground line O2→O4; lengths in the unit of --ground.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from rigfem.errors import InputError, check_range
+
+HELP = "design a linkage: a four-bar generating a function (Freudenstein, Chebyshev points)"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    sub = p.add_subparsers(dest="task", metavar="TASK", parser_class=type(p))
+    f = sub.add_parser("function", help="function generation y = f(x) with a four-bar",
+                       description="function generation y = f(x) with a four-bar")
+    f.add_argument("expr", metavar="EXPR", help="f(x), e.g. 'x*log(x)' (x, numbers, + - * / **, pi, e, numpy sin cos "
+                                                "tan exp log log10 sqrt ...)")
+    f.add_argument("--x", nargs=2, required=True, metavar=("X0", "X1"), help="range of x")
+    f.add_argument("--input", nargs=2, required=True, metavar=("START", "RANGE"), help="crank angle at X0 and its sweep (deg)")
+    f.add_argument("--output", nargs=2, required=True, metavar=("START", "RANGE"),
+                   help="rocker angle at f(X0) and its sweep (deg)")
+    f.add_argument("--ground", required=True, metavar="D", help="ground length d (sets the unit of a, b, c)")
+    f.add_argument("--points", default="3", metavar="N", help="precision points (3)")
+    f.add_argument("--json", action="store_true", help="print one JSON object")
+    f.add_argument("--plot", metavar="PNG", help="plot of the structural error over the range")
+
+
+def _table(r: dict) -> str:
+    L = r["lengths"]
+    out = [f"four-bar generating y = {r['expression']} for x in [{r['x_range'][0]:g}, {r['x_range'][1]:g}]",
+           f"input (crank) {r['input_deg']['start']:g} deg over {r['input_deg']['range']:g} deg, output (rocker) "
+           f"{r['output_deg']['start']:g} deg over {r['output_deg']['range']:g} deg",
+           "",
+           f"links: input a = {L['a']:.6g}, coupler b = {L['b']:.6g}, output c = {L['c']:.6g}, ground d = {L['d']:.6g}"]
+    if r["input_offset_deg"] or r["output_offset_deg"]:
+        out.append(f"(Freudenstein gave negative lengths: crank drawn at input + {r['input_offset_deg']:g} deg, "
+                   f"rocker at output + {r['output_offset_deg']:g} deg)")
+    out.append(f"assembly branch: {r['branch'] or 'none'}")
+    out.append("")
+    out.append(f"{'precision point':>16s} {'x':>10s} {'y':>10s} {'input deg':>10s} {'output deg':>11s}")
+    for i, p in enumerate(r["precision_points"], 1):
+        out.append(f"{i:16d} {p['x']:10.5f} {p['y']:10.5f} {p['input_deg']:10.4f} {p['output_deg']:11.4f}")
+    if "structural_error" in r:
+        s = r["structural_error"]
+        out.append(f"\nstructural error: max |generated - ideal| = {s['max_abs']:.5g} at x = {s['at_x']:.4g} "
+                   f"({s['percent_of_range']:.3f} % of the output range)")
+        t = r["transmission_deg"]
+        out.append(f"transmission angle over the range: min {t['min']:.2f} deg, max {t['max']:.2f} deg")
+    for d in r["defects"]:
+        out.append(f"DEFECT: {d}")
+    if not r["defects"]:
+        out.append("no branch or order defect")
+    return "\n".join(out)
+
+
+def run(args) -> int:
+    if getattr(args, "task", None) != "function":
+        raise InputError("give a task: rigfem synthesize function EXPR --x X0 X1 --input START RANGE "
+                         "--output START RANGE --ground D")
+    from rigfem.dynamics.synthesis import synthesize_function
+
+    png = None
+    if args.plot:
+        png = Path(args.plot)
+        if png.suffix.lower() != ".png":
+            raise InputError(f"--plot = {args.plot!r} must be a .png path")
+        if png.exists():
+            raise InputError(f"--plot = {args.plot!r} already exists; refusing to overwrite it")
+    nums = dict(x0=check_range("--x X0", args.x[0]), x1=check_range("--x X1", args.x[1]),
+                in_start=check_range("--input START", args.input[0], -360, 360, "deg"),
+                in_range=check_range("--input RANGE", args.input[1], -360, 360, "deg"),
+                out_start=check_range("--output START", args.output[0], -360, 360, "deg"),
+                out_range=check_range("--output RANGE", args.output[1], -360, 360, "deg"),
+                d=check_range("--ground", args.ground, 0, None, lo_open=True))
+    points = check_range("--points", args.points, 3, 3)
+    r = synthesize_function(args.expr, points=int(points), **nums)
+    gen = r.pop("generated", None)
+    if png and gen is not None:
+        from rigfem.report.motion import structural_error_plot
+
+        structural_error_plot(gen, r, png)
+    if args.json:
+        print(json.dumps(r, indent=1))
+    else:
+        print(_table(r))
+    return 0

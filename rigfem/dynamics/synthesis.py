@@ -1,0 +1,185 @@
+"""Function generation with a four-bar: Freudenstein's equation at Chebyshev precision points.
+
+The crank angle θ2 stands for x and the rocker angle θ4 for y = f(x), both linearly:
+θ2 = θ2s + (x − x0)/(x1 − x0)·Δθ2, θ4 = θ4s + (y − y0)/(y1 − y0)·Δθ4 (deg, counter-clockwise
+from the ground line O2→O4, O4 at (d, 0)).  The loop a e2 + b e3 = d + c e4 squared gives
+Freudenstein's equation  K1 cos θ4 − K2 cos θ2 + K3 = cos(θ2 − θ4),
+K1 = d/a, K2 = d/c, K3 = (a² − b² + c² + d²)/(2ac), linear in K at each precision point.
+The generated function is then computed by the closed-form kinematics
+(:mod:`rigfem.dynamics.kinematics`), independently of these equations.
+"""
+
+from __future__ import annotations
+
+import ast
+import operator
+
+import numpy as np
+
+from rigfem.dynamics.kinematics import fourbar_motion, fourbar_turn
+from rigfem.errors import ComputeError, InputError
+
+_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+           ast.Pow: operator.pow}
+_UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+_FUNCS = {n: getattr(np, n) for n in ("sin", "cos", "tan", "arcsin", "arccos", "arctan", "sinh", "cosh", "tanh",
+                                      "exp", "log", "log10", "log2", "sqrt", "abs")}
+_CONSTS = {"pi": np.pi, "e": np.e}
+
+
+def parse_function(expr: str):
+    """A safe function of ``x`` from an expression (numbers, x, pi, e, + - * / **, and numpy's
+    sin cos tan arcsin arccos arctan sinh cosh tanh exp log log10 log2 sqrt abs); nothing else
+    is evaluated.  Raises InputError naming what is not allowed."""
+    try:
+        tree = ast.parse(expr, mode="eval")
+    except SyntaxError:
+        raise InputError(f"EXPR = {expr!r} is not a valid expression of x") from None
+
+    def build(node):
+        if isinstance(node, ast.Expression):
+            return build(node.body)
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
+            v = float(node.value)
+            return lambda x: v
+        if isinstance(node, ast.Name):
+            if node.id == "x":
+                return lambda x: x
+            if node.id in _CONSTS:
+                v = _CONSTS[node.id]
+                return lambda x: v
+            raise InputError(f"EXPR: unknown name {node.id!r}; allowed x, pi, e and {', '.join(_FUNCS)}")
+        if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+            f, lft, rgt = _BINOPS[type(node.op)], build(node.left), build(node.right)
+            return lambda x: f(lft(x), rgt(x))
+        if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
+            f, arg = _UNARY[type(node.op)], build(node.operand)
+            return lambda x: f(arg(x))
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCS
+                and len(node.args) == 1 and not node.keywords):
+            f, arg = _FUNCS[node.func.id], build(node.args[0])
+            return lambda x: f(arg(x))
+        raise InputError(f"EXPR: {ast.unparse(node)!r} is not allowed; use x, numbers, + - * / **, pi, e "
+                         f"and {', '.join(_FUNCS)}")
+
+    fn = build(tree)
+    return lambda x: np.asarray(fn(np.asarray(x, float)), float) + np.zeros_like(np.asarray(x, float))
+
+
+def chebyshev_points(x0: float, x1: float, n: int) -> np.ndarray:
+    """Chebyshev spacing of ``n`` precision points on [x0, x1]: x_j = m − h cos((2j − 1)π/(2n))."""
+    j = np.arange(1, n + 1)
+    return (x0 + x1) / 2 - (x1 - x0) / 2 * np.cos((2 * j - 1) * np.pi / (2 * n))
+
+
+def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_range: float, out_start: float,
+                        out_range: float, d: float, points: int = 3, samples: int = 2001) -> dict:
+    """Four-bar generating y = f(x) on [x0, x1] (angles deg, lengths in the unit of ``d``).
+
+    Returns the link lengths a (input crank), b (coupler), c (output rocker), d; the precision
+    points; the branch; the generated output over the range (by the closed-form kinematics)
+    and its structural error (largest |generated − ideal| in y and in % of |y1 − y0|); the
+    defects found (branch: precision points on different assembly branches; order: a dead
+    point of the crank inside the input range, so the points are not reached in one sweep).
+    A negative a or c means that link points the other way: its length is given positive and
+    its angle offset by 180° (``input_offset_deg``/``output_offset_deg``).
+    """
+    f = parse_function(expr)
+    for name, v in (("--x X0", x0), ("--x X1", x1), ("--input START", in_start), ("--input RANGE", in_range),
+                    ("--output START", out_start), ("--output RANGE", out_range), ("--ground", d)):
+        if not np.isfinite(v):
+            raise InputError(f"{name} = {v!r} must be a finite number")
+    if not x1 > x0:
+        raise InputError(f"--x X0 X1 = {x0:g} {x1:g}: X1 must be greater than X0")
+    if d <= 0:
+        raise InputError(f"--ground = {d:g} must be a positive length")
+    if int(points) != 3:
+        raise InputError(f"--points = {points!r}: Freudenstein's equation has three unknowns, allowed 3")
+    for name, v in (("--input RANGE", in_range), ("--output RANGE", out_range)):
+        if v == 0 or abs(v) >= 360:
+            raise InputError(f"{name} = {v:g} deg must be non-zero and within (-360, 360) deg")
+    xs = np.linspace(x0, x1, samples)
+    with np.errstate(all="ignore"):
+        ys = f(xs)
+    if not np.all(np.isfinite(ys)):
+        raise InputError(f"EXPR = {expr!r} is not finite everywhere on [{x0:g}, {x1:g}]")
+    y0, y1 = float(ys[0]), float(ys[-1])
+    if y1 == y0:
+        raise InputError(f"EXPR = {expr!r} has f(X0) = f(X1) = {y0:g}: the output range would be zero")
+
+    def th2(x):
+        return in_start + (np.asarray(x) - x0) / (x1 - x0) * in_range
+
+    def th4(y):
+        return out_start + (np.asarray(y) - y0) / (y1 - y0) * out_range
+
+    xp = chebyshev_points(x0, x1, 3)
+    yp = f(xp)
+    t2, t4 = np.radians(th2(xp)), np.radians(th4(yp))
+    M = np.stack([np.cos(t4), -np.cos(t2), np.ones(3)], -1)
+    try:
+        K1, K2, K3 = np.linalg.solve(M, np.cos(t2 - t4))
+    except np.linalg.LinAlgError:
+        raise ComputeError("Freudenstein's equations are singular at these precision points") from None
+    if K1 == 0 or K2 == 0:
+        raise ComputeError("Freudenstein's solution puts a link at infinite length (K1 or K2 = 0)")
+    a, c = d / K1, d / K2
+    b2_sq = a * a + c * c + d * d - 2 * a * c * K3
+    if not b2_sq > 0:
+        raise ComputeError(f"Freudenstein's solution has no real coupler (b² = {b2_sq:.4g})")
+    b = float(np.sqrt(b2_sq))
+    off_in, off_out = (180.0 if a < 0 else 0.0), (180.0 if c < 0 else 0.0)
+    a, c = abs(a), abs(c)
+    res = dict(expression=expr, x_range=[x0, x1], y_range=[y0, y1], ground=d,
+               input_deg=dict(start=in_start, range=in_range), output_deg=dict(start=out_start, range=out_range),
+               freudenstein=dict(K1=float(K1), K2=float(K2), K3=float(K3)),
+               lengths=dict(a=float(a), b=b, c=float(c), d=float(d)),
+               input_offset_deg=off_in, output_offset_deg=off_out)
+    defects = []
+    arc = _reachable(a, b, c, d)
+    sweep = th2(xs) + off_in
+    if arc is not None:
+        inside = ((sweep - arc[0]) % 360.0) <= (arc[1] - arc[0])
+        if not inside.all():
+            defects.append(f"order defect: the crank meets a dead point inside the input range "
+                           f"(it can only move {arc[0]:.3f} to {arc[1]:.3f} deg)")
+    res["precision_points"] = [dict(x=float(x), y=float(y), input_deg=float(p), output_deg=float(q))
+                               for x, y, p, q in zip(xp, yp, th2(xp), th4(yp))]
+    # which assembly branch passes through each precision point (computed by the kinematics)
+    on = {}
+    for br in ("open", "crossed"):
+        try:
+            m = fourbar_motion(a, b, c, d, th2(xp) + off_in, branch=br)
+        except InputError:
+            continue
+        got = m.links["rocker"]["angle_deg"] - off_out
+        on[br] = np.abs(((got - th4(yp)) + 180.0) % 360.0 - 180.0) < 1e-6
+    branch = next((br for br, ok in on.items() if ok.all()), None)
+    if branch is None:
+        defects.append("branch defect: the precision points lie on different assembly branches")
+        res.update(branch=None, defects=defects)
+        return res
+    res["branch"] = branch
+    if defects:
+        res["defects"] = defects
+        return res
+    m = fourbar_motion(a, b, c, d, sweep, branch=branch)
+    psi = m.links["rocker"]["angle_deg"] - off_out
+    psi = th4(y0) + ((psi - th4(y0) + 180.0) % 360.0 - 180.0)
+    y_gen = y0 + (psi - out_start) / out_range * (y1 - y0)
+    err = y_gen - ys
+    i = int(np.argmax(np.abs(err)))
+    res.update(defects=defects, generated=dict(x=xs, y_ideal=ys, y_generated=y_gen, error=err),
+               structural_error=dict(max_abs=float(abs(err[i])), at_x=float(xs[i]),
+                                     percent_of_range=float(100 * abs(err[i]) / abs(y1 - y0))),
+               transmission_deg=dict(min=float(m.transmission_deg.min()), max=float(m.transmission_deg.max())))
+    return res
+
+
+def _reachable(a, b, c, d):
+    """Crank arc (deg, start < end) the synthesised four-bar can reach; None = a full turn."""
+    try:
+        arc = fourbar_turn(a, b, c, d)["crank_range_deg"]
+    except InputError:
+        raise ComputeError(f"the synthesised four-bar a={a:.4g} b={b:.4g} c={c:.4g} d={d:.4g} cannot be assembled") from None
+    return None if arc is None else tuple(arc)
