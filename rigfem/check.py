@@ -289,7 +289,8 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
         "rule_violations": cs.rule_violations,
-        "verdict": overall(parts), "limit_mpa": limit,
+        # a configuration that cannot be mounted never passes, whatever its stresses
+        "verdict": "fail" if cs.rule_violations else overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],
                           "samples": int(h.crank_deg.size)},

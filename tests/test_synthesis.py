@@ -84,3 +84,44 @@ def test_cli_bad_input(capsys, argv, needle):
     rc = main(["synthesize", "function", *argv, *extra])
     _, err = capsys.readouterr()
     assert rc == 2 and needle in err
+
+
+TRAINER = np.array([[0.0, 0.0], [-15.12, -9.0], [-29.128, -4.0]])       # elliptical-trainer foot points (cm)
+
+
+def _kinematics_points(r, branch):
+    """The coupler point at the three crank angles, by the closed-form kinematics, in the global frame."""
+    L = r["lengths"]
+    m = fourbar_motion(L["b2"], L["b3"], L["b4"], L["d"], r["crank_deg"], branch=branch,
+                       coupler_point=(r["coupler_point"]["distance"], r["coupler_point"]["angle_deg"]))
+    t = np.radians(r["ground_angle_deg"])
+    R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    return np.array(r["O2"]) + m.points["P"]["position_mm"] @ R.T
+
+
+def test_three_position_analytic_and_optimised():
+    from rigfem.dynamics import check_three_position, optimise_three_position, three_position
+
+    r = optimise_three_position(TRAINER, maxiter=40)
+    chk = check_three_position(r)
+    assert chk["defects"] == [] and chk["grashof"] == "crank-rocker"
+    assert np.allclose(_kinematics_points(r, chk["branch"]), TRAINER, atol=1e-9)
+    assert chk["transmission_deg"]["min"] > 45 and chk["transmission_deg"]["max"] < 135
+    # the analytic solution with the optimiser's free choices is the same linkage
+    r2 = three_position(TRAINER, r["alpha_deg"], r["beta_deg"], r["gamma_deg"])
+    assert r2["lengths"] == pytest.approx(r["lengths"], rel=1e-12)
+    # a choice whose positions lie on two branches is flagged, not hidden
+    bad = check_three_position(three_position(TRAINER * 10, [-20, -40], [90, 180], [30, 60]))
+    assert any("branch defect" in d for d in bad["defects"])
+
+
+def test_cli_motion(capsys):
+    rc = main(["synthesize", "motion", "--points", "0,0", "-15.12,-9", "-29.128,-4", "--alpha", "4.875", "7.810",
+               "--beta", "218.395", "-227.639", "--gamma", "7.473", "1.961", "--json"])
+    out, err = capsys.readouterr()
+    r = json.loads(out)
+    assert rc == 0 and r["optimised"] is False and r["position_error"] < 1e-9 and r["defects"] == []
+    rc = main(["synthesize", "motion", "--points", "0,0", "1,1", "1,1", "--alpha", "1", "2", "--beta", "3", "4",
+               "--gamma", "5", "6"])
+    _, err = capsys.readouterr()
+    assert rc == 2 and "distinct" in err

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 from pathlib import Path
 
 from rigfem.errors import InputError, check_range
@@ -22,13 +23,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     f.add_argument("expr", metavar="EXPR", help="f(x), e.g. 'x*log(x)' (x, numbers, + - * / **, pi, e, numpy sin cos "
                                                 "tan exp log log10 sqrt ...)")
     f.add_argument("--x", nargs=2, required=True, metavar=("X0", "X1"), help="range of x")
-    f.add_argument("--input", nargs=2, required=True, metavar=("START", "RANGE"), help="crank angle at X0 and its sweep (deg)")
+    f.add_argument("--input", nargs=2, required=True, metavar=("START", "RANGE"),
+                   help="crank angle at X0 and its sweep (deg)")
     f.add_argument("--output", nargs=2, required=True, metavar=("START", "RANGE"),
                    help="rocker angle at f(X0) and its sweep (deg)")
     f.add_argument("--ground", required=True, metavar="D", help="ground length d (sets the unit of a, b, c)")
     f.add_argument("--points", default="3", metavar="N", help="precision points (3)")
     f.add_argument("--json", action="store_true", help="print one JSON object")
     f.add_argument("--plot", metavar="PNG", help="plot of the structural error over the range")
+    m = sub.add_parser("motion", help="three-position motion generation of a coupler point",
+                       description="three-position motion generation of a coupler point (dyads in standard "
+                                   "form); without --beta/--gamma the free choices maximise the smallest "
+                                   "transmission angle")
+    # "-15.12,-9" is a position, not an option: let argparse read negative coordinates
+    m._negative_number_matcher = re.compile(r"^-\.?\d")
+    m.add_argument("--points", nargs=3, required=True, metavar="X,Y", help="the three positions, in order")
+    m.add_argument("--alpha", nargs=2, metavar=("A2", "A3"), help="coupler rotations from position 1 (deg)")
+    m.add_argument("--beta", nargs=2, metavar=("B2", "B3"), help="crank rotations from position 1 (deg)")
+    m.add_argument("--gamma", nargs=2, metavar=("G2", "G3"), help="rocker rotations from position 1 (deg)")
+    m.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def _table(r: dict) -> str:
@@ -37,7 +50,8 @@ def _table(r: dict) -> str:
            f"input (crank) {r['input_deg']['start']:g} deg over {r['input_deg']['range']:g} deg, output (rocker) "
            f"{r['output_deg']['start']:g} deg over {r['output_deg']['range']:g} deg",
            "",
-           f"links: input a = {L['a']:.6g}, coupler b = {L['b']:.6g}, output c = {L['c']:.6g}, ground d = {L['d']:.6g}"]
+           f"links: input a = {L['a']:.6g}, coupler b = {L['b']:.6g}, output c = {L['c']:.6g}, "
+           f"ground d = {L['d']:.6g}"]
     if r["input_offset_deg"] or r["output_offset_deg"]:
         out.append(f"(Freudenstein gave negative lengths: crank drawn at input + {r['input_offset_deg']:g} deg, "
                    f"rocker at output + {r['output_offset_deg']:g} deg)")
@@ -59,10 +73,56 @@ def _table(r: dict) -> str:
     return "\n".join(out)
 
 
+def _point(text: str) -> tuple[float, float]:
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise InputError(f"--points: {text!r} must be X,Y")
+    return check_range("--points X", parts[0]), check_range("--points Y", parts[1])
+
+
+def _motion(args) -> int:
+    from rigfem.dynamics.synthesis import check_three_position, optimise_three_position, three_position
+
+    P = [_point(t) for t in args.points]
+
+    def angles(flag, v):
+        return None if v is None else [check_range(flag, a, -360, 360, "deg") for a in v]
+
+    al, be, ga = angles("--alpha", args.alpha), angles("--beta", args.beta), angles("--gamma", args.gamma)
+    if (be is None) != (ga is None) or (be is not None and al is None):
+        raise InputError("give --alpha, --beta and --gamma together (analytic), or none/only --alpha (optimised)")
+    r = three_position(P, al, be, ga) if be is not None else optimise_three_position(P, al)
+    r["optimised"] = be is None
+    r.update(check_three_position(r))
+    if args.json:
+        print(json.dumps(r, indent=1))
+        return 0
+    L = r["lengths"]
+    how = "optimised free choices (largest smallest transmission angle)" if r["optimised"] else "given free choices"
+    out = [how + f": coupler rotations {r['alpha_deg'][0]:.3f}, {r['alpha_deg'][1]:.3f} deg; crank {r['beta_deg'][0]:.3f}, "
+           f"{r['beta_deg'][1]:.3f} deg; rocker {r['gamma_deg'][0]:.3f}, {r['gamma_deg'][1]:.3f} deg",
+           f"ground pivots O2 = ({r['O2'][0]:.4f}, {r['O2'][1]:.4f}), O4 = ({r['O4'][0]:.4f}, {r['O4'][1]:.4f})",
+           f"links: crank {L['b2']:.4f}, coupler {L['b3']:.4f}, rocker {L['b4']:.4f}, ground {L['d']:.4f}; "
+           f"coupler point {r['coupler_point']['distance']:.4f} from A at {r['coupler_point']['angle_deg']:.3f} deg "
+           f"from A->B",
+           "crank angles at the positions (deg, from O2->O4): " + ", ".join(f"{c:.3f}" for c in r["crank_deg"]),
+           f"branch {r['branch']}; {r.get('grashof', '')}"]
+    if r.get("transmission_deg"):
+        out.append(f"transmission angle over a turn: min {r['transmission_deg']['min']:.2f} deg, "
+                   f"max {r['transmission_deg']['max']:.2f} deg")
+    if "position_error" in r:
+        out.append(f"positions reproduced by the kinematics to {r['position_error']:.2e}")
+    out += [f"DEFECT: {d}" for d in r["defects"]] or ["no branch or order defect"]
+    print("\n".join(out))
+    return 0
+
+
 def run(args) -> int:
+    if getattr(args, "task", None) == "motion":
+        return _motion(args)
     if getattr(args, "task", None) != "function":
         raise InputError("give a task: rigfem synthesize function EXPR --x X0 X1 --input START RANGE "
-                         "--output START RANGE --ground D")
+                         "--output START RANGE --ground D, or rigfem synthesize motion --points X,Y X,Y X,Y")
     from rigfem.dynamics.synthesis import synthesize_function
 
     png = None

@@ -15,6 +15,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "mechanisms": ["MU_TOGGLE_DEG", "MODELS", "four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "compressor_gas_force", "inverted_slider_crank", "quick_return", "BUILDERS", "crank_angles", "simulate", "simulate_original"],
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],
         "solver": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "solve"],
-        "synthesis": ["parse_function", "chebyshev_points", "synthesize_function"],
+        "synthesis": ["parse_function", "chebyshev_points", "synthesize_function", "three_position", "check_three_position", "optimise_three_position"],
     },
 )

@@ -58,7 +58,8 @@ def render_markdown(r: dict) -> str:
     lines = [f"# rigfem check: {md_text(r['scene'])}", ""]
     if r.get("rule_violations"):
         lines += ["**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
-                  "checked only because --allow-rule-violations was passed:**", ""]
+                  "checked only because --allow-rule-violations was passed, and its overall verdict is FAIL "
+                  "whatever its stresses:**", ""]
         lines += [f"- {md_text(v)}" for v in r["rule_violations"]] + [""]
     lines += [
              md_text(r.get("description", "")).strip(), "",

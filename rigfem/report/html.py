@@ -79,6 +79,10 @@ def render_html(report: dict, folder: str | Path) -> str:
                f"&lt; {s['limit_factor']:g}·σu = <b>{r['limit_mpa']:.0f} MPa</b> "
                f"({_e(s['material'])}, σu = {s['sigma_u_mpa']:g} MPa); utilisation = peak / allowable, "
                f"with the peak's discretisation-error band.</p>")
+    if r.get("rule_violations"):
+        out.append("<p><b>NOT MOUNTABLE: this configuration breaks rig rules and was checked only because "
+                   "--allow-rule-violations was passed; its overall verdict is FAIL whatever its stresses.</b></p><ul>"
+                   + "".join(f"<li>{_e(v)}</li>" for v in r["rule_violations"]) + "</ul>")
     for w in r.get("warnings") or []:
         out.append(f'<p class="note">⚠ {_e(w)}</p>')
     if r.get("singular"):
