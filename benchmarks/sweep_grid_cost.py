@@ -123,8 +123,8 @@ def main() -> None:
            f"uses {t_bases_used:.0f} s, the cold build of results/benchmarks/sweep.json if larger), "
            f"{t_cfg * 1e3:.0f} ms per FE-checked "
            f"configuration (serial draft sweep of {len(cfgs)} configurations spread over the grid; "
-           f"results/benchmarks/sweep.json recorded {t_ref * 1e3:.0f} ms with the candidate-node peak search "
-           f"that preceded the exact one).  Assumed parallel efficiency {eff:.0%} for every N > 1.", "",
+           f"results/benchmarks/sweep.json recorded {t_ref * 1e3:.0f} ms in an earlier run of the same "
+           f"candidate-node peak search).  Assumed parallel efficiency {eff:.0%} for every N > 1.", "",
            "| hole pitch, per-configuration time | " + " | ".join(f"N = {n}" for n in a.workers) + " |",
            "|---|" + "---|" * len(a.workers)]
     for key, d in proj.items():

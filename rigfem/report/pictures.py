@@ -174,9 +174,12 @@ def render_field(r: CaseResult, c: np.ndarray, limit: float, path: str | Path,
                 continue
             faces = np.hstack([np.full((len(tri), 1), 3), np.asarray(tri)[:, :3]]).ravel()
             patch = pv.PolyData(fm.nodes + scale * u, faces)
-            p.add_mesh(patch.extract_feature_edges(boundary_edges=True, feature_edges=False,
-                                                   manifold_edges=False, non_manifold_edges=False),
-                       color=colours[kind], line_width=3)
+            rim = patch.extract_feature_edges(boundary_edges=True, feature_edges=False,
+                                              manifold_edges=False, non_manifold_edges=False)
+            if close:  # only the outlines inside the close-up's box
+                rim = rim.clip_box([lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]], invert=False)
+            if rim.n_points:
+                p.add_mesh(rim, color=colours[kind], line_width=3)
         p.add_point_labels(pv.PolyData(x_peak[None, :]), [f"peak {vm[peak]:.1f} MPa"], point_size=14,
                            point_color="white", font_size=20 if close else 16, shape_opacity=0.7,
                            always_visible=True)
