@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.dynamics.kinematics import Motion, linkage_motion, linkage_turn
 from rigfem.dynamics.mechanisms import crank_angles, four_bar, slider_crank
 from rigfem.errors import InputError, check_range
@@ -26,12 +27,7 @@ HELP = "motion of a linkage: angles, velocities, accelerations, transmission ang
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
-                   help="four-bar crank, coupler, rocker, ground lengths (mm)")
-    g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
-    p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
+    add_linkage_arguments(p)
     p.add_argument("--branch", metavar="open|crossed", help="four-bar assembly branch (default open)")
     p.add_argument("--coupler-point", nargs=2, metavar=("DIST", "ANGLE"),
                    help="four-bar coupler point: distance from A (mm), angle from the coupler line (deg)")

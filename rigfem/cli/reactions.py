@@ -10,6 +10,7 @@ import argparse
 import json
 import math
 
+from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.dynamics.history import summary
 from rigfem.dynamics.mechanisms import MODELS, four_bar, simulate, slider_crank
 from rigfem.errors import InputError, check_range
@@ -21,12 +22,7 @@ REFERENCE = (540.0, 840.0, 780.0, 1020.0)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
-                   help="four-bar crank, coupler, rocker, ground lengths (mm)")
-    g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
-    p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
+    add_linkage_arguments(p)
     p.add_argument("--speed-hz", metavar="HZ", help="crank speed (Hz, default 1 or the scene's)")
     p.add_argument("--model", default="rigid-body", metavar="MODEL",
                    help="mass model: rigid-body (default) or original (the 2013 program, four-bar only)")

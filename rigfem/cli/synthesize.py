@@ -81,7 +81,11 @@ def _point(text: str) -> tuple[float, float]:
 
 
 def _motion(args) -> int:
-    from rigfem.dynamics.synthesis import check_three_position, optimise_three_position, three_position
+    from rigfem.dynamics.synthesis import (
+        check_three_position,
+        optimise_three_position,
+        three_position,
+    )
 
     P = [_point(t) for t in args.points]
 

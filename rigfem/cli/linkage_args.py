@@ -1,0 +1,15 @@
+"""The options that name a linkage, shared by the commands that take one (reactions, kinematics)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_linkage_arguments(p: argparse.ArgumentParser) -> None:
+    """SCENE, or --four-bar B2 B3 B4 D / --slider-crank B2 B3 [--offset E] (mm)."""
+    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
+                   help="four-bar crank, coupler, rocker, ground lengths (mm)")
+    g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
+    p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
