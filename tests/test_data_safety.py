@@ -78,3 +78,17 @@ def test_sigterm_leaves_nothing_behind(tmp_path):
     assert proc.returncode == 143, err
     assert b"Traceback" not in err
     assert list(tmp_path.iterdir()) == []  # no result, no temporary folder, no lock
+
+
+def test_gmsh_does_not_take_over_sigterm():
+    """gmsh's initialisation installs C signal handlers that kill the process on SIGTERM; the
+    session puts Python's back, so a run terminated while meshing still cleans up."""
+    code = ("import os, signal, sys, time\n"
+            "from rigfem.mesh.geometry import gmsh_session\n"
+            "def h(s, f): raise SystemExit(7)\n"
+            "signal.signal(signal.SIGTERM, h)\n"
+            "with gmsh_session():\n"
+            "    os.kill(os.getpid(), signal.SIGTERM)\n"
+            "    time.sleep(5)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60)
+    assert proc.returncode == 7, proc.stderr

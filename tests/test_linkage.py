@@ -28,7 +28,7 @@ def test_fourbar_kinematics_closed_form_full_turn(branch, sgn):
     """Loop-closure (Freudenstein) positions, velocities, accelerations at 720 angles; the
     continuation must stay on the starting branch all the way round."""
     deg = crank_angles(720)
-    h = solve(four_bar(*REF, branch=branch), deg, speed_hz=1.0)
+    h = solve(four_bar(*REF, branch=branch), deg, speed_hz=1.0, general=True)
     k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians(deg), 2 * np.pi, sgn)
     c, r = h.bodies["coupler"], h.bodies["rocker"]
     assert np.max(np.abs(_wrap(c.angle_rad - k["theta3"]))) < 1e-10
@@ -42,7 +42,7 @@ def test_fourbar_kinematics_closed_form_full_turn(branch, sgn):
 
 def test_branch_continuity_across_full_turn():
     """Successive samples move by a bounded step and the turn closes on itself."""
-    h = simulate(four_bar(*REF), samples=360)
+    h = solve(four_bar(*REF), crank_angles(360), general=True)
     for b in h.bodies.values():
         ang = np.unwrap(np.r_[b.angle_rad, b.angle_rad[0]])
         assert np.max(np.abs(np.diff(ang))) < np.radians(3.0)
@@ -208,9 +208,10 @@ from rigfem.scene import load_scene
     lambda: load_scene("mech5-compressor").linkage,
     _driven_slider_crank,
 ], ids=["fourbar-gravity", "slider-crank", "inverted", "quick-return", "compressor", "driven-slider"])
-def test_every_body_in_newton_euler_balance(make):
+@pytest.mark.parametrize("general", [False, True], ids=["default", "general-solver"])
+def test_every_body_in_newton_euler_balance(make, general):
     lk = make()
-    h = solve(lk, crank_angles(72), speed_hz=1.5)
+    h = solve(lk, crank_angles(72), speed_hz=1.5, general=general)
     scale = max(np.abs(j.force_N).max() for j in h.joints.values()) + 1.0
     f, m = _balance(h, lk)
     assert f < 1e-9 * scale and m < 1e-9 * scale
@@ -253,9 +254,10 @@ def _power_balance(h, lk):
 @pytest.mark.parametrize("make", [lambda: four_bar(*REF), lambda: quick_return(150, 350, 800),
                                   lambda: inverted_slider_crank(500, 200, 200)],
                          ids=["rig-fourbar", "quick-return", "inverted"])
-def test_motor_power_equals_rate_of_kinetic_energy(make):
+@pytest.mark.parametrize("general", [False, True], ids=["default", "general-solver"])
+def test_motor_power_equals_rate_of_kinetic_energy(make, general):
     lk = make()
-    h = solve(lk, crank_angles(360), speed_hz=1.0)
+    h = solve(lk, crank_angles(360), speed_hz=1.0, general=general)
     p_in, dke = _power_balance(h, lk)
     assert np.allclose(p_in, dke, atol=1e-7 * np.abs(dke).max())
 
@@ -265,7 +267,7 @@ def test_guess_at_another_angle_keeps_the_branch():
     for branch, sgn in (("open", 1), ("crossed", -1)):
         lk = four_bar(*REF, branch=branch, start_deg=130.0)
         deg = crank_angles(36)
-        h = solve(lk, deg)
+        h = solve(lk, deg, general=True)
         k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians(deg), 2 * np.pi, sgn)
         assert np.max(np.abs(_wrap(h.bodies["rocker"].angle_rad - k["theta4"]))) < 1e-10
 
@@ -274,7 +276,7 @@ def test_guess_at_another_angle_keeps_the_branch():
 def test_near_toggle_slider_crank_keeps_its_branch(offset):
     """b2 + offset just below b3: the two assembly branches nearly touch at crank 270 deg.
     The slider must stay on the +x branch, x = Ax + sqrt(b3^2 - (e - Ay)^2), all the way round."""
-    h = simulate(slider_crank(300, 900, offset), samples=360)
+    h = solve(slider_crank(300, 900, offset), crank_angles(360), general=True)
     th = np.radians(h.crank_deg)
     x = 300 * np.cos(th) + np.sqrt(900**2 - (offset - 300 * np.sin(th)) ** 2)
     assert np.allclose(h.bodies["slider"].origin_mm[:, 0], x, atol=1e-8)
@@ -287,7 +289,7 @@ def test_evaluator_far_from_the_solved_range_falls_back_to_continuation():
     """Solved on 0-90 deg only, then evaluated at 250 deg: the Taylor prediction is far off,
     so the solver continues through to the sample and must land on the same branch."""
     lk = four_bar(*REF)
-    h = solve(lk, np.linspace(0.0, 90.0, 10))
+    h = solve(lk, np.linspace(0.0, 90.0, 10), general=True)
     far = h.evaluator(np.array([250.0, 300.0]))
     k = fourbar_kinematics(*(x / 1000 for x in REF), np.radians([250.0, 300.0]), 2 * np.pi, 1)
     assert np.allclose(_wrap(far.bodies["rocker"].angle_rad - k["theta4"]), 0.0, atol=1e-10)

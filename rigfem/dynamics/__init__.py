@@ -10,10 +10,11 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "history": ["JointHistory", "BodyHistory", "ReactionHistory", "singular_ranges", "merge_ranges", "is_full_turn", "spline_evaluator", "peaks", "summary"],
-        "kinematics": ["BRANCHES", "Motion", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
+        "kinematics": ["BRANCHES", "MU_TOGGLE_DEG", "Motion", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "slider_crank_angles", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
         "linkage": ["GROUND", "ClosureError", "AssemblyError", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage"],
-        "mechanisms": ["MU_TOGGLE_DEG", "MODELS", "four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "compressor_gas_force", "inverted_slider_crank", "quick_return", "BUILDERS", "crank_angles", "simulate", "simulate_original"],
+        "mechanisms": ["MODELS", "four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "compressor_gas_force", "inverted_slider_crank", "quick_return", "BUILDERS", "crank_angles", "simulate", "simulate_original"],
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],
+        "closed": ["closed_form"],
         "solver": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "solve"],
         "synthesis": ["parse_function", "chebyshev_points", "synthesize_function", "three_position", "check_three_position", "optimise_three_position"],
     },

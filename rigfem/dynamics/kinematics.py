@@ -25,6 +25,11 @@ from rigfem.errors import InputError, check_range
 #: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.dynamics.original)
 BRANCHES = {"open": 1, "crossed": -1}
 
+#: a four-bar is at a toggle when its transmission angle mu is within this angle of 0 or
+#: 180 deg, a slider-crank when its rod is within this angle of perpendicular to the slide:
+#: reactions there are unbounded, so no peak is reported (``rigfem.dynamics.history.peaks``)
+MU_TOGGLE_DEG = 5.0
+
 
 @dataclass
 class Motion:
@@ -262,6 +267,21 @@ def _strokes(start_deg: float, end_deg: float) -> dict:
 
 
 # ----------------------------------------------------------------------------- slider-crank
+def slider_crank_angles(b2: float, b3: float, offset: float, th2: np.ndarray, w2, a2=0.0) -> dict[str, np.ndarray]:
+    """Rod angle, rate and acceleration (rad, rad/s, rad/s²) and the slider's position, velocity
+    and acceleration along the slide (any length unit) of a slider-crank, slider on the +x side."""
+    th2 = np.asarray(th2, float)
+    c2, sn2 = np.cos(th2), np.sin(th2)
+    s3 = (offset - b2 * sn2) / b3
+    th3 = np.arcsin(s3)
+    c3 = np.cos(th3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w3 = -b2 * w2 * c2 / (b3 * c3)
+        a3 = (b2 * w2**2 * sn2 - b2 * a2 * c2 + b3 * w3**2 * s3) / (b3 * c3)
+    return dict(theta3=th3, omega3=w3, alpha3=a3, x=b2 * c2 + b3 * c3, v=-b2 * w2 * sn2 - b3 * w3 * s3,
+                acc=-b2 * (a2 * sn2 + w2**2 * c2) - b3 * (a3 * s3 + w3**2 * c3))
+
+
 def slider_crank_motion(b2: float, b3: float, offset: float = 0.0, crank_deg=0.0, omega: float = 2 * np.pi,
                         alpha: float = 0.0) -> Motion:
     """Slider-crank O2-A-B, slider B on y = ``offset`` (mm) on the +x side, at ``crank_deg``.
@@ -280,14 +300,8 @@ def slider_crank_motion(b2: float, b3: float, offset: float = 0.0, crank_deg=0.0
         ok = np.abs(offset - b2 * np.sin(np.radians(grid))) <= b3
         raise InputError(f"slider-crank b2={b2:g} b3={b3:g} offset={offset:g} mm cannot be assembled at "
                          f"crank {deg[np.abs(s3) > 1][0]:g} deg; it closes for crank angles {_ranges_text(ok, grid)}")
-    th3 = np.arcsin(s3)
-    c2, sn2, c3 = np.cos(th2), np.sin(th2), np.cos(th3)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w3 = -b2 * w2 * c2 / (b3 * c3)
-        a3 = (b2 * w2**2 * sn2 - b2 * a2 * c2 + b3 * w3**2 * s3) / (b3 * c3)
-    x = b2 * c2 + b3 * c3
-    v = -b2 * w2 * sn2 - b3 * w3 * s3
-    acc = -b2 * (a2 * sn2 + w2**2 * c2) - b3 * (a3 * s3 + w3**2 * c3)
+    k = slider_crank_angles(b2, b3, offset, th2, w2, a2)
+    th3, w3, a3, x, v, acc = (k[n] for n in ("theta3", "omega3", "alpha3", "x", "v", "acc"))
     zero = np.zeros((deg.size, 2))
     A = b2 * _e(th2)
     vA = b2 * w2 * _eperp(th2)

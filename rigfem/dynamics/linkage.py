@@ -65,6 +65,22 @@ class Body:
         inertia += sum(pm * np.sum((pos - c) ** 2) for pm, pos in pts)
         return m, c, float(inertia)
 
+    def inertia_load(self, phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, acc_origin: np.ndarray,
+                     gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gravity plus d'Alembert force at the centre of mass (N, (n, 2)) and its moment about
+        the body's frame origin (N·m, (n,)), from the body's motion (SI: rad, rad/s, rad/s², m/s²).
+
+        The one home of the Newton–Euler body terms: the general solver and the closed forms
+        (``rigfem.dynamics.closed``) both balance the joint forces against these.
+        """
+        m, c, inertia = self.totals()
+        cs, sn = np.cos(phi), np.sin(phi)
+        rc = np.stack([cs * c[0] - sn * c[1], sn * c[0] + cs * c[1]], -1)
+        rc_perp = np.stack([-rc[:, 1], rc[:, 0]], -1)
+        a_g = acc_origin + rc_perp * alpha[:, None] - rc * (omega**2)[:, None]
+        f = m * (gravity - a_g)
+        return f, rc[:, 0] * f[:, 1] - rc[:, 1] * f[:, 0] - inertia * alpha
+
 
 @dataclass
 class Revolute:

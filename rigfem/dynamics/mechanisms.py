@@ -30,7 +30,7 @@ from rigfem.dynamics.history import (
     merge_ranges,
     singular_ranges,
 )
-from rigfem.dynamics.kinematics import fourbar_closes, transmission_angle_deg
+from rigfem.dynamics.kinematics import MU_TOGGLE_DEG, fourbar_closes, transmission_angle_deg
 from rigfem.dynamics.linkage import (
     GROUND,
     Body,
@@ -44,11 +44,6 @@ from rigfem.dynamics.linkage import (
 from rigfem.dynamics.solver import solve
 from rigfem.errors import InputError
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
-
-#: a four-bar sample is flagged as a toggle when mu is within this angle of 0 or 180 deg
-#: (a slider-crank when its rod is within this angle of perpendicular to the slide)
-MU_TOGGLE_DEG = 5.0
-
 
 MODELS = ("rigid-body", "original")
 

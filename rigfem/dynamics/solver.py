@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigfem.dynamics.closed import closed_form
 from rigfem.dynamics.history import (
     BodyHistory,
     JointHistory,
@@ -28,7 +29,7 @@ _ZERO2, _ZERO1 = np.zeros((1, 2)), np.zeros(1)        # the ground's pose, broad
 
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
 #: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
-#: builder adds its own mu criterion, mechanisms.MU_TOGGLE_DEG)
+#: builder adds its own mu criterion, kinematics.MU_TOGGLE_DEG)
 RCOND_SINGULAR = 2e-3
 
 
@@ -378,8 +379,12 @@ def _continuation(model: _Model, theta_nodes: np.ndarray, q0: np.ndarray, tol: f
 
 
 def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
-          check_closure: bool = True) -> ReactionHistory:
+          check_closure: bool = True, general: bool = False) -> ReactionHistory:
     """Positions, velocities, accelerations and reactions at the driver phases ``crank_deg``.
+
+    A toggle-free rig four-bar or slider-crank is solved in closed form
+    (``rigfem.dynamics.closed``, ``meta["solver"] = "closed form"``); ``general=True`` forces
+    the general solver (the reference the closed forms are tested against).
 
     ``crank_deg`` must be increasing (an evenly spaced full turn for a crank); the driver
     turns at ``speed_hz`` (negative = clockwise).  Returns a ReactionHistory whose
@@ -387,6 +392,9 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     """
     model = _Model(lk)
     deg = np.asarray(crank_deg, float)
+    fast = None if general else closed_form(lk, deg, speed_hz)
+    if fast is not None:
+        return fast
     theta = np.radians(deg)
     tol = tol_mm / 1000
     # coarse continuation at <= 20 deg steps, then a vectorised Newton for all samples
@@ -467,14 +475,11 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
     bodies_out: dict[str, BodyHistory] = {}
     for b in lk.bodies:
         i = 3 * model.index[b.name]
-        m, c, inertia = b.totals()
         r, phi = q[:, i:i + 2], q[:, i + 2]
         a, w, al = qdd[:, i:i + 2], qd[:, i + 2], qdd[:, i + 2]
-        rc = _rot(phi, c)
-        a_g = a + _perp(rc) * al[:, None] - rc * (w**2)[:, None]
-        f = m * (g - a_g)                                   # external + d'Alembert force at G
+        f, mo = b.inertia_load(phi, w, al, a, g)
         Q[:, i:i + 2] += f
-        Q[:, i + 2] += _cross(rc, f) - inertia * al
+        Q[:, i + 2] += mo
         bodies_out[b.name] = BodyHistory(
             b.name, phi, w, al, r * 1000, a * 1000, b.mass_kg, np.asarray(b.com_local_mm, float),
             b.inertia_com_kg_mm2, [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in b.point_masses], {},
@@ -538,7 +543,7 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
     bad = ~np.isfinite(lam).all(1) | (rcond < RCOND_SINGULAR)
     meta = dict(lk.meta)
     meta.update(speed_hz=speed_hz, driver_unit="N·m" if isinstance(dv, CrankDriver) else "N",
-                rcond_min=float(rcond.min()))
+                rcond_min=float(rcond.min()), solver="general")
     if state[5]:
         meta["warnings"] = list(state[5])
     extra = lk.meta.get("singular_fn")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+import threading
 from contextlib import contextmanager
 from typing import Iterator
 
@@ -13,12 +15,23 @@ from rigfem.mesh.partmesh import Hole
 from rigfem.rig.parts import PartDef, rail_hole_groups, rail_hole_x
 
 
+def _restore_python_signal_handlers() -> None:
+    """gmsh's initialisation installs its own C signal handlers (SIGTERM then kills the process
+    outright); put back Python's, so a terminated run still cleans up (``rigfem.cli``)."""
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            handler = signal.getsignal(sig)
+            if handler is not None:
+                signal.signal(sig, handler)
+
+
 @contextmanager
 def gmsh_session(model: str = "rigfem") -> Iterator[None]:
     """Quiet gmsh session with a fresh model; finalizes gmsh if this call initialized it."""
     owner = not gmsh.isInitialized()
     if owner:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
+        _restore_python_signal_handlers()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.option.setNumber("General.Verbosity", 1)
