@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.cli.linkage_args import add_linkage_arguments
+from rigfem.cli.outputs import new_output
 from rigfem.dynamics.kinematics import Motion, linkage_motion, linkage_turn
 from rigfem.dynamics.mechanisms import crank_angles, four_bar, slider_crank
 from rigfem.errors import InputError, check_range
@@ -86,12 +87,7 @@ def _build(args):
 def _refuse_existing(args) -> None:
     for flag, path, suffix in (("--csv", args.csv, ".csv"), ("--plot", args.plot, ".png"),
                                ("--animate", args.animate, ".gif")):
-        if path is None:
-            continue
-        if not str(path).lower().endswith(suffix):
-            raise InputError(f"{flag} = {path!r} must be a {suffix} path")
-        if Path(path).exists() and not args.force:
-            raise InputError(f"{flag}: {path} already exists; pass --force to overwrite it")
+        new_output(flag, path, suffix, args.force)
 
 
 def _num(x) -> float | None:

@@ -1,7 +1,11 @@
-"""``rigfem synthesize function``: a four-bar that generates y = f(x) (Freudenstein's equation,
-Chebyshev precision points), its structural error over the range and its defects.
+"""``rigfem synthesize function|motion``: a four-bar that generates y = f(x) (Freudenstein's
+equation, Chebyshev precision points) or moves a coupler point through three positions, its
+errors and defects; ``--rig`` then ranks the nearest buildable rig configurations, each with
+its rule table and stress verdict (``rigfem.studies.rig_design``).
 
-Angles in degrees counter-clockwise from the ground line O2→O4; lengths in the unit of --ground.
+Angles in degrees counter-clockwise from the ground line O2→O4; lengths in the unit of
+--ground (function) or of the positions (motion); rig lengths in mm.  Exit status with
+--rig and the stress check: 0 if a listed configuration passes every part, 1 if none does.
 """
 
 from __future__ import annotations
@@ -9,11 +13,29 @@ from __future__ import annotations
 import argparse
 import json
 import re
-from pathlib import Path
 
-from rigfem.errors import InputError, check_range
+from rigfem.cli.outputs import new_output, write_text
+from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.settings import FIDELITY
 
-HELP = "design a linkage: a four-bar generating a function (Freudenstein, Chebyshev points)"
+HELP = ("design a linkage: a four-bar generating a function or a coupler-point motion, and with --rig "
+        "the nearest buildable rig configurations, checked")
+
+
+def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:
+    g = p.add_argument_group("snap to the rig")
+    g.add_argument("--rig", action="store_true",
+                   help="rank the mountable rig four-bars (60 mm grid, every rig rule) that do the job best, "
+                        "each with its rule table and stress verdict")
+    g.add_argument("--top", default="5", metavar="N", help="rig configurations listed (default 5, 1-50)")
+    g.add_argument("--fidelity", default="draft", help="FE preset of the stress verdicts: draft (default), "
+                                                       "standard, fine")
+    g.add_argument("--no-stress", action="store_true", help="rules and motion error only (no FE)")
+    g.add_argument("--scene-out", metavar="TOML", help="write the best rig configuration as a scene file "
+                                                        "(then: rigfem check TOML)")
+    if motion:
+        g.add_argument("--scale", metavar="K", help="rig mm per unit of the positions (default: every scale "
+                                                    "at which the design fits the rails)")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,6 +53,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     f.add_argument("--points", default="3", metavar="N", help="precision points (3)")
     f.add_argument("--json", action="store_true", help="print one JSON object")
     f.add_argument("--plot", metavar="PNG", help="plot of the structural error over the range")
+    _rig_arguments(f, motion=False)
     m = sub.add_parser("motion", help="three-position motion generation of a coupler point",
                        description="three-position motion generation of a coupler point (dyads in standard "
                                    "form); without --beta/--gamma the free choices maximise the smallest "
@@ -42,6 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     m.add_argument("--beta", nargs=2, metavar=("B2", "B3"), help="crank rotations from position 1 (deg)")
     m.add_argument("--gamma", nargs=2, metavar=("G2", "G3"), help="rocker rotations from position 1 (deg)")
     m.add_argument("--json", action="store_true", help="print one JSON object")
+    _rig_arguments(m, motion=True)
 
 
 def _table(r: dict) -> str:
@@ -88,6 +112,7 @@ def _motion(args) -> int:
     )
 
     P = [_point(t) for t in args.points]
+    rig = _rig_options(args, motion=True)
 
     def angles(flag, v):
         return None if v is None else [check_range(flag, a, -360, 360, "deg") for a in v]
@@ -98,9 +123,10 @@ def _motion(args) -> int:
     r = three_position(P, al, be, ga) if be is not None else optimise_three_position(P, al)
     r["optimised"] = be is None
     r.update(check_three_position(r))
+    status = _snap(r, rig, "motion") if rig else 0
     if args.json:
         print(json.dumps(r, indent=1))
-        return 0
+        return status
     L = r["lengths"]
     how = "optimised free choices (largest smallest transmission angle)" if r["optimised"] else "given free choices"
     out = [how + f": coupler rotations {r['alpha_deg'][0]:.3f}, {r['alpha_deg'][1]:.3f} deg; crank {r['beta_deg'][0]:.3f}, "
@@ -118,7 +144,9 @@ def _motion(args) -> int:
         out.append(f"positions reproduced by the kinematics to {r['position_error']:.2e}")
     out += [f"DEFECT: {d}" for d in r["defects"]] or ["no branch or order defect"]
     print("\n".join(out))
-    return 0
+    if rig:
+        print(_rig_text(r["rig"], "motion"))
+    return status
 
 
 def run(args) -> int:
@@ -129,13 +157,8 @@ def run(args) -> int:
                          "--output START RANGE --ground D, or rigfem synthesize motion --points X,Y X,Y X,Y")
     from rigfem.dynamics.synthesis import synthesize_function
 
-    png = None
-    if args.plot:
-        png = Path(args.plot)
-        if png.suffix.lower() != ".png":
-            raise InputError(f"--plot = {args.plot!r} must be a .png path")
-        if png.exists():
-            raise InputError(f"--plot = {args.plot!r} already exists; refusing to overwrite it")
+    png = new_output("--plot", args.plot, ".png")
+    rig = _rig_options(args, motion=False)
     nums = dict(x0=check_range("--x X0", args.x[0]), x1=check_range("--x X1", args.x[1]),
                 in_start=check_range("--input START", args.input[0], -360, 360, "deg"),
                 in_range=check_range("--input RANGE", args.input[1], -360, 360, "deg"),
@@ -149,8 +172,97 @@ def run(args) -> int:
         from rigfem.report.motion import structural_error_plot
 
         structural_error_plot(gen, r, png)
+    status = _snap(r, rig, "function") if rig else 0
     if args.json:
         print(json.dumps(r, indent=1))
     else:
         print(_table(r))
-    return 0
+        if rig:
+            print(_rig_text(r["rig"], "function"))
+    return status
+
+
+def _rig_options(args, motion: bool) -> dict | None:
+    """The --rig options, checked before anything is computed."""
+    given = [f for f, v in (("--top", args.top != "5"), ("--fidelity", args.fidelity != "draft"),
+                            ("--no-stress", args.no_stress), ("--scene-out", args.scene_out),
+                            ("--scale", motion and args.scale is not None)) if v]
+    if not args.rig:
+        if given:
+            raise InputError(f"{', '.join(given)} only apply with --rig")
+        return None
+    top = check_range("--top", args.top, 1, 50)
+    if top != int(top):
+        raise InputError(f"--top = {args.top!r} must be a whole number in [1, 50]")
+    if args.fidelity not in FIDELITY:
+        raise InputError(f"--fidelity = {args.fidelity!r} must be one of {', '.join(FIDELITY)}")
+    scale = check_range("--scale", args.scale, 0.0, 1e4, lo_open=True) if motion and args.scale is not None else None
+    return dict(top=int(top), fidelity=args.fidelity, stress=not args.no_stress, scale=scale,
+                scene=new_output("--scene-out", args.scene_out, ".toml"))
+
+
+def _snap(r: dict, opts: dict, task: str) -> int:
+    """Rank the rig configurations into ``r["rig"]``; write the scene; the exit status."""
+    from rigfem.studies.rig_design import snap_function, snap_motion, stress_verdicts
+
+    if r.get("branch") is None:
+        raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")
+    cands = snap_function(r, opts["top"]) if task == "function" else snap_motion(r, opts["top"], opts["scale"])
+    if opts["stress"]:
+        stress_verdicts(cands, opts["fidelity"])
+    r["rig"] = {"candidates": cands, "stress_fidelity": opts["fidelity"] if opts["stress"] else None}
+    if opts["scene"] is not None:
+        write_text(opts["scene"], _scene_toml(cands[0], task))
+        r["rig"]["scene"] = str(opts["scene"])
+    if not opts["stress"]:
+        return 0
+    return 0 if any(c["stress"]["verdict"] == "pass" for c in cands) else 1
+
+
+def _scene_toml(c: dict, task: str) -> str:
+    L = c["lengths_mm"]
+    lines = [f"# The rig configuration rigfem synthesize {task} --rig ranked first "
+             f"(error {c['error_pct']:.3g} % of the {'output range' if task == 'function' else 'positions span'}).",
+             "[linkage]", 'type = "four-bar"',
+             f'title = "Rig four-bar for {task} generation ({L["b2"]:g}/{L["b3"]:g}/{L["b4"]:g}/{L["d"]:g} mm)"',
+             *(f"{k} = {v:.1f}" for k, v in L.items()), f'branch = "{c["branch"]}"', "speed_hz = 1.0",
+             'masses = "rig"']
+    if task == "motion":
+        cp = c["coupler_point"]
+        lines += ["", "[linkage.coupler_point]", f"distance_mm = {cp['distance_mm']:.3f}",
+                  f"angle_deg = {(cp['angle_deg'] + 180.0) % 360.0 - 180.0:.4f}"]
+    return "\n".join(lines) + "\n"
+
+
+def _rig_text(rig: dict, task: str) -> str:
+    """The ranked rig configurations: lengths, error, rule table, stress verdict."""
+    out = ["", f"nearest buildable rig configurations (60 mm hole grid, every rig rule), best first"
+                + (f"; stress verdicts at {rig['stress_fidelity']} fidelity" if rig["stress_fidelity"] else "") + ":"]
+    for i, c in enumerate(rig["candidates"], 1):
+        L = c["lengths_mm"]
+        head = f"\n{i}. b2 {L['b2']:g}, b3 {L['b3']:g}, b4 {L['b4']:g}, d {L['d']:g} mm, {c['branch']} branch: "
+        if task == "function":
+            head += (f"structural error {c['error']:.4g} ({c['error_pct']:.2f} % of the output range); crank at "
+                     f"{c['input_start_deg']:.2f} deg and rocker at {c['output_start_deg']:.2f} deg at X0")
+        else:
+            cp = c["coupler_point"]
+            head += (f"scale {c['scale']:.4g} mm per unit, motion error {c['error_mm']:.3g} mm "
+                     f"({c['error_pct']:.3g} % of the positions' span); coupler point {cp['distance_mm']:.1f} mm from A "
+                     f"at {cp['angle_deg']:.2f} deg from A->B"
+                     + (f" (a marker arm {cp['off_rail_mm']:.0f} mm off the coupler rail)" if cp["off_rail_mm"] > 0.5
+                        else " (on the coupler rail)")
+                     + "; crank at " + ", ".join(f"{a:.1f}" for a in c["crank_deg"]) + " deg")
+        out.append(head)
+        for rule in c["rules"]:
+            out.append(f"   {'ok  ' if rule['ok'] else 'FAIL'} {rule['name']}: {rule['value']:.4g} {rule['unit']}".rstrip())
+        st = c.get("stress")
+        if st is None:
+            continue
+        if "max_util_pct" in st:
+            out.append(f"   stress: {st['verdict'].upper()}, worst {st['max_util_pct']:.1f} % of sigma_u/2 "
+                       f"({st['limiting_part']}, error band {st['error_band_pct']:g} %)")
+        else:
+            out.append(f"   stress: {st['verdict'].upper()} ({st['note']})")
+    if rig.get("scene"):
+        out.append(f"\nbest configuration written to {rig['scene']}: rigfem check {rig['scene']}")
+    return "\n".join(out)

@@ -10,7 +10,8 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "history": ["JointHistory", "BodyHistory", "ReactionHistory", "singular_ranges", "merge_ranges", "is_full_turn", "spline_evaluator", "peaks", "summary"],
-        "kinematics": ["BRANCHES", "MU_TOGGLE_DEG", "Motion", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "slider_crank_angles", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
+        "loops": ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "slider_crank_angles"],
+        "kinematics": ["Motion", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
         "linkage": ["GROUND", "ClosureError", "AssemblyError", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage"],
         "mechanisms": ["MODELS", "four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "compressor_gas_force", "inverted_slider_crank", "quick_return", "BUILDERS", "crank_angles", "simulate", "simulate_original"],
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],

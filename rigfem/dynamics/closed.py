@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.dynamics.history import BodyHistory, JointHistory, ReactionHistory
-from rigfem.dynamics.kinematics import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
+from rigfem.dynamics.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
 from rigfem.dynamics.linkage import GROUND, CrankDriver, Linkage, Prismatic, Revolute
 
 __all__ = ["closed_form"]

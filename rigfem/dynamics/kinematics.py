@@ -20,15 +20,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rigfem.dynamics.loops import (
+    BRANCHES,
+    MU_TOGGLE_DEG,
+    fourbar_angles,
+    fourbar_closes,
+    slider_crank_angles,
+    transmission_angle_deg,
+)
 from rigfem.errors import InputError, check_range
-
-#: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.dynamics.original)
-BRANCHES = {"open": 1, "crossed": -1}
-
-#: a four-bar is at a toggle when its transmission angle mu is within this angle of 0 or
-#: 180 deg, a slider-crank when its rod is within this angle of perpendicular to the slide:
-#: reactions there are unbounded, so no peak is reported (``rigfem.dynamics.history.peaks``)
-MU_TOGGLE_DEG = 5.0
 
 
 @dataclass
@@ -90,44 +90,7 @@ def _ranges_text(ok: np.ndarray, deg: np.ndarray) -> str:
     return ", ".join(f"{deg[a]:.1f} to {deg[b]:.1f} deg" for a, b in zip(starts, ends))
 
 
-def transmission_angle_deg(theta3: np.ndarray, theta4: np.ndarray) -> np.ndarray:
-    """Four-bar transmission angle mu (deg, 0..180): the interior coupler–rocker angle at B."""
-    return np.degrees(np.arccos(np.clip(np.cos(np.asarray(theta3) - np.asarray(theta4)), -1.0, 1.0)))
-
-
 # ----------------------------------------------------------------------------- four-bar
-def fourbar_closes(b2: float, b3: float, b4: float, d: float, deg: np.ndarray) -> np.ndarray:
-    """True where the four-bar loop closes at crank angle ``deg`` (O2 at 0, O4 at (d, 0))."""
-    th = np.radians(deg)
-    f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(th))
-    return (f <= b3 + b4 + 1e-12 * f) & (f >= abs(b3 - b4) - 1e-12 * f)
-
-
-def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w2, a2=0.0,
-                   branch: int = 1) -> dict[str, np.ndarray]:
-    """Coupler and rocker angles, rates and accelerations (rad, rad/s, rad/s²) of a four-bar
-    (any length unit); ``branch`` +1 open, -1 crossed.  NaN where the loop cannot close."""
-    th2 = np.asarray(th2, float)
-    ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
-    dx, dy = d - ax, -ay
-    f2 = dx * dx + dy * dy
-    f = np.sqrt(f2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        cpsi = (b3 * b3 + f2 - b4 * b4) / (2 * b3 * f)
-        psi = np.arccos(np.where(np.abs(cpsi) <= 1.0 + 1e-12, np.clip(cpsi, -1.0, 1.0), np.nan))
-        th3 = np.arctan2(dy, dx) + branch * psi
-        th4 = np.arctan2(ay + b3 * np.sin(th3), ax + b3 * np.cos(th3) - d)
-        s34 = np.sin(th3 - th4)
-        w3 = b2 * w2 * np.sin(th4 - th2) / (b3 * s34)
-        w4 = b2 * w2 * np.sin(th3 - th2) / (b4 * s34)
-        # d2/dt2 of the loop, dotted with e4 (eliminates alpha4) and with e3 (eliminates alpha3)
-        a3 = (-b4 * w4**2 + b2 * w2**2 * np.cos(th2 - th4) + b3 * w3**2 * np.cos(th3 - th4)
-              - b2 * a2 * np.sin(th4 - th2)) / (b3 * np.sin(th4 - th3))
-        a4 = (b2 * a2 * np.sin(th3 - th2) - b2 * w2**2 * np.cos(th2 - th3) - b3 * w3**2
-              + b4 * w4**2 * np.cos(th4 - th3)) / (b4 * s34)
-    return dict(theta3=th3, theta4=th4, omega3=w3, omega4=w4, alpha3=a3, alpha4=a4, f2=f2)
-
-
 def fourbar_motion(b2: float, b3: float, b4: float, d: float, crank_deg, omega: float = 2 * np.pi,
                    alpha: float = 0.0, branch: str = "open",
                    coupler_point: tuple[float, float] | None = None) -> Motion:
@@ -267,21 +230,6 @@ def _strokes(start_deg: float, end_deg: float) -> dict:
 
 
 # ----------------------------------------------------------------------------- slider-crank
-def slider_crank_angles(b2: float, b3: float, offset: float, th2: np.ndarray, w2, a2=0.0) -> dict[str, np.ndarray]:
-    """Rod angle, rate and acceleration (rad, rad/s, rad/s²) and the slider's position, velocity
-    and acceleration along the slide (any length unit) of a slider-crank, slider on the +x side."""
-    th2 = np.asarray(th2, float)
-    c2, sn2 = np.cos(th2), np.sin(th2)
-    s3 = (offset - b2 * sn2) / b3
-    th3 = np.arcsin(s3)
-    c3 = np.cos(th3)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w3 = -b2 * w2 * c2 / (b3 * c3)
-        a3 = (b2 * w2**2 * sn2 - b2 * a2 * c2 + b3 * w3**2 * s3) / (b3 * c3)
-    return dict(theta3=th3, omega3=w3, alpha3=a3, x=b2 * c2 + b3 * c3, v=-b2 * w2 * sn2 - b3 * w3 * s3,
-                acc=-b2 * (a2 * sn2 + w2**2 * c2) - b3 * (a3 * s3 + w3**2 * c3))
-
-
 def slider_crank_motion(b2: float, b3: float, offset: float = 0.0, crank_deg=0.0, omega: float = 2 * np.pi,
                         alpha: float = 0.0) -> Motion:
     """Slider-crank O2-A-B, slider B on y = ``offset`` (mm) on the +x side, at ``crank_deg``.

@@ -30,7 +30,7 @@ from rigfem.dynamics.history import (
     merge_ranges,
     singular_ranges,
 )
-from rigfem.dynamics.kinematics import MU_TOGGLE_DEG, fourbar_closes, transmission_angle_deg
+from rigfem.dynamics.loops import MU_TOGGLE_DEG, fourbar_closes, transmission_angle_deg
 from rigfem.dynamics.linkage import (
     GROUND,
     Body,

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.kinematics import fourbar_angles, transmission_angle_deg
+from rigfem.dynamics.loops import fourbar_angles, transmission_angle_deg
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
 
 
