@@ -79,6 +79,9 @@ def main() -> None:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2, 16, 64])
     ap.add_argument("--efficiency", type=float, default=None,
                     help="parallel efficiency assumed for N > 1 (default: results/benchmarks/sweep.json's 1 -> 2)")
+    ap.add_argument("--bases-seconds", type=float, default=None,
+                    help="cold unit-solution build time to assume (s; default: the larger of this run's and "
+                         "results/benchmarks/sweep.json's, which a warm disk cache makes short)")
     a = ap.parse_args()
     p = SweepParams()
     counts = {pitch: count(pitch, p) for pitch in (60.0, 30.0)}
@@ -99,7 +102,8 @@ def main() -> None:
         table = run_sweep(p, tmp, configs=cfgs, chunk_size=8, bases=bases, distributed=False, progress=False)
         t_run = time.perf_counter() - t0
     t_cfg = t_run / len(cfgs)
-    t_bases_used = max(t_bases, cold)  # the unit-solution cache may be warm here: assume a cold build
+    # the unit-solution cache may be warm here: assume a cold build
+    t_bases_used = a.bases_seconds if a.bases_seconds is not None else max(t_bases, cold)
     assert (table["status"] == "ok").all()
     t_ref = float(json.loads((OUT / "sweep.json").read_text())["per_configuration_s"]["1"])
     proj = {}
@@ -112,7 +116,8 @@ def main() -> None:
            "load_before": load, "load_after": os.getloadavg()[0],
            "projected_s": {k: {str(n): v for n, v in d.items()} for k, d in proj.items()}}
     md = ["# Sweep cost of a finer rig grid (four-bar, draft)", "",
-          "Command: `python benchmarks/sweep_grid_cost.py" + (f" --every {a.every}" if a.every != 400 else "") + "`",
+          "Command: `python benchmarks/sweep_grid_cost.py" + (f" --every {a.every}" if a.every != 400 else "")
+          + (f" --bases-seconds {a.bases_seconds:g}" if a.bases_seconds is not None else "") + "`",
           f"(load average {load:.2f} before, {res['load_after']:.2f} after; shared 2-core machine).", "",
           "| hole pitch | lengths b2 × b3 × b4 × d | mountable configurations | with FE check (full turn) |",
           "|---|---|---|---|"]
@@ -120,11 +125,12 @@ def main() -> None:
         md.append(f"| {c['pitch_mm']:g} mm | {' × '.join(map(str, c['lengths']))} | {c['mountable']:,} | "
                   f"{c['fe_checked']:,} |")
     md += ["", f"Measured: unit solutions {t_bases:.1f} s here (the on-disk cache may be warm; the projection "
-           f"uses {t_bases_used:.0f} s, the cold build of results/benchmarks/sweep.json if larger), "
+           f"uses {t_bases_used:.0f} s for a cold build), "
            f"{t_cfg * 1e3:.0f} ms per FE-checked "
            f"configuration (serial draft sweep of {len(cfgs)} configurations spread over the grid; "
-           f"results/benchmarks/sweep.json recorded {t_ref * 1e3:.0f} ms in an earlier run of the same "
-           f"candidate-node peak search).  Assumed parallel efficiency {eff:.0%} for every N > 1.", "",
+           f"results/benchmarks/sweep.json recorded {t_ref * 1e3:.0f} ms per configuration on its subset with one "
+           f"Dask worker, start-up included).  Assumed parallel efficiency {eff:.0%} for every N > 1 (the "
+           f"steady-state 1 → 2 worker figure of results/benchmarks/sweep.md).", "",
            "| hole pitch, per-configuration time | " + " | ".join(f"N = {n}" for n in a.workers) + " |",
            "|---|" + "---|" * len(a.workers)]
     for key, d in proj.items():

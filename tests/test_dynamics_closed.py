@@ -105,3 +105,27 @@ def test_toggles_and_other_topologies_stay_with_the_general_solver():
     for lk in (four_bar(540, 840, 780, 1080), slider_crank(300, 900, 599.9), quick_return(150, 350, 800), lk):
         assert solve(lk, crank_angles(36)).meta["solver"] == "general"
     assert solve(slider_crank(300, 900, 590.0), crank_angles(36)).meta["solver"] == "closed form"
+
+
+@pytest.mark.parametrize("general", [False, True])
+def test_mirrored_equal_peaks_are_all_reported(general):
+    """An offset-free slider-crank is symmetric: every reaction peaks equally at crank angles θ
+    and 360° − θ.  Which one the floats crown is a knife edge, so both are listed, the smaller
+    is the peak's angle whichever solver ran, and the study's load case takes both."""
+    from rigfem.loads import part_cases
+    from rigfem.settings import check_settings
+
+    lk = slider_crank(540, 600)
+    h = solve(lk, crank_angles(360), general=general)
+    pk = peaks(h)
+    for name in ("O2", "A", "B", "torque"):
+        a, b = pk[name]["equal_peaks_deg"]
+        assert a + b == pytest.approx(360.0, abs=1e-5) and pk[name]["crank_deg"] == a < 180.0
+    assert "equal_peaks_deg" not in peaks(solve(four_bar(540, 840, 780, 1020), crank_angles(360)))["B"]
+    cases = dict((c.name, c) for mode, c in part_cases(h, pk, check_settings({}, "slider-crank", [700.0, 1000.0]))
+                 if mode == "original" and c.name == "plate_B")
+    c = cases["plate_B"]
+    assert c.coef.shape == (2, 2) and np.allclose(c.coef, np.diag(np.diag(c.coef)))
+    assert sorted(c.rows) == pytest.approx(pk["B"]["equal_peaks_deg"])
+    d0, d1 = (np.array(u.direction[:2]) for u in c.loads)
+    assert not np.allclose(d0, d1)  # mirrored force directions, in the plate's frame

@@ -111,7 +111,7 @@ def test_cli_writes_a_checkable_scene_and_refuses_bad_options(tmp_path, capsys):
     lk = load_scene(scene).linkage
     first = out.split("\n1. ")[1].split(" mm,")[0]
     assert first == "b2 {b2:g}, b3 {b3:g}, b4 {b4:g}, d {d:g}".format(**lk.meta["lengths_mm"])
-    for bad, msg in (([*args, "--rig", "--top", "0"], "--top"), ([*args, "--top", "3"], "only apply with --rig"),
+    for bad, msg in (([*args, "--rig", "--top", "0"], "--top"), ([*args, "--top", "3"], "--top needs --rig"),
                      ([*args, "--rig", "--fidelity", "rough"], "--fidelity"),
                      ([*args, "--rig", "--scene-out", str(scene)], "already exists"),
                      ([*args, "--rig", "--scene-out", str(tmp_path / "x.txt")], ".toml")):

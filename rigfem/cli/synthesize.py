@@ -189,7 +189,7 @@ def _rig_options(args, motion: bool) -> dict | None:
                             ("--scale", motion and args.scale is not None)) if v]
     if not args.rig:
         if given:
-            raise InputError(f"{', '.join(given)} only apply with --rig")
+            raise InputError(f"{', '.join(given)} {'needs' if len(given) == 1 else 'need'} --rig")
         return None
     top = check_range("--top", args.top, 1, 50)
     if top != int(top):

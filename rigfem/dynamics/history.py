@@ -73,6 +73,10 @@ class ReactionHistory:
     evaluator: Callable[[np.ndarray], "ReactionHistory"] | None = field(default=None, repr=False)
 
 
+#: refined peaks within this relative distance of the largest count as equal (``equal_peaks_deg``)
+TIE_RTOL = 1e-9
+
+
 def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list[float]] | None:
     """Contiguous crank-angle ranges [start, end] (deg) where ``mask`` is True; None if none."""
     if mask is None or not np.any(mask):
@@ -138,6 +142,17 @@ def _candidates(vals: np.ndarray, periodic: bool) -> list[int]:
     return near_top or [int(np.argmax(vals))]
 
 
+def _distinct(xs: list[float], periodic: bool, tol: float = 1e-4) -> list[float]:
+    """Sorted angles (deg) with those within ``tol`` of each other (round the turn if periodic) merged."""
+    out: list[float] = []
+    for x in xs:
+        if not out or x - out[-1] > tol:
+            out.append(x)
+    if periodic and len(out) > 1 and out[0] + 360.0 - out[-1] <= tol:
+        out.pop()
+    return out
+
+
 def _series(h: ReactionHistory) -> dict[str, np.ndarray]:
     out = {name: np.hypot(j.force_N[:, 0], j.force_N[:, 1]) for name, j in h.joints.items()}
     out["torque"] = np.abs(h.torque_Nm)
@@ -174,7 +189,9 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     {peak, value, crank_deg, singular}}`` (N, deg, N·m; ``value`` is the signed torque).
     With ``refine`` every sampled local maximum near the top is refined on the history's
     evaluator (the solver itself, or a cubic spline of imported samples) down to 1e-7 deg,
-    so the result does not depend on the sampling.  If the history has a toggle
+    so the result does not depend on the sampling.  Local maxima equal to the largest (within
+    :data:`TIE_RTOL`, e.g. the mirrored peaks of a symmetric linkage) are all listed in
+    ``equal_peaks_deg`` and the smallest angle is the peak's.  If the history has a toggle
     (``meta["singular"]``, a flagged sample, or one met while refining) the peaks are
     unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
@@ -188,6 +205,7 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     step = abs(deg[1] - deg[0]) if deg.size > 1 else 0.0
     series = _series(h)
     best = {n: (float(deg[int(np.argmax(v))]), float(np.max(v))) for n, v in series.items()}
+    found: dict[str, list[tuple[float, float]]] = {n: [] for n in series}  # refined local maxima
     if toggle is None and refine and ev is not None and step > 0.0:
         cand = [(n, i) for n, v in series.items() for i in _candidates(v, periodic)
                 if periodic or 0 < i < deg.size - 1]
@@ -197,8 +215,16 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
             xs, fs, toggle = _zoom_max(ev, names, centre - step, centre + step)
             if toggle is None:
                 for n, x, f in zip(names, xs, fs):
+                    found[n].append((float(np.mod(x, 360.0)) if periodic else float(x), float(f)))
                     if f > best[n][1]:
                         best[n] = (float(x), float(f))
+    # equal peaks (a symmetric linkage peaks at mirrored crank angles): which one the floats
+    # crown is a knife edge, so all are reported and the smallest angle is the peak's
+    ties = {n: _distinct(sorted(x for x, f in found[n] if f >= best[n][1] * (1 - TIE_RTOL)), periodic)
+            for n in series}
+    for n, t in ties.items():
+        if len(t) > 1:
+            best[n] = (t[0], best[n][1])
     out: dict = {}
     if toggle is not None:
         for n in series:
@@ -221,6 +247,8 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
         else:
             out[n] = {"force_N": f, "crank_deg": crank, "fx_N": float(vecs[n][0]), "fy_N": float(vecs[n][1]),
                       "singular": False}
+        if len(ties[n]) > 1:
+            out[n]["equal_peaks_deg"] = ties[n]
     return out
 
 

@@ -185,7 +185,9 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         vm_rows, peak_nodes = sol.peak_sweep(coef)
         row = int(np.argmax(vm_rows))
         nodes = hist = None
-        if len(case.rows) > 1:  # the stress cycle at every node that peaks at some angle
+        # the stress cycle at every node that peaks at some angle (an original-mode case's rows are
+        # alternative equal peaks, not a cycle)
+        if mode == "cycle" and len(case.rows) > 1:
             nodes = np.unique(peak_nodes)
             hist = np.einsum("rk,knc->rnc", coef, sol.nodal_stress[:, nodes])
         out.append(CaseResult(case, mode, sol, coef, vm_rows, row, sol.peak(coef[row]), nodes, hist, pm,

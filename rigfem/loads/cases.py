@@ -195,20 +195,33 @@ def rail_angle(h: ReactionHistory, bar: Bar) -> np.ndarray:
 
 
 def _at_peak(h: ReactionHistory, peak: dict, what: str) -> tuple[ReactionHistory, float]:
-    """The history evaluated at a refined peak's crank angle, and the peak magnitude (N)."""
+    """The history evaluated at a refined peak's crank angles (every equal peak, e.g. the mirrored
+    ones of a symmetric linkage: the study's case is then the worst of them), and the peak (N)."""
     if peak.get("singular") or peak.get("force_N") is None:
         raise InputError(f"{what}: the peak lies in a toggle (singular) range; no load can be "
                          f"derived — change the configuration")
-    deg = np.array([peak["crank_deg"]])
+    deg = np.asarray(peak.get("equal_peaks_deg") or [peak["crank_deg"]], float)
     if h.evaluator is not None:
         return h.evaluator(deg), float(peak["force_N"])
-    i = int(np.argmin(np.abs((h.crank_deg - deg[0] + 180.0) % 360.0 - 180.0)))
-    one = ReactionHistory(h.crank_deg[i:i + 1],
-                          {n: type(j)(j.name, j.body_a, j.body_b, j.force_N[i:i + 1],
-                                      None if j.position_mm is None else j.position_mm[i:i + 1])
-                           for n, j in h.joints.items()},
-                          h.torque_Nm[i:i + 1], None, h.meta)
-    return one, float(peak["force_N"])
+    idx = [int(np.argmin(np.abs((h.crank_deg - x + 180.0) % 360.0 - 180.0))) for x in deg]
+    some = ReactionHistory(h.crank_deg[idx],
+                           {n: type(j)(j.name, j.body_a, j.body_b, j.force_N[idx],
+                                       None if j.position_mm is None else j.position_mm[idx])
+                            for n, j in h.joints.items()},
+                           h.torque_Nm[idx], None, h.meta)
+    return some, float(peak["force_N"])
+
+
+def _angles_text(deg: np.ndarray) -> str:
+    """'12.34°', or '12.34° and 347.66° (equal peaks: the worst is checked)'."""
+    text = " and ".join(f"{x:.2f}°" for x in deg)
+    return text + (" (equal peaks: the worst is checked)" if len(deg) > 1 else "")
+
+
+def _one_per_row(rows: int, per_row: int, value: float) -> list[list[float]]:
+    """Coefficients of ``rows`` load sets of ``per_row`` unit loads each, one set per row."""
+    return [[value if i * per_row <= j < (i + 1) * per_row else 0.0 for j in range(rows * per_row)]
+            for i in range(rows)]
 
 
 def _unit(v: np.ndarray) -> tuple[float, float, float]:
@@ -224,17 +237,17 @@ def original_rail(h: ReactionHistory, pk: dict, bar: Bar, factor: float) -> Part
     """The 2013 study's rail case: factor × peak far-joint reaction at the rail's far end."""
     at, mag = _at_peak(h, pk[bar.far], f"{bar.name} ({bar.far})")
     body = bar_body(h, bar)
-    d = _unit(_local_force(at, bar.far, bar, body)[0])
+    dirs = [_unit(v) for v in _local_force(at, bar.far, bar, body)]
     k = int(round(bar.layout.screw_spacing / bar.layout.pitch))
     last = len(bar.layout.hole_x) - 1
     screws = (rail_hole_name(last - k), rail_hole_name(last))
     pivot = tuple(rail_hole_name(i) for i in bar.layout.coupling(0.0, bar.name))
     f = factor * mag / 2
     return PartCase(bar.name, bar.part, {"length": bar.length_mm}, [("bolt", pivot)],
-                    [UnitLoad("bearing", g, d) for g in screws], [[f, f]],
-                    np.array([pk[bar.far]["crank_deg"]]), pivot + screws,
+                    [UnitLoad("bearing", g, d) for d in dirs for g in screws], _one_per_row(len(dirs), 2, f),
+                    np.array(at.crank_deg, float), pivot + screws,
                     notes=[f"{factor:g} × peak {bar.far} reaction {mag:.1f} N at crank "
-                           f"{pk[bar.far]['crank_deg']:.2f}°, split over {screws[0]} and {screws[1]} at the "
+                           f"{_angles_text(at.crank_deg)}, split over {screws[0]} and {screws[1]} at the "
                            f"far end (study's worst case); held by the screws of the pivot coupling"])
 
 
@@ -259,12 +272,12 @@ def original_fitting(h: ReactionHistory, pk: dict, fit: Fitting, factor: float,
                         screws + ("fillets",), notes=[f"{fl:g} N longitudinal + {ft:g} N transverse at each screw "
                                        f"hole (study); {POST_HELD}"])
     at, mag = _at_peak(h, pk[fit.joint], f"{fit.name} ({fit.joint})")
-    d = _unit(_local_force(at, fit.joint, fit.bar, bar_body(h, fit.bar))[0])
+    dirs = [_unit(v) for v in _local_force(at, fit.joint, fit.bar, bar_body(h, fit.bar))]
     return PartCase(fit.name, fit.part, {}, [("bolt", ("screw_1", "screw_2"))],
-                    [UnitLoad("bearing", "bore", d)], [[factor * mag]],
-                    np.array([pk[fit.joint]["crank_deg"]]), ("bore", "screw_1", "screw_2"),
-                    notes=[f"{factor:g} × peak {fit.joint} pin reaction {mag:.1f} N on the bearing "
-                           f"seat; held by its two screws"])
+                    [UnitLoad("bearing", "bore", d) for d in dirs], _one_per_row(len(dirs), 1, factor * mag),
+                    np.array(at.crank_deg, float), ("bore", "screw_1", "screw_2"),
+                    notes=[f"{factor:g} × peak {fit.joint} pin reaction {mag:.1f} N at crank "
+                           f"{_angles_text(at.crank_deg)} on the bearing seat; held by its two screws"])
 
 
 def _point_acc(b: BodyHistory, local_mm: np.ndarray) -> np.ndarray:
