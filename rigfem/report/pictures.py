@@ -151,7 +151,8 @@ def render_field(r: CaseResult, c: np.ndarray, limit: float, path: str | Path,
             marked[ld.group] = "loaded"
     colours = {"support": "black", "loaded": "magenta"}
     try:
-        p = pv.Plotter(off_screen=True, window_size=list(size), shape=(1, 2), border=False)
+        with pv.vtk_verbosity("error"):  # VTK tries X first and warns on a headless machine
+            p = pv.Plotter(off_screen=True, window_size=list(size), shape=(1, 2), border=False)
     except Exception:  # noqa: BLE001 - no OpenGL context on this machine
         field_picture(fm.nodes, fm.elements, vm, path, title)
         return "matplotlib"
