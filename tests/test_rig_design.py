@@ -86,7 +86,7 @@ def test_motion_candidates_reach_the_positions():
 
 
 def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():
-    from tests.test_sweep import CHECK
+    from test_sweep import CHECK  # the coarse sweep meshes of the default tests
 
     p = SweepParams(check=CHECK)
     cands = [{"lengths_mm": dict(b2=480.0, b3=840.0, b4=780.0, d=1020.0), "branch": b} for b in ("open", "crossed")]
