@@ -1,10 +1,14 @@
-"""Compare two rigfem result folders (or report.json files) number by number.
+"""Compare two rigfem result folders (or report.json files, or sweep tables) number by number.
 
 Used to show that a change moves no result: every numeric leaf of report.json must agree
 within ``--rtol`` (relative, with an absolute floor ``--atol`` for values near zero).
-Timings, versions, paths and dates are ignored.
+Timings, versions, paths and dates are ignored.  A sweep table (.csv or .csv.gz) compares
+every number of the configurations computed (status ok), keyed by their lengths; ``--only
+SUFFIX`` keeps the columns ending so (e.g. ``_mpa``: the part peaks).
 
     python benchmarks/compare_reports.py OLD_DIR NEW_DIR --rtol 1e-12
+    git show c1d9a40:results/sweep/sweep_four-bar.csv.gz > /tmp/old.csv.gz
+    python benchmarks/compare_reports.py /tmp/old.csv.gz results/sweep/sweep_four-bar.csv.gz --only _mpa --rtol 1e-3
 """
 
 import argparse
@@ -30,15 +34,40 @@ def leaves(obj, path=""):
         yield path, float(obj)
 
 
+def table_leaves(path: str):
+    """(lengths.column, number) for every finite number of the computed rows of a sweep table."""
+    import pandas as pd
+
+    from rigfem.studies.sweep import LENGTHS
+
+    t = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    t = t[t["status"] == "ok"]
+    keys = LENGTHS[t["type"].iloc[0]]
+    for _, row in t.iterrows():
+        name = "[" + ", ".join(f"{row[k]:g}" for k in keys) + "]"
+        for col, v in row.items():
+            if col not in keys and isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
+                yield f"{name}.{col}", float(v)
+
+
+def _load(path: str) -> dict:
+    if path.endswith((".csv", ".csv.gz")):
+        return dict(table_leaves(path))
+    p = Path(path)
+    return dict(leaves(json.loads((p / "report.json" if p.is_dir() else p).read_text())))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("old")
     ap.add_argument("new")
     ap.add_argument("--rtol", type=float, default=1e-12)
     ap.add_argument("--atol", type=float, default=1e-9)
+    ap.add_argument("--only", metavar="SUFFIX", help="compare only the numbers whose key ends with SUFFIX")
     a = ap.parse_args(argv)
-    load = lambda p: json.loads((Path(p) / "report.json" if Path(p).is_dir() else Path(p)).read_text())
-    old, new = dict(leaves(load(a.old))), dict(leaves(load(a.new)))
+    old, new = _load(a.old), _load(a.new)
+    if a.only:
+        old, new = ({k: v for k, v in d.items() if k.endswith(a.only)} for d in (old, new))
     missing = sorted(set(old) ^ set(new))
     worst, bad = 0.0, []
     for k in sorted(set(old) & set(new)):

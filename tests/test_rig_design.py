@@ -82,7 +82,8 @@ def test_motion_candidates_reach_the_positions():
         got = 30.0 * np.asarray(r["O2"]) + local @ R.T
         dist = np.linalg.norm(got - 30.0 * np.asarray(P), axis=1)
         assert dist.max() == pytest.approx(c["error_mm"], rel=1e-6, abs=1e-6)
-        assert c["error_pct"] == pytest.approx(100 * c["error_mm"] / (30.0 * 29.43), rel=0.01)
+        span = max(np.hypot(*np.subtract(a, b)) for a in P for b in P)
+        assert c["error_pct"] == pytest.approx(100 * c["error_mm"] / (30.0 * span), rel=1e-9)
 
 
 def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():

@@ -27,9 +27,8 @@ def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:
     g.add_argument("--rig", action="store_true",
                    help="rank the mountable rig four-bars (60 mm grid, every rig rule) that do the job best, "
                         "each with its rule table and stress verdict")
-    g.add_argument("--top", default="5", metavar="N", help="rig configurations listed (default 5, 1-50)")
-    g.add_argument("--fidelity", default="draft", help="FE preset of the stress verdicts: draft (default), "
-                                                       "standard, fine")
+    g.add_argument("--top", metavar="N", help="rig configurations listed (default 5, 1-50)")
+    g.add_argument("--fidelity", help="FE preset of the stress verdicts: draft (default), standard, fine")
     g.add_argument("--no-stress", action="store_true", help="rules and motion error only (no FE)")
     g.add_argument("--scene-out", metavar="TOML", help="write the best rig configuration as a scene file "
                                                         "(then: rigfem check TOML)")
@@ -184,20 +183,21 @@ def run(args) -> int:
 
 def _rig_options(args, motion: bool) -> dict | None:
     """The --rig options, checked before anything is computed."""
-    given = [f for f, v in (("--top", args.top != "5"), ("--fidelity", args.fidelity != "draft"),
-                            ("--no-stress", args.no_stress), ("--scene-out", args.scene_out),
-                            ("--scale", motion and args.scale is not None)) if v]
+    scale = args.scale if motion else None
+    given = [f for f, v in (("--top", args.top), ("--fidelity", args.fidelity), ("--no-stress", args.no_stress),
+                            ("--scene-out", args.scene_out), ("--scale", scale)) if v]
     if not args.rig:
         if given:
             raise InputError(f"{', '.join(given)} {'needs' if len(given) == 1 else 'need'} --rig")
         return None
-    top = check_range("--top", args.top, 1, 50)
+    top = check_range("--top", args.top or 5, 1, 50)
     if top != int(top):
         raise InputError(f"--top = {args.top!r} must be a whole number in [1, 50]")
-    if args.fidelity not in FIDELITY:
-        raise InputError(f"--fidelity = {args.fidelity!r} must be one of {', '.join(FIDELITY)}")
-    scale = check_range("--scale", args.scale, 0.0, 1e4, lo_open=True) if motion and args.scale is not None else None
-    return dict(top=int(top), fidelity=args.fidelity, stress=not args.no_stress, scale=scale,
+    fidelity = args.fidelity or "draft"
+    if fidelity not in FIDELITY:
+        raise InputError(f"--fidelity = {fidelity!r} must be one of {', '.join(FIDELITY)}")
+    return dict(top=int(top), fidelity=fidelity, stress=not args.no_stress,
+                scale=None if scale is None else check_range("--scale", scale, 0.0, 1e4, lo_open=True),
                 scene=new_output("--scene-out", args.scene_out, ".toml"))
 
 
@@ -236,7 +236,7 @@ def _scene_toml(c: dict, task: str) -> str:
 
 def _rig_text(rig: dict, task: str) -> str:
     """The ranked rig configurations: lengths, error, rule table, stress verdict."""
-    out = ["", f"nearest buildable rig configurations (60 mm hole grid, every rig rule), best first"
+    out = ["", "nearest buildable rig configurations (60 mm hole grid, every rig rule), best first"
                 + (f"; stress verdicts at {rig['stress_fidelity']} fidelity" if rig["stress_fidelity"] else "") + ":"]
     for i, c in enumerate(rig["candidates"], 1):
         L = c["lengths_mm"]

@@ -17,6 +17,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],
         "closed": ["closed_form"],
         "solver": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "solve"],
-        "synthesis": ["parse_function", "chebyshev_points", "synthesize_function", "three_position", "check_three_position", "optimise_three_position"],
+        "synthesis": ["parse_function", "chebyshev_points", "synthesize_function", "three_position", "crank_in_order", "check_three_position", "optimise_three_position"],
     },
 )

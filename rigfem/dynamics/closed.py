@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.history import BodyHistory, JointHistory, ReactionHistory
+from rigfem.dynamics.history import JointHistory, ReactionHistory
 from rigfem.dynamics.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
-from rigfem.dynamics.linkage import GROUND, CrankDriver, Linkage, Prismatic, Revolute
+from rigfem.dynamics.linkage import GROUND, CrankDriver, Linkage, Prismatic, Revolute, cross, perp, rotate
 
 __all__ = ["closed_form"]
 
@@ -68,19 +68,10 @@ def _toggle_free(lk: Linkage, kind: str) -> bool:
     return bool(s3 < 1.0 and np.sqrt(1.0 - s3**2) >= lim)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
 def _cramer(r1: np.ndarray, b1: np.ndarray, r2: np.ndarray, b2: np.ndarray) -> np.ndarray:
-    """F (n, 2) with r1·F = b1 and r2·F = b2 (rows (n, 2))."""
+    """F (n, 2) with r1·F = b1 and r2·F = b2 (rows (n, 2); a moment r × F is perp(r)·F)."""
     det = r1[:, 0] * r2[:, 1] - r1[:, 1] * r2[:, 0]
     return np.stack([(b1 * r2[:, 1] - r1[:, 1] * b2) / det, (r1[:, 0] * b2 - b1 * r2[:, 0]) / det], -1)
-
-
-def _row(r: np.ndarray) -> np.ndarray:
-    """Row of the moment r × F = row · F."""
-    return np.stack([-r[:, 1], r[:, 0]], -1)
 
 
 def _motion(lk: Linkage, kind: str, theta: np.ndarray, w2: float) -> dict:
@@ -117,23 +108,18 @@ def _history(lk: Linkage, kind: str, deg: np.ndarray, speed_hz: float) -> Reacti
     for b in lk.bodies:
         phi, w, al, _, _, acc = mo[b.name]
         D[b.name], M[b.name] = b.inertia_load(phi, w, al, acc, g)
-    if lk.loads:
+    if lk.loads:  # the loads see the general solver's coordinates (x, y, phi per body, SI)
         q = np.concatenate([np.column_stack([mo[b.name][3], mo[b.name][0]]) for b in lk.bodies], 1)
         qd = np.concatenate([np.column_stack([mo[b.name][4], mo[b.name][1]]) for b in lk.bodies], 1)
         for ld in lk.loads:
-            phi, _, _, r, _, _ = mo[ld.body]
-            loc = np.asarray(ld.local_mm, float) / 1000
-            s = np.stack([np.cos(phi) * loc[0] - np.sin(phi) * loc[1], np.sin(phi) * loc[0] + np.cos(phi) * loc[1]], -1)
-            f = np.asarray(ld.force({"theta_rad": theta, "point_mm": (r + s) * 1000, "q": q, "qd": qd}),
-                           float).reshape(theta.size, 2)
+            f, m = ld.applied(theta, mo[ld.body][3], mo[ld.body][0], q, qd)
             D[ld.body] = D[ld.body] + f
-            M[ld.body] = M[ld.body] + _cross(s, f)
+            M[ld.body] = M[ld.body] + m
     A = mo["coupler" if kind == "four-bar" else "rod"][3]
     if kind == "four-bar":
-        B = mo["rocker"][3] + (lk.meta["lengths_mm"]["b4"] / 1000) * np.stack(
-            [np.cos(mo["rocker"][0]), np.sin(mo["rocker"][0])], -1)
+        B = mo["rocker"][3] + rotate(mo["rocker"][0], (lk.meta["lengths_mm"]["b4"] / 1000, 0.0))
         # rocker about O4: (B - O4) x F_B = -M_r;  coupler about A: (B - A) x F_B = M_c
-        FB = _cramer(_row(B - mo["rocker"][3]), -M["rocker"], _row(B - A), M["coupler"])
+        FB = _cramer(perp(B - mo["rocker"][3]), -M["rocker"], perp(B - A), M["coupler"])
         FA = FB - D["coupler"]
         forces = {"O2": FA - D["crank"], "A": FA, "B": FB, "O4": -FB - D["rocker"]}
         pos = {"O2": np.zeros_like(A), "A": A, "B": B, "O4": mo["rocker"][3]}
@@ -141,23 +127,18 @@ def _history(lk: Linkage, kind: str, deg: np.ndarray, speed_hz: float) -> Reacti
         B = mo["slider"][3]
         u = np.broadcast_to([1.0, 0.0], B.shape)
         # rod about A: (B - A) x F_B = M_rod;  slider along the slide: u · F_B = -u · D_s
-        FB = _cramer(_row(B - A), M["rod"], u, -D["slider"][:, 0])
+        FB = _cramer(perp(B - A), M["rod"], u, -D["slider"][:, 0])
         FA = FB - D["rod"]
         forces = {"O2": FA - D["crank"], "A": FA, "B": FB, "slide": -FB - D["slider"]}
         pos = {"O2": np.zeros_like(A), "A": A, "B": B, "slide": B}
-    torque = _cross(A, FA) - M["crank"]
+    torque = cross(A, FA) - M["crank"]
+    bodies = {b.name: b.history(*mo[b.name]) for b in lk.bodies}
     joints = {}
-    bodies = {b.name: BodyHistory(b.name, mo[b.name][0], mo[b.name][1], mo[b.name][2], mo[b.name][3] * 1000,
-                                  mo[b.name][5] * 1000, b.mass_kg, np.asarray(b.com_local_mm, float),
-                                  b.inertia_com_kg_mm2, [(lab, pm, np.asarray(p, float)) for lab, pm, p in b.point_masses],
-                                  {}, mo[b.name][4] * 1000) for b in lk.bodies}
     for j in lk.joints:
         prism = isinstance(j, Prismatic)
         joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, forces[j.name], pos[j.name] * 1000,
                                       -M["slider"] if prism else None, "prismatic" if prism else "revolute")
-        for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
-            if bn != GROUND:
-                bodies[bn].joint_local_mm[j.name] = np.asarray(loc, float)
+    lk.record_joint_points(bodies)
     meta = {k: v for k, v in lk.meta.items() if k != "singular_fn"}
     meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=None)
     return ReactionHistory(deg, joints, torque, bodies, meta, singular_mask=None,

@@ -22,7 +22,6 @@ import numpy as np
 
 from rigfem.dynamics.loops import (
     BRANCHES,
-    MU_TOGGLE_DEG,
     fourbar_angles,
     fourbar_closes,
     slider_crank_angles,

@@ -26,9 +26,32 @@ from typing import Callable
 
 import numpy as np
 
+from rigfem.dynamics.history import BodyHistory
 from rigfem.errors import ComputeError, InputError
 
 GROUND = "ground"
+
+
+def rotate(phi: np.ndarray, s) -> np.ndarray:
+    """R(phi) s for phi (n,), s (2,) -> (n, 2)."""
+    c, sn = np.cos(phi), np.sin(phi)
+    out = np.empty(np.shape(phi) + (2,))
+    out[..., 0] = c * s[0] - sn * s[1]
+    out[..., 1] = sn * s[0] + c * s[1]
+    return out
+
+
+def perp(v: np.ndarray) -> np.ndarray:
+    """v turned by +90 degrees, (..., 2)."""
+    out = np.empty(v.shape)
+    out[..., 0] = -v[..., 1]
+    out[..., 1] = v[..., 0]
+    return out
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z component of a × b, (..., 2) -> (...)."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
 class ClosureError(InputError):
@@ -74,12 +97,16 @@ class Body:
         (``rigfem.dynamics.closed``) both balance the joint forces against these.
         """
         m, c, inertia = self.totals()
-        cs, sn = np.cos(phi), np.sin(phi)
-        rc = np.stack([cs * c[0] - sn * c[1], sn * c[0] + cs * c[1]], -1)
-        rc_perp = np.stack([-rc[:, 1], rc[:, 0]], -1)
-        a_g = acc_origin + rc_perp * alpha[:, None] - rc * (omega**2)[:, None]
-        f = m * (gravity - a_g)
-        return f, rc[:, 0] * f[:, 1] - rc[:, 1] * f[:, 0] - inertia * alpha
+        rc = rotate(phi, c)
+        f = m * (gravity - (acc_origin + perp(rc) * alpha[:, None] - rc * (omega**2)[:, None]))
+        return f, cross(rc, f) - inertia * alpha
+
+    def history(self, phi, omega, alpha, origin_m, vel_m, acc_m) -> BodyHistory:
+        """The body's :class:`BodyHistory` from its motion (SI in, mm out); joint points empty."""
+        return BodyHistory(self.name, phi, omega, alpha, origin_m * 1000, acc_m * 1000, self.mass_kg,
+                           np.asarray(self.com_local_mm, float), self.inertia_com_kg_mm2,
+                           [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in self.point_masses], {},
+                           vel_m * 1000)
 
 
 @dataclass
@@ -132,6 +159,15 @@ class Load:
     local_mm: tuple[float, float]
     force: Callable[[dict], np.ndarray]
 
+    def applied(self, theta_rad: np.ndarray, origin_m: np.ndarray, phi: np.ndarray, q: np.ndarray,
+                qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The force (N, (n, 2)) and its moment about the body's origin (N·m) at driver phases
+        ``theta_rad``, the body at ``origin_m``/``phi``; ``q``, ``qd`` the solver's coordinates."""
+        s = rotate(phi, np.asarray(self.local_mm, float) / 1000)
+        f = np.asarray(self.force({"theta_rad": theta_rad, "point_mm": (origin_m + s) * 1000, "q": q, "qd": qd}),
+                       float).reshape(len(theta_rad), 2)
+        return f, cross(s, f)
+
 
 @dataclass
 class Linkage:
@@ -146,3 +182,10 @@ class Linkage:
     loads: list[Load] = field(default_factory=list)
     gravity_mm_s2: tuple[float, float] = (0.0, 0.0)
     meta: dict = field(default_factory=dict)
+
+    def record_joint_points(self, bodies: dict[str, BodyHistory]) -> None:
+        """Each moving body's joint points (local mm), for the kinematics of its history."""
+        for j in self.joints:
+            for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
+                if bn != GROUND:
+                    bodies[bn].joint_local_mm[j.name] = np.asarray(loc, float)

@@ -21,6 +21,8 @@ from rigfem.dynamics.linkage import (
     Prismatic,
     Revolute,
     SliderDriver,
+    cross,
+    perp,
 )
 from rigfem.errors import InputError
 
@@ -34,28 +36,8 @@ RCOND_SINGULAR = 2e-3
 
 
 # ----------------------------------------------------------------------------- helpers
-def _rot(phi: np.ndarray, s) -> np.ndarray:
-    """R(phi) s for phi (n,), s (2,) -> (n, 2)."""
-    c, sn = np.cos(phi), np.sin(phi)
-    out = np.empty(phi.shape + (2,))
-    out[..., 0] = c * s[0] - sn * s[1]
-    out[..., 1] = sn * s[0] + c * s[1]
-    return out
-
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    out = np.empty(v.shape)
-    out[..., 0] = -v[..., 1]
-    out[..., 1] = v[..., 0]
-    return out
-
-
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", a, b)
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
 class _Model:
@@ -138,7 +120,7 @@ class _Model:
                 rb, _ = self.pose(q, j.body_b)
                 ax = np.asarray(j.axis_a, float)
                 u = rot(j.body_a, ax / np.hypot(*ax))
-                fr[j.name] = (sa, sb, u, _perp(u), rb + sb - ra - sa)
+                fr[j.name] = (sa, sb, u, perp(u), rb + sb - ra - sa)
         return fr
 
     def residual(self, q: np.ndarray, theta: np.ndarray, fr: dict | None = None) -> np.ndarray:
@@ -176,10 +158,10 @@ class _Model:
                 sa, sb = fr[j.name]
                 if ca is not None:
                     J[:, r, ca] = J[:, r + 1, ca + 1] = 1.0
-                    J[:, r:r + 2, ca + 2] = _perp(sa)
+                    J[:, r:r + 2, ca + 2] = perp(sa)
                 if cb is not None:
                     J[:, r, cb] = J[:, r + 1, cb + 1] = -1.0
-                    J[:, r:r + 2, cb + 2] = -_perp(sb)
+                    J[:, r:r + 2, cb + 2] = -perp(sb)
             else:
                 self._prism_rows(J, r, fr[j.name], ca, cb, normal=True)
                 if ca is not None:
@@ -201,10 +183,10 @@ class _Model:
         v, dv = (n, -u) if normal else (u, n)      # d v / d phi_a
         if ca is not None:
             J[:, r, ca:ca + 2] = -v
-            J[:, r, ca + 2] = _dot(dv, d) - _dot(v, _perp(sa))
+            J[:, r, ca + 2] = _dot(dv, d) - _dot(v, perp(sa))
         if cb is not None:
             J[:, r, cb:cb + 2] = v
-            J[:, r, cb + 2] = _dot(v, _perp(sb))
+            J[:, r, cb + 2] = _dot(v, perp(sb))
 
     def gamma(self, q: np.ndarray, qd: np.ndarray, sdd: np.ndarray, fr: dict | None = None) -> np.ndarray:
         """Right-hand side of Phi_q qddot = gamma (quadratic velocity terms)."""
@@ -231,7 +213,7 @@ class _Model:
         sa, sb, u, n, d = terms
         va, wa = self.pose(qd, j.body_a)
         vb, wb = self.pose(qd, j.body_b)
-        dd = vb + _perp(sb) * wb[:, None] - va - _perp(sa) * wa[:, None]
+        dd = vb + perp(sb) * wb[:, None] - va - perp(sa) * wa[:, None]
         v, w = (n, u) if normal else (u, -n)        # v' = -w * wa   (n' = -u wa, u' = n wa)
         return (wa**2 * _dot(v, d) + 2 * wa * _dot(w, dd)
                 + _dot(v, sb * (wb**2)[:, None] - sa * (wa**2)[:, None]))
@@ -390,11 +372,11 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     turns at ``speed_hz`` (negative = clockwise).  Returns a ReactionHistory whose
     ``singular_mask`` flags toggle samples and whose ``evaluator`` re-solves at any angle.
     """
-    model = _Model(lk)
     deg = np.asarray(crank_deg, float)
     fast = None if general else closed_form(lk, deg, speed_hz)
     if fast is not None:
         return fast
+    model = _Model(lk)
     theta = np.radians(deg)
     tol = tol_mm / 1000
     # coarse continuation at <= 20 deg steps, then a vectorised Newton for all samples
@@ -480,18 +462,12 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
         f, mo = b.inertia_load(phi, w, al, a, g)
         Q[:, i:i + 2] += f
         Q[:, i + 2] += mo
-        bodies_out[b.name] = BodyHistory(
-            b.name, phi, w, al, r * 1000, a * 1000, b.mass_kg, np.asarray(b.com_local_mm, float),
-            b.inertia_com_kg_mm2, [(lab, pm, np.asarray(pos, float)) for lab, pm, pos in b.point_masses], {},
-            qd[:, i:i + 2] * 1000)
+        bodies_out[b.name] = b.history(phi, w, al, r, qd[:, i:i + 2], a)
     for ld in lk.loads:
         i = 3 * model.index[ld.body]
-        r, phi = q[:, i:i + 2], q[:, i + 2]
-        s = _rot(phi, np.asarray(ld.local_mm, float) / 1000)
-        state_d = {"theta_rad": np.radians(deg), "point_mm": (r + s) * 1000, "q": q, "qd": qd}
-        f = np.asarray(ld.force(state_d), float).reshape(n, 2)
+        f, mo = ld.applied(np.radians(deg), q[:, i:i + 2], q[:, i + 2], q, qd)
         Q[:, i:i + 2] += f
-        Q[:, i + 2] += _cross(s, f)
+        Q[:, i + 2] += mo
     lam = np.einsum("nji,nj->ni", Jinv, Q)               # Phi_q^T lambda = Q
     joints: dict[str, JointHistory] = {}
     fr = model.frame(q)
@@ -508,14 +484,12 @@ def _dynamics(lk, model, state, deg, q, qd, qdd, J, Jinv, speed_hz, tol) -> Reac
             fab = -nn * lam[:, r][:, None]
             pos = rb + sb
             # moment on b about its sliding point: -(dPhi/dphi_b)^T lambda - sb x F_on_b
-            m_origin = -(lam[:, r] * _dot(nn, _perp(sb)) + lam[:, r + 1])
-            mom = m_origin - _cross(sb, fab)
-        for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
-            if bn != GROUND:
-                bodies_out[bn].joint_local_mm[j.name] = np.asarray(loc, float)
+            m_origin = -(lam[:, r] * _dot(nn, perp(sb)) + lam[:, r + 1])
+            mom = m_origin - cross(sb, fab)
         pos = np.broadcast_to(pos, (n, 2)) * 1000
         joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, fab, pos, mom,
                                       "revolute" if isinstance(j, Revolute) else "prismatic")
+    lk.record_joint_points(bodies_out)
     dv = lk.driver
     # motor torque on the crank (N·m), or actuator force on the slider along its axis (N)
     drive = -lam[:, model.drow]

@@ -27,10 +27,10 @@ import numpy as np
 
 from rigfem.dynamics.kinematics import fourbar_motion
 from rigfem.dynamics.loops import BRANCHES, fourbar_angles
-from rigfem.dynamics.synthesis import parse_function
+from rigfem.dynamics.synthesis import crank_in_order, parse_function
 from rigfem.errors import ComputeError, InputError
 from rigfem.rig.rules import HOLE_PITCH_MM, fourbar_rules
-from rigfem.studies.sweep import SweepParams, enumerate_configs
+from rigfem.studies.sweep import SweepParams, build_bases, enumerate_configs, evaluate
 
 __all__ = ["rig_fourbars", "snap_function", "snap_motion", "rule_table", "stress_verdicts"]
 
@@ -142,11 +142,8 @@ def _fit_coupler_point(lengths: dict, branch: str, O2: np.ndarray, ground_deg: f
         m = fourbar_motion(*L, v[2:], branch=branch, coupler_point=(v[0], v[1]))
         return O2 + m.points["P"]["position_mm"] @ R.T
 
-    def residual(v):
-        try:
-            return (position(v) - targets).ravel()
-        except InputError:  # cannot happen for a rig crank-rocker; keep the solver away
-            return np.full(targets.size, 1e6)
+    def residual(v):  # a rig four-bar is a crank-rocker: it closes at every crank angle
+        return (position(v) - targets).ravel()
 
     x0 = np.r_[cp0, crank0]
     res = least_squares(residual, x0, x_scale=np.r_[max(cp0[0], 1.0), 10.0, 10.0, 10.0, 10.0], method="lm")
@@ -163,12 +160,6 @@ def _off_rail(cp: tuple[float, float], p: SweepParams | None) -> float:
     behind = RIG_MASSES.rail_behind_mm
     x, y = cp[0] * np.cos(np.radians(cp[1])), cp[0] * np.sin(np.radians(cp[1]))
     return float(np.hypot(x - np.clip(x, -behind, rail - behind), y))
-
-
-def _in_order(crank: np.ndarray) -> bool:
-    """The crank reaches the three angles in order, turning one way."""
-    ccw = [(crank[1] - crank[0]) % 360, (crank[2] - crank[0]) % 360]
-    return ccw[0] < ccw[1] or (360 - ccw[0]) % 360 < (360 - ccw[1]) % 360
 
 
 def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParams | None = None) -> list[dict]:
@@ -191,23 +182,19 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
         scales = np.geomspace(lo, hi, 24) if hi > lo else np.array([lo])
     else:
         scales = np.array([scale])
-    seen, out = set(), []
+    out = []
     for s in scales:
         for combo in np.stack(np.meshgrid(*[_grid_neighbours(x) for x in s * Ld], indexing="ij"), -1).reshape(-1, 4):
             key = tuple(map(float, combo))
-            if key not in ok or (key, round(float(s), 9)) in seen:
+            if key not in ok:
                 continue
-            seen.add((key, round(float(s), 9)))
             lengths = dict(zip(LENGTH_KEYS, key))
             cp0 = (s * r["coupler_point"]["distance"], r["coupler_point"]["angle_deg"])
             best = None
             for br in BRANCHES:
-                try:
-                    cp, crank, dist = _fit_coupler_point(lengths, br, s * np.asarray(r["O2"]), r["ground_angle_deg"],
-                                                         s * P, cp0, np.asarray(r["crank_deg"], float))
-                except (InputError, ValueError):
-                    continue
-                if _in_order(crank) and (best is None or dist.max() < best[2].max()):
+                cp, crank, dist = _fit_coupler_point(lengths, br, s * np.asarray(r["O2"]), r["ground_angle_deg"],
+                                                     s * P, cp0, np.asarray(r["crank_deg"], float))
+                if crank_in_order(crank) and (best is None or dist.max() < best[2].max()):
                     best = (br, cp, dist, crank)
             if best is None:
                 continue
@@ -232,8 +219,6 @@ def stress_verdicts(candidates: list[dict], fidelity: str = "draft", p: SweepPar
     """Add each candidate's stress check (``stress``: verdict, worst utilisation and part, per-part
     utilisation) from the sweep's unit solutions (built once, cached on disk); ``p`` overrides
     the sweep parameters (its own fidelity then)."""
-    from rigfem.studies.sweep import build_bases, evaluate
-
     p = p or SweepParams(fidelity=fidelity)
     bases = build_bases(p)
     for c in candidates:

@@ -569,8 +569,8 @@ def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:
     from dask.distributed import Client, LocalCluster, as_completed
 
     # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers, which turns off glibc's adaptive
-    # mmap threshold: every temporary of the superposition is then mapped and unmapped afresh,
-    # +70 % time in page faults (measured on a sweep chunk); the local workers go without it
+    # mmap threshold: every temporary of the superposition is then mapped and unmapped afresh, at
+    # a cost in page faults (benchmarks/bench_malloc_trim.py); the local workers go without it
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
         local = (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                               dashboard_address=None) if scheduler is None else nullcontext())
