@@ -36,7 +36,7 @@ def cycle_stress(part: str) -> list[dict]:
     for n in SAMPLES:
         cs = load_check_scene(SCENE, {"parts": [part], "modes": ["cycle"], "fidelity": "draft",
                                       "samples": n})
-        h = simulate(cs.scene.linkage, samples=n, speed_hz=cs.scene.speed_hz)
+        h = simulate(cs.linkage, samples=n, speed_hz=cs.scene.speed_hz)
         t = time.perf_counter()
         r = solve_cases(part_cases(h, peaks(h), cs.settings), cs.settings)[0]
         out[n] = (float(r.vm_rows.max()), time.perf_counter() - t, r.seconds.get("superpose", 0.0))

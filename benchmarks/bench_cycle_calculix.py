@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     from rigfem.loads import part_cases
 
     cs = load_check_scene("final-cm", {"fidelity": a.fidelity, "parts": [a.part], "modes": ["cycle"]})
-    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
+    h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     cases = part_cases(h, peaks(h), cs.settings)
     s = cs.settings
     mesh_case(cases[0][1], s.size_mm, s.local_size_mm)  # meshed once, outside the timing (same mesh for both)

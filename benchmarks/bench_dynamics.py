@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.dynamics import crank_angles, four_bar, original_program, peaks, simulate, solve
+from rigfem.dynamics import original_program, peaks, simulate, solve
+from rigfem.linkage import crank_angles, four_bar
 from rigfem.rig import RIG_MASSES
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.dynamics import crank_angles, fourbar_motion, fourbar_turn
+from rigfem.linkage import crank_angles, fourbar_motion, fourbar_turn
 
 RUNS, N, TARGET_MS = 15, 5000, 5.0
 CASE = (540.0, 840.0, 780.0, 1020.0)       # the rig's reference four-bar (RIG.md §3)

@@ -26,7 +26,7 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 CHILD = """
 import json, resource, sys, time
 import numpy as np
-from rigfem.dynamics import fourbar_closes
+from rigfem.linkage import fourbar_closes
 from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_chunk
 p = SweepParams()
 grid = np.linspace(0.0, 360.0, 3601)

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.dynamics import fourbar_closes
+from rigfem.linkage import fourbar_closes
 from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_sweep
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"

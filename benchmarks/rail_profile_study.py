@@ -93,7 +93,7 @@ def section_hand(part) -> tuple[float, float]:
 def study(fidelity: str) -> tuple[list[dict], list[str], object]:
     """Every variant of the crank rail's original-mode case at one fidelity preset."""
     cs = load_check_scene(SCENE, {"parts": ["crank_rail"], "modes": ["original"], "fidelity": fidelity})
-    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
+    h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     (mode, base), = part_cases(h, peaks(h), cs.settings)
     rows = []
     for name, (dims, what) in VARIANTS.items():

@@ -9,11 +9,12 @@ Run: python examples/textbook_kinematics.py
 
 import numpy as np
 
-from rigfem.dynamics import coupler_point_path, simulate
+from rigfem.dynamics import loaded_linkage, simulate
+from rigfem.linkage import coupler_point_path
 from rigfem.scene import load_scene
 
 scene = load_scene("mech2-fourbar-coupler-point")
-h = simulate(scene.linkage, samples=360, speed_hz=scene.speed_hz)
+h = simulate(loaded_linkage(scene), samples=360, speed_hz=scene.speed_hz)
 mu = h.meta["mu_deg"]
 path = coupler_point_path(h)
 span = np.ptp(path, axis=0)

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from rigfem import __version__
+from rigfem.dynamics.cycle import simulate
+from rigfem.dynamics.forces import loaded_linkage
 from rigfem.dynamics.history import (
     JointHistory,
     ReactionHistory,
@@ -31,12 +33,12 @@ from rigfem.dynamics.history import (
     spline_evaluator,
     summary,
 )
-from rigfem.dynamics.mechanisms import simulate
 from rigfem.dynamics.solver import solve
 from rigfem.errors import InputError, plain
 from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
+from rigfem.linkage.model import Linkage
 from rigfem.loads.cases import part_cases
 from rigfem.report.document import REPORT_SCHEMA, render_markdown, write_json
 from rigfem.report.folder import atomic_dir, check_writable, folder_lock
@@ -68,6 +70,7 @@ class CheckScene:
     """A scene read for checking: linkage, check settings and dynamics options."""
 
     scene: Scene
+    linkage: Linkage  #: the scene's linkage with the forces it names (rigfem.dynamics.forces)
     settings: CheckSettings
     description: str
     samples: int
@@ -77,7 +80,7 @@ class CheckScene:
     rule_violations: list[str] = dataclasses.field(default_factory=list)  #: broken rig rules (allowed explicitly)
 
 
-def rule_violations(sc: Scene) -> list[str]:
+def rule_violations(sc: Scene, lk: Linkage) -> list[str]:
     """The rig rules (rigfem.rig.rules) a rig scene breaks, each with its numbers.
 
     A rig scene is one built from the rig's catalogue (``masses = "rig"``); the textbook
@@ -86,7 +89,7 @@ def rule_violations(sc: Scene) -> list[str]:
     if sc.raw.get("linkage", {}).get("masses", "rig") != "rig":
         return []
     return [f"{r.name}: {r.value:.6g} {r.unit} must be {r.relation} {r.limit:.6g} {r.unit}"
-            for r in rules_for(sc.linkage.meta) if not r.ok]
+            for r in rules_for(lk.meta) if not r.ok]
 
 
 def load_check_scene(name: str | Path, overrides: dict | None = None,
@@ -101,7 +104,8 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
     """
     path = resolve(name)
     sc = load_scene(path)
-    broken = rule_violations(sc)
+    lk = loaded_linkage(sc)
+    broken = rule_violations(sc, lk)
     if broken and not allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
                          f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "
@@ -110,7 +114,7 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
     table = {**data.get("check", {}), **(overrides or {})}
     validate_check(table, path.name)
     dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
-    settings = check_settings(table, sc.linkage.meta["type"], sc.linkage.meta.get("rails_mm"))
+    settings = check_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
     desc = data.get("description", data["linkage"].get("title", ""))
     csv_path = None
     if dyn["reactions_csv"] is not None:
@@ -119,7 +123,7 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
             raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
                              f"next to the scene ({plain(str(csv_path), 120)})")
         read_csv(csv_path)  # coverage, sampling and units refused now, not after the dynamics
-    return CheckScene(sc, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
+    return CheckScene(sc, lk, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
                       broken)
 
 
@@ -133,7 +137,7 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     imbalance of each free part.
     """
     ext = read_csv(cs.reactions_csv)
-    kin = solve(cs.scene.linkage, ext.crank_deg, cs.scene.speed_hz)
+    kin = solve(cs.linkage, ext.crank_deg, cs.scene.speed_hz)
     missing = [n for n in kin.joints if n not in ext.joints]
     if missing:
         raise InputError(f"reactions CSV {cs.reactions_csv.name} lacks joint(s) {', '.join(missing)}; "
@@ -151,7 +155,7 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     def at(deg) -> ReactionHistory:
         d = np.atleast_1d(np.asarray(deg, float))
         order = np.argsort(d)  # the solver wants increasing angles; answer in the order asked
-        k = solve(cs.scene.linkage, d[order], cs.scene.speed_hz, check_closure=False)
+        k = solve(cs.linkage, d[order], cs.scene.speed_hz, check_closure=False)
         back = np.argsort(order)
         for j in k.joints.values():
             j.position_mm = j.position_mm[back]
@@ -246,7 +250,7 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
     """The scene's reaction history (its dynamics, or an imported CSV) and every part case
     solved; no cases at a toggle, where the reactions are unbounded."""
     h = (imported_history(cs) if cs.reactions_csv else
-         simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
+         simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
     if h.meta.get("singular"):
         return h, []
     cases = part_cases(h, peaks(h), cs.settings)

@@ -1,11 +1,14 @@
-"""Scene files: the ``[linkage]`` table of a TOML file turned into a Linkage.
+"""Scene files: a TOML file read as validated, plain data.
 
 The whole file is checked against :mod:`rigfem.schema` first (unknown tables and keys,
-types, ranges); only ``[linkage]`` is built here.  Keys (lengths mm, angles deg)::
+types, ranges); the ``[linkage]`` table becomes a :class:`Scene`: the linkage's type and
+builder arguments, its speed and what it names (masses, a gas force).  Nothing is computed
+here: :func:`rigfem.linkage.mechanisms.build` makes the linkage, the dynamics resolve the
+forces (:func:`rigfem.dynamics.forces.loaded_linkage`).  Keys (lengths mm, angles deg)::
 
     [linkage]
     type = "four-bar"          # four-bar | slider-crank | inverted-slider-crank | quick-return
-    b2 = 540.0                 # builder arguments (see rigfem.dynamics.mechanisms)
+    b2 = 540.0                 # builder arguments (see rigfem.linkage.mechanisms)
     speed_hz = 1.0             # or rpm = 20, or omega_rad_s = -3.12 (negative = clockwise)
     alpha_rad_s2 = 0.0         # crank angular acceleration at the instant (0 = constant speed)
     instant_deg = 60.0         # optional: the crank angle of the instant of interest
@@ -30,8 +33,6 @@ from pathlib import Path
 import numpy as np
 from pydantic import ValidationError
 
-from rigfem.dynamics.linkage import Linkage
-from rigfem.dynamics.mechanisms import BUILDERS, compressor_gas_force
 from rigfem.errors import InputError, plain
 from rigfem.schema import SceneFile, input_error, load_validated
 
@@ -44,10 +45,12 @@ _INFO_KEYS = ("type", "title", "notes", "masses", "bodies", "gas", "instant_deg"
 
 @dataclass
 class Scene:
-    """A linkage read from a scene file, with its crank speed (Hz; negative = clockwise)."""
+    """A scene file's linkage as plain data: its type and builder arguments (lengths mm, angles
+    deg), its crank speed (Hz; negative = clockwise) and the gas force it names (or None)."""
 
     name: str
-    linkage: Linkage
+    linkage_type: str
+    params: dict
     speed_hz: float
     table: dict = field(default_factory=dict)
     #: crank angular acceleration (rad/s²) and the crank angle of the instant of interest (deg)
@@ -56,6 +59,8 @@ class Scene:
     #: a textbook linkage (MECHANISMS.md), not a rig configuration: the rig rules do not apply
     textbook: bool = False
     raw: dict = field(default_factory=dict)  #: the whole scene file (raw TOML, validated)
+    #: ``[linkage.gas]``: the compressor's gas force on the slider (p_N, L_mm, c_mm), or None
+    gas: dict | None = None
 
 
 def builtin_scenes() -> dict[str, Path]:
@@ -85,19 +90,17 @@ def _speed(t: dict) -> float:
     return {"speed_hz": v, "rpm": v / 60.0, "omega_rad_s": v / (2 * np.pi)}[k]
 
 
-def linkage_from_table(t: dict) -> tuple[Linkage, float]:
-    """Build (Linkage, speed_hz) from a ``[linkage]`` table (raw TOML, validated by rigfem.schema)."""
+def linkage_params(t: dict) -> dict:
+    """The builder arguments (:data:`rigfem.linkage.mechanisms.BUILDERS`) of a ``[linkage]``
+    table (raw TOML, validated by rigfem.schema): lengths as floats, pairs as tuples."""
     try:
         SceneFile.model_validate({"linkage": t})
     except ValidationError as exc:
         raise input_error(exc, {"linkage": t}) from None
-    typ = t["type"]
     masses = t.get("masses", "rig")
     kwargs: dict = {"masses": None if masses == "none" else "rig"}
     if t.get("bodies"):
         kwargs["body_masses"] = t["bodies"]
-    if "gas" in t:
-        kwargs["slider_force"] = compressor_gas_force(float(t["b2"]), float(t["b3"]), **t["gas"])
     for k, v in t.items():
         if k in _INFO_KEYS:
             continue
@@ -109,16 +112,14 @@ def linkage_from_table(t: dict) -> tuple[Linkage, float]:
             kwargs[k] = v
         else:
             kwargs[k] = float(v)
-    return BUILDERS[typ](**kwargs), _speed(t)
+    return kwargs
 
 
 def load_scene(path_or_name: str | Path) -> Scene:
-    """Read the ``[linkage]`` table of a scene file (or built-in scene name)."""
+    """Read a scene file (or built-in scene name) as plain, validated data."""
     p = resolve(path_or_name)
     data, _ = load_validated(p)
     t = data["linkage"]
-    lk, speed = linkage_from_table(t)
-    textbook = bool(t.get("textbook", False))
-    lk.meta["scene"] = p.stem
-    lk.meta["textbook"] = textbook
-    return Scene(p.stem, lk, speed, t, float(t.get("alpha_rad_s2", 0.0)), t.get("instant_deg"), textbook, data)
+    return Scene(p.stem, t["type"], linkage_params(t), _speed(t), t, float(t.get("alpha_rad_s2", 0.0)),
+                 t.get("instant_deg"), bool(t.get("textbook", False)), data,
+                 dict(t["gas"]) if "gas" in t else None)

@@ -1,7 +1,7 @@
 """The one schema of a scene file (pydantic v2): every table and key known, types strict,
 ranges checked, NaN and infinity refused.
 
-A scene file is read as raw TOML, validated here, and only then built into a linkage
+A scene file is read as raw TOML, validated here, and only then turned into plain scene data
 (:mod:`rigfem.scene`) and check settings (:mod:`rigfem.settings`); CLI overrides of the
 ``[check]`` table go through the same :class:`CheckTable`.  Every problem becomes one
 :class:`~rigfem.errors.InputError` line naming the field (``[check].order``), the value and
@@ -18,9 +18,8 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from rigfem.dynamics.mechanisms import MODELS
 from rigfem.errors import InputError, plain
-from rigfem.settings import FIDELITY, MODES
+from rigfem.settings import FIDELITY, MODELS, MODES
 from rigfem.verdict.fatigue import RELIABILITY, SURFACE
 
 #: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
@@ -32,7 +31,7 @@ class _Table(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
 
 
-Length = Annotated[float, Field(ge=10.0, le=10_000.0)]  # mm, as rigfem.dynamics.mechanisms
+Length = Annotated[float, Field(ge=10.0, le=10_000.0)]  # mm, as rigfem.linkage.mechanisms
 Text = Annotated[str, Field(max_length=2000)]
 
 

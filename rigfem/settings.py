@@ -44,6 +44,9 @@ PRESET_ERROR_PCT: dict[str, float] = {"draft": 10.0, "standard": 3.0, "fine": 1.
 
 MODES = ("original", "cycle")
 
+#: the dynamics' mass models, ``[check].mass_model`` (rigfem.dynamics.cycle.simulate)
+MODELS = ("rigid-body", "original")
+
 
 RAIL = "rail_size25"
 

@@ -335,7 +335,7 @@ def test_any_scene_parses_or_is_input_error(tmp_path, table, key, value):
     except InputError as exc:
         assert "\n" not in str(exc)
         return
-    assert cs.settings.order in (1, 2) and cs.scene.linkage.meta["type"] == "four-bar"
+    assert cs.settings.order in (1, 2) and cs.linkage.meta["type"] == "four-bar"
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -95,7 +95,7 @@ def test_imported_csv_reproduces_the_dynamics(tmp_path):
     from rigfem.io import write_csv
 
     cs = load_check_scene("final-cm")
-    write_csv(simulate(cs.scene.linkage, samples=360), tmp_path / "ext.csv")
+    write_csv(simulate(cs.linkage, samples=360), tmp_path / "ext.csv")
     opts = {"parts": ["plate_A"], "fidelity": "draft", "frames": 0}
     ref = run_check("final-cm", out=tmp_path / "ref", overrides=opts, quiet=True)
     imp = run_check("final-cm", out=tmp_path / "imp", quiet=True,

@@ -5,16 +5,8 @@ general solver keeps toggles and other topologies."""
 import numpy as np
 import pytest
 
-from rigfem.dynamics import (
-    Revolute,
-    compressor_gas_force,
-    crank_angles,
-    four_bar,
-    peaks,
-    quick_return,
-    slider_crank,
-    solve,
-)
+from rigfem.dynamics import compressor_gas_force, peaks, solve
+from rigfem.linkage import Revolute, crank_angles, four_bar, quick_return, slider_crank
 
 
 def _rng_fourbars(n: int, seed: int = 3):

@@ -13,14 +13,8 @@ import pytest
 
 from rigfem.check import run_check
 from rigfem.cli import main
-from rigfem.dynamics import (
-    MU_TOGGLE_DEG,
-    ClosureError,
-    four_bar,
-    peaks,
-    simulate,
-    slider_crank,
-)
+from rigfem.dynamics import peaks, simulate
+from rigfem.linkage import MU_TOGGLE_DEG, ClosureError, four_bar, slider_crank
 from rigfem.errors import InputError
 from rigfem.report import finite
 from rigfem.rig import fourbar_rules, transmission_angle_range

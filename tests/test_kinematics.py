@@ -1,11 +1,14 @@
-"""Closed-form kinematics (rigfem.dynamics.kinematics) against finite differences of its own
+"""Closed-form kinematics (rigfem.linkage.kinematics) against finite differences of its own
 positions, against the general planar solver on every MECHANISMS.md linkage, and the
 MECHANISMS.md §6 instant against a hand-derived closed form."""
 
 import numpy as np
 import pytest
 
-from rigfem.dynamics import (
+from rigfem.dynamics import solve
+from rigfem.errors import InputError
+from rigfem.linkage import (
+    build,
     crank_angles,
     fourbar_motion,
     fourbar_turn,
@@ -15,9 +18,7 @@ from rigfem.dynamics import (
     motion_from_history,
     slider_crank_motion,
     slider_crank_turn,
-    solve,
 )
-from rigfem.errors import InputError
 from rigfem.scene import load_scene
 
 DT = 1e-4   # s
@@ -66,11 +67,11 @@ def test_slider_crank_rates_are_derivatives_of_positions(alpha):
                                   "rig-fourbar-reference", "rig-slider-crank"])
 def test_closed_form_agrees_with_the_general_solver(name):
     s = load_scene(name)
-    h = solve(s.linkage, crank_angles(90), speed_hz=s.speed_hz, general=True)
+    h = solve(build(s), crank_angles(90), speed_hz=s.speed_hz, general=True)
     assert h.meta["solver"] == "general"
     gen = motion_from_history(h)
-    cf = linkage_motion(s.linkage, h.crank_deg, 2 * np.pi * s.speed_hz)
-    size = max(s.linkage.meta["lengths_mm"].values())
+    cf = linkage_motion(build(s), h.crank_deg, 2 * np.pi * s.speed_hz)
+    size = max(build(s).meta["lengths_mm"].values())
     for link, v in gen.links.items():
         if link == "slider":
             continue
@@ -93,7 +94,7 @@ def test_general_solver_point_velocities_are_derivatives_of_positions(name):
     w = 2 * np.pi * s.speed_hz
     deg = np.arange(0.0, 360.0, 15.0)
     h = np.degrees(w * DT)
-    ms = [linkage_motion(s.linkage, deg + k * h, w) for k in (-1, 0, 1)]
+    ms = [linkage_motion(build(s), deg + k * h, w) for k in (-1, 0, 1)]
     for pt, p in ms[1].points.items():
         P = [m.points[pt]["position_mm"] for m in ms]
         v = (P[2] - P[0]) / (2 * DT)
@@ -115,7 +116,7 @@ def test_mech6_instant_against_hand_closed_form():
     b2 = (-r * w**2 * np.sin(th) + l * b1**2 * np.sin(beta)) / (l * np.cos(beta))
     x1 = -r * w * np.sin(th) - l * b1 * np.sin(beta)
     x2 = -r * w**2 * np.cos(th) - l * (b2 * np.sin(beta) + b1**2 * np.cos(beta))
-    m = linkage_motion(s.linkage, [s.table["instant_deg"]], 2 * np.pi * s.speed_hz)
+    m = linkage_motion(build(s), [s.table["instant_deg"]], 2 * np.pi * s.speed_hz)
     rod = m.links["rod"]
     assert rod["omega_rad_s"][0] == pytest.approx(-b1, rel=1e-12)       # rod angle = -beta
     assert rod["alpha_rad_s2"][0] == pytest.approx(-b2, rel=1e-12)
@@ -173,10 +174,10 @@ def test_slider_crank_stroke_and_quick_return_with_offset():
 
 def test_linkage_turn_and_instant_from_scenes():
     s = load_scene("mech2-fourbar-coupler-point")
-    assert linkage_turn(s.linkage)["grashof"] == "crank-rocker"
-    m = linkage_motion(s.linkage, [0.0, 90.0], 2 * np.pi * s.speed_hz)
+    assert linkage_turn(build(s))["grashof"] == "crank-rocker"
+    m = linkage_motion(build(s), [0.0, 90.0], 2 * np.pi * s.speed_hz)
     assert "P" in m.points and np.all(np.isfinite(m.mechanical_advantage))
-    assert linkage_turn(load_scene("mech3-inverted-slider-crank").linkage) is None
+    assert linkage_turn(build(load_scene("mech3-inverted-slider-crank"))) is None
 
 
 def test_bad_input_is_one_line_error():

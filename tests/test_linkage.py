@@ -4,16 +4,8 @@ body, agreement with the 2013 equations where their quirks vanish, branch contin
 import numpy as np
 import pytest
 
-from rigfem.dynamics import (
-    ClosureError,
-    crank_angles,
-    four_bar,
-    fourbar_kinematics,
-    original_reactions,
-    simulate,
-    solve,
-    transmission_angle,
-)
+from rigfem.dynamics import fourbar_kinematics, loaded_linkage, original_reactions, simulate, solve
+from rigfem.linkage import ClosureError, crank_angles, four_bar, transmission_angle
 from rigfem.rig import RigMasses
 
 REF = (540.0, 840.0, 780.0, 1020.0)
@@ -145,7 +137,7 @@ def test_cannot_close_names_crank_range():
 def _balance(h, lk):
     """Max force (N) and moment (N·m) imbalance over all bodies, recomputed from the history:
     joint forces at joint points, prismatic constraint moments, driver, loads, gravity."""
-    from rigfem.dynamics import CrankDriver
+    from rigfem.linkage import CrankDriver
 
     g = np.asarray(lk.gravity_mm_s2) / 1000
     worst_f = worst_m = 0.0
@@ -185,7 +177,7 @@ def _balance(h, lk):
 
 def _driven_slider_crank():
     """Slider-crank driven at the slider, s = 400 + 80 sin(theta) mm: the crank rocks."""
-    from rigfem.dynamics import SliderDriver
+    from rigfem.linkage import SliderDriver
 
     lk = slider_crank(150, 350, masses="rig")
     lk.driver = SliderDriver("slide", 400.0, 80.0)
@@ -196,7 +188,7 @@ def _driven_slider_crank():
     return lk
 
 
-from rigfem.dynamics import inverted_slider_crank, quick_return, slider_crank
+from rigfem.linkage import inverted_slider_crank, quick_return, slider_crank
 from rigfem.scene import load_scene
 
 
@@ -205,7 +197,7 @@ from rigfem.scene import load_scene
     lambda: slider_crank(300, 900, 60),
     lambda: inverted_slider_crank(500, 200, 200),
     lambda: quick_return(150, 350, 800),
-    lambda: load_scene("mech5-compressor").linkage,
+    lambda: loaded_linkage(load_scene("mech5-compressor")),
     _driven_slider_crank,
 ], ids=["fourbar-gravity", "slider-crank", "inverted", "quick-return", "compressor", "driven-slider"])
 @pytest.mark.parametrize("general", [False, True], ids=["default", "general-solver"])
@@ -310,7 +302,7 @@ def test_toggle_between_samples_is_still_flagged(model):
 
 def test_joint_direction_convention():
     """Naming the ground as body_b flips the reported force (force BY body_a ON body_b)."""
-    from rigfem.dynamics import Revolute
+    from rigfem.linkage import Revolute
 
     lk = four_bar(*REF)
     h = solve(lk, crank_angles(24))

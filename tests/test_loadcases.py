@@ -68,7 +68,8 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
     Independent truth: Newton–Euler of the rail alone, a uniform bar over the meshed rail
     (0..L, pivot joint at ``layout.pivot_x``) with the catalogue's linear mass.
     """
-    from rigfem.dynamics import four_bar, simulate
+    from rigfem.dynamics import simulate
+    from rigfem.linkage import four_bar
     from rigfem.loads import bar_body, cycle_rail
     from rigfem.rig import RIG_MASSES
 
@@ -102,7 +103,8 @@ def test_cycle_rail_loads_balance_the_rigid_body_dynamics(speed_hz):
 def test_dynamics_rail_matches_the_meshed_rail():
     """The dynamics' rail (mass, reach behind the pivot) is the meshed rail: catalogue kg/m
     equals the part file's, and ``rail_behind_mm`` equals the mesh layout's pivot position."""
-    from rigfem.dynamics import four_bar, simulate
+    from rigfem.dynamics import simulate
+    from rigfem.linkage import four_bar
     from rigfem.rig import RIG_MASSES, load_part, rail_layout
     from rigfem.settings import PLATE, RAIL
 

@@ -4,12 +4,8 @@ kinematics (and, for #5, a hand-solved Newton–Euler force analysis)."""
 import numpy as np
 import pytest
 
-from rigfem.dynamics import (
-    coupler_point_path,
-    fourbar_kinematics,
-    simulate,
-    transmission_angle,
-)
+from rigfem.dynamics import fourbar_kinematics, loaded_linkage, simulate
+from rigfem.linkage import build, coupler_point_path, transmission_angle
 from rigfem.scene import builtin_scenes, load_scene
 
 N = 120
@@ -17,7 +13,7 @@ N = 120
 
 def _run(name, samples=N):
     s = load_scene(name)
-    h = simulate(s.linkage, samples=samples, speed_hz=s.speed_hz)
+    h = simulate(loaded_linkage(s), samples=samples, speed_hz=s.speed_hz)
     return s, h
 
 
@@ -43,7 +39,7 @@ def test_all_seven_scenes_ship_with_the_package():
 @pytest.mark.parametrize("name", ["mech1-slider-crank", "mech5-compressor"])
 def test_slider_crank_kinematics(name):
     s, h = _run(name)
-    L = s.linkage.meta["lengths_mm"]
+    L = build(s).meta["lengths_mm"]
     w = 2 * np.pi * s.speed_hz
     cf = _slider_crank_closed_form(L["b2"], L["b3"], np.radians(h.crank_deg), w)
     sl, rod = h.bodies["slider"], h.bodies["rod"]
@@ -60,7 +56,7 @@ def test_mech6_slider_crank_at_one_instant():
     a = -8.4007 in/s^2 (x measured from the crank pivot towards the slider)."""
     s = load_scene("mech6-slider-crank-instant")
     assert s.speed_hz == pytest.approx(-3.12 / (2 * np.pi))
-    h = simulate(s.linkage, samples=360, speed_hz=s.speed_hz)
+    h = simulate(loaded_linkage(s), samples=360, speed_hz=s.speed_hz)
     i = int(np.flatnonzero(np.isclose(h.crank_deg, s.table["instant_deg"]))[0])
     rod, sl = h.bodies["rod"], h.bodies["slider"]
     # slider velocity is not stored in the history: from the rod motion, v_B = v_A + w x r_AB
@@ -77,7 +73,7 @@ def test_mech6_slider_crank_at_one_instant():
 
 def test_mech2_fourbar_with_coupler_point():
     s, h = _run("mech2-fourbar-coupler-point")
-    L = s.linkage.meta["lengths_mm"]
+    L = build(s).meta["lengths_mm"]
     w = 2 * np.pi * s.speed_hz
     assert w == pytest.approx(20 * 2 * np.pi / 60)
     k = fourbar_kinematics(L["b2"], L["b3"], L["b4"], L["d"], np.radians(h.crank_deg), w, 1)
@@ -95,7 +91,7 @@ def test_mech2_fourbar_with_coupler_point():
 def test_mech3_inverted_slider_crank():
     """Link 4: (A - O4)·u = arm with u the arm direction: phi4 = beta - acos(arm / f)."""
     s, h = _run("mech3-inverted-slider-crank")
-    L = s.linkage.meta["lengths_mm"]
+    L = build(s).meta["lengths_mm"]
     d, r, e = L["d"], L["b2"], L["arm"]
     w = 2 * np.pi * s.speed_hz
 
@@ -123,7 +119,7 @@ def test_mech3_inverted_slider_crank():
 def test_mech4_quick_return_ram():
     """Ram x = h Ax / (Ay + p) on the line h above O4 (similar triangles through the slot)."""
     s, h = _run("mech4-quick-return", 180)
-    L = s.linkage.meta["lengths_mm"]
+    L = build(s).meta["lengths_mm"]
     r, p, hh = L["b2"], L["pivot_below"], L["ram_height"]
     w = 2 * np.pi * s.speed_hz
     th = np.radians(h.crank_deg)
@@ -180,7 +176,7 @@ def test_mech5_compressor_reactions_and_torque():
 
 def test_mech7_elliptical_trainer_transmission_and_advantage():
     s, h = _run("mech7-elliptical-trainer", 360)
-    L = s.linkage.meta["lengths_mm"]
+    L = build(s).meta["lengths_mm"]
     b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]
     mu_min = np.degrees(np.arccos((b3**2 + b4**2 - (d - b2) ** 2) / (2 * b3 * b4)))
     mu_max = np.degrees(np.arccos((b3**2 + b4**2 - (d + b2) ** 2) / (2 * b3 * b4)))
@@ -197,4 +193,4 @@ def test_every_shipped_scene_solves_without_toggle(name):
     s, h = _run(name, 72)
     assert h.meta["singular"] is None and "warnings" not in h.meta
     assert all(np.isfinite(j.force_N).all() for j in h.joints.values())
-    assert s.linkage.meta["type"] in ("four-bar", "slider-crank", "inverted-slider-crank", "quick-return")
+    assert build(s).meta["type"] in ("four-bar", "slider-crank", "inverted-slider-crank", "quick-return")

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from rigfem.dynamics import four_bar, peaks, simulate, singular_ranges
+from rigfem.dynamics import peaks, simulate
+from rigfem.linkage import four_bar, singular_ranges
 from rigfem.errors import InputError
 from rigfem.io import read_csv, write_csv
 

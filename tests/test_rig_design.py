@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from rigfem.cli import main
-from rigfem.dynamics import four_bar, solve
-from rigfem.dynamics.synthesis import check_three_position, synthesize_function, three_position
+from rigfem.dynamics import solve
+from rigfem.linkage import four_bar
+from rigfem.linkage.mechanisms import build
+from rigfem.linkage.synthesis import check_three_position, synthesize_function, three_position
 from rigfem.scene import load_scene
 from rigfem.studies import SweepParams, build_bases, evaluate
 from rigfem.studies.rig_design import _function_error, rig_fourbars, snap_function, snap_motion, stress_verdicts
@@ -109,7 +111,7 @@ def test_cli_writes_a_checkable_scene_and_refuses_bad_options(tmp_path, capsys):
     assert main([*args, "--rig", "--no-stress", "--top", "2", "--scene-out", str(scene)]) == 0
     out = capsys.readouterr().out
     assert "nearest buildable rig configurations" in out and out.count("mountable (whole 60 mm") == 2
-    lk = load_scene(scene).linkage
+    lk = build(load_scene(scene))
     first = out.split("\n1. ")[1].split(" mm,")[0]
     assert first == "b2 {b2:g}, b3 {b3:g}, b4 {b4:g}, d {d:g}".format(**lk.meta["lengths_mm"])
     for bad, msg in (([*args, "--rig", "--top", "0"], "--top"), ([*args, "--top", "3"], "--top needs --rig"),

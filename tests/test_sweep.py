@@ -9,7 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rigfem.dynamics import four_bar, peaks, simulate
+from rigfem.dynamics import peaks, simulate
+from rigfem.linkage import four_bar
 from rigfem.errors import InputError
 from rigfem.fe import solve_cases
 from rigfem.loads import part_cases
@@ -23,7 +24,7 @@ from rigfem.studies import (
     run_sweep,
     superposed_peaks,
 )
-from rigfem.studies.sweep import _case_key
+from rigfem.studies.sweep_bases import case_key
 
 #: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
 CHECK = (("order", 1), ("size_mm", 14.0), ("local_size_mm", 7.0), ("bearing_directions", 4),
@@ -93,9 +94,9 @@ def test_superposition_equals_full_solve(params, bases, cfg):
     ref = part_cases(h, pk, s)
     # same mesh as the sweep: refine every hole the basis refines
     refine = {k[:2]: c.refine for k, c in ((k, _spec_case(params, k)) for k in bases)}
-    cases = [(m, dataclasses.replace(c, refine=refine[_case_key(c)[:2]])) for m, c in ref]
+    cases = [(m, dataclasses.replace(c, refine=refine[case_key(c)[:2]])) for m, c in ref]
     for (mode, case), res in zip(cases, solve_cases(cases, s)):
-        b = bases[_case_key(case)]
+        b = bases[case_key(case)]
         peak, deg = case_peak(b, case)
         tol = 1e-5 if mode == "cycle" else 1e-3
         assert peak == pytest.approx(float(res.vm_rows.max()), rel=tol), (case.name, mode)
@@ -123,7 +124,7 @@ def test_bounded_peak_is_exact_for_any_coefficients(bases):
 
 
 def _spec_case(params, key):
-    from rigfem.studies.sweep import _basis_specs
+    from rigfem.studies.sweep_bases import _basis_specs
 
     specs = _basis_specs(params, params.settings())
     refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rigfem.cli import main
-from rigfem.dynamics import chebyshev_points, fourbar_motion, parse_function, synthesize_function
+from rigfem.linkage import chebyshev_points, fourbar_motion, parse_function, synthesize_function
 from rigfem.errors import InputError
 
 WORKED = dict(expr="x*log(x)", x0=1.0, x1=3.0, in_start=20.0, in_range=90.0, out_start=80.0, out_range=90.0, d=2.0)
@@ -100,7 +100,7 @@ def _kinematics_points(r, branch):
 
 
 def test_three_position_analytic_and_optimised():
-    from rigfem.dynamics import check_three_position, optimise_three_position, three_position
+    from rigfem.linkage import check_three_position, optimise_three_position, three_position
 
     r = optimise_three_position(TRAINER, maxiter=40)
     chk = check_three_position(r)

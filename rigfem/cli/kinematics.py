@@ -19,9 +19,9 @@ import numpy as np
 
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.cli.outputs import new_output
-from rigfem.dynamics.kinematics import Motion, linkage_motion, linkage_turn
-from rigfem.dynamics.mechanisms import crank_angles, four_bar, slider_crank
 from rigfem.errors import InputError, check_range
+from rigfem.linkage.kinematics import Motion, linkage_motion, linkage_turn
+from rigfem.linkage.mechanisms import build, crank_angles, four_bar, slider_crank
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
@@ -70,7 +70,7 @@ def _build(args):
         from rigfem.scene import load_scene
 
         sc = load_scene(args.scene)
-        lk, name = sc.linkage, sc.name
+        lk, name = build(sc), sc.name
         omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
     else:
         raise InputError("give a scene (rigfem check --list shows the built-in ones), --four-bar B2 B3 B4 D "

@@ -11,10 +11,12 @@ import json
 import math
 
 from rigfem.cli.linkage_args import add_linkage_arguments
+from rigfem.dynamics.cycle import MODELS, simulate
+from rigfem.dynamics.forces import loaded_linkage
 from rigfem.dynamics.history import summary
-from rigfem.dynamics.mechanisms import MODELS, four_bar, simulate, slider_crank
 from rigfem.errors import InputError, check_range
 from rigfem.io.reactions_csv import write_csv
+from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.report.pictures import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
@@ -53,7 +55,7 @@ def _build(args) -> tuple[object, float, str]:
         from rigfem.scene import load_scene
 
         sc = load_scene(args.scene)
-        lk, speed = sc.linkage, speed if speed is not None else sc.speed_hz
+        lk, speed = loaded_linkage(sc), speed if speed is not None else sc.speed_hz
     else:
         lk = four_bar(*REFERENCE)
     return lk, (1.0 if speed is None else speed)

@@ -11,7 +11,7 @@ HELP = "sweep every mountable four-bar or slider-crank configuration of the rig 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from rigfem.dynamics.mechanisms import MODELS
+    from rigfem.settings import MODELS
     from rigfem.settings import FIDELITY
 
     kind = p.add_mutually_exclusive_group()
@@ -34,7 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rigfem.errors import InputError
-    from rigfem.studies.sweep import SweepParams, run_sweep
+    from rigfem.studies.sweep import run_sweep
+    from rigfem.studies.sweep_configs import SweepParams
     from rigfem.studies.sweep_report import write_report
 
     if args.scheduler is not None and not args.scheduler.startswith("tcp://"):

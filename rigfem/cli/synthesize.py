@@ -104,7 +104,7 @@ def _point(text: str) -> tuple[float, float]:
 
 
 def _motion(args) -> int:
-    from rigfem.dynamics.synthesis import (
+    from rigfem.linkage.synthesis import (
         check_three_position,
         optimise_three_position,
         three_position,
@@ -154,7 +154,7 @@ def run(args) -> int:
     if getattr(args, "task", None) != "function":
         raise InputError("give a task: rigfem synthesize function EXPR --x X0 X1 --input START RANGE "
                          "--output START RANGE --ground D, or rigfem synthesize motion --points X,Y X,Y X,Y")
-    from rigfem.dynamics.synthesis import synthesize_function
+    from rigfem.linkage.synthesis import synthesize_function
 
     png = new_output("--plot", args.plot, ".png")
     rig = _rig_options(args, motion=False)

@@ -1,9 +1,9 @@
 """Closed-form rigid-body dynamics of the rig's four-bar and slider-crank.
 
-The general solver (``rigfem.dynamics.solver``) closes the loop by continuation and Newton
+The general solver (``rigfem.linkage.general``) closes the loop by continuation and Newton
 and inverts a 9×9 constraint Jacobian per crank angle; for the two linkages the rig is
 built as, positions, rates and accelerations have closed forms
-(``rigfem.dynamics.kinematics``) and the joint reactions follow from two moment balances
+(``rigfem.linkage.loops``) and the joint reactions follow from two moment balances
 per angle (a 2×2 system solved by Cramer's rule), all vectorised over crank angles:
 
 * four-bar: rocker about O4 and coupler about A give the force at B; force balances then
@@ -20,9 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigfem.dynamics.forces import applied, inertia_load
 from rigfem.dynamics.history import JointHistory, ReactionHistory
-from rigfem.dynamics.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
-from rigfem.dynamics.linkage import GROUND, CrankDriver, Linkage, Prismatic, Revolute, cross, perp, rotate
+from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
+from rigfem.linkage.model import GROUND, CrankDriver, Linkage, Prismatic, Revolute, cross, perp, rotate
 
 __all__ = ["closed_form"]
 
@@ -107,12 +108,12 @@ def _history(lk: Linkage, kind: str, deg: np.ndarray, speed_hz: float) -> Reacti
     D, M = {}, {}                       # per body: applied + d'Alembert force, its moment about the origin
     for b in lk.bodies:
         phi, w, al, _, _, acc = mo[b.name]
-        D[b.name], M[b.name] = b.inertia_load(phi, w, al, acc, g)
+        D[b.name], M[b.name] = inertia_load(b, phi, w, al, acc, g)
     if lk.loads:  # the loads see the general solver's coordinates (x, y, phi per body, SI)
         q = np.concatenate([np.column_stack([mo[b.name][3], mo[b.name][0]]) for b in lk.bodies], 1)
         qd = np.concatenate([np.column_stack([mo[b.name][4], mo[b.name][1]]) for b in lk.bodies], 1)
         for ld in lk.loads:
-            f, m = ld.applied(theta, mo[ld.body][3], mo[ld.body][0], q, qd)
+            f, m = applied(ld, theta, mo[ld.body][3], mo[ld.body][0], q, qd)
             D[ld.body] = D[ld.body] + f
             M[ld.body] = M[ld.body] + m
     A = mo["coupler" if kind == "four-bar" else "rod"][3]

@@ -2,7 +2,7 @@
 
 Units at this interface: crank angle in degrees, forces in N, torque in N·m, positions
 in mm, accelerations in mm/s², inertia in kg·mm².  A history comes from the linkage
-solver (``rigfem.dynamics.mechanisms.simulate``) or from an external CSV (``read_csv``).
+solver (``rigfem.dynamics.cycle.simulate``) or from an external CSV (``read_csv``).
 
 ``peaks`` refines around each sampled maximum (on the solver itself, or on a periodic
 cubic spline for an imported CSV) so the peak does not depend on sampling.
@@ -20,6 +20,9 @@ from typing import Callable
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from rigfem.linkage.general import is_full_turn
+from rigfem.linkage.loops import singular_ranges
+from rigfem.linkage.model import BodyHistory
 from rigfem.rig.rules import rules_for
 
 
@@ -35,27 +38,6 @@ class JointHistory:
     #: prismatic joints only: constraint moment on body_b about its sliding point (N·m)
     moment_Nm: np.ndarray | None = None
     kind: str = "revolute"
-
-
-@dataclass
-class BodyHistory:
-    """Motion and mass data of one moving body (frame origin at its first joint, a bar's x
-    axis towards its second joint).  ``mass_kg``/``com_local_mm``/``inertia_com_kg_mm2`` are the
-    body's own (e.g. the guide rail); ``point_masses`` the particles it carries."""
-
-    name: str
-    angle_rad: np.ndarray
-    omega_rad_s: np.ndarray
-    alpha_rad_s2: np.ndarray
-    origin_mm: np.ndarray
-    origin_acc_mm_s2: np.ndarray
-    mass_kg: float
-    com_local_mm: np.ndarray
-    inertia_com_kg_mm2: float
-    point_masses: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
-    joint_local_mm: dict[str, np.ndarray] = field(default_factory=dict)
-    #: velocity of the frame origin (mm/s); None where the source does not give it
-    origin_vel_mm_s: np.ndarray | None = None
 
 
 @dataclass
@@ -77,16 +59,6 @@ class ReactionHistory:
 TIE_RTOL = 1e-9
 
 
-def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list[float]] | None:
-    """Contiguous crank-angle ranges [start, end] (deg) where ``mask`` is True; None if none."""
-    if mask is None or not np.any(mask):
-        return None
-    idx = np.flatnonzero(mask)
-    breaks = np.flatnonzero(np.diff(idx) != 1)
-    starts, ends = np.r_[idx[0], idx[breaks + 1]], np.r_[idx[breaks], idx[-1]]
-    return [[float(crank_deg[a]), float(crank_deg[b])] for a, b in zip(starts, ends)]
-
-
 def merge_ranges(*lists: list[list[float]] | None) -> list[list[float]] | None:
     """Union of crank-angle range lists (deg), overlapping ranges merged; None if empty."""
     rs = sorted([list(r) for lst in lists if lst for r in lst])
@@ -97,15 +69,6 @@ def merge_ranges(*lists: list[list[float]] | None) -> list[list[float]] | None:
         else:
             out.append([a, b])
     return out or None
-
-
-def is_full_turn(deg: np.ndarray) -> bool:
-    """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
-    if deg.size < 4:
-        return False
-    step = np.diff(deg)
-    return bool(np.allclose(step, step[0], rtol=1e-6, atol=1e-9)
-                and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)
 
 
 def _zoom_max(ev: Callable[[np.ndarray], "ReactionHistory"], names: list[str], lo: np.ndarray,

@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.loops import fourbar_angles, transmission_angle_deg
+from rigfem.linkage.loops import fourbar_angles, transmission_angle_deg
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
 
 
 def fourbar_kinematics(b2: float, b3: float, b4: float, d: float, theta2: np.ndarray, omega2: float,
                        branch: int = 1) -> dict[str, np.ndarray]:
     """Closed-form four-bar positions, velocities, accelerations (SI), O2 at 0, O4 at (d, 0),
-    in the 2013 program's layout (the closed form itself: ``rigfem.dynamics.kinematics``).
+    in the 2013 program's layout (the closed form itself: ``rigfem.linkage.kinematics``).
 
     ``branch`` = +1 is the open circuit (coupler turned counter-clockwise from A->O4),
     -1 the crossed one.  Angles in rad; raises ValueError where the loop cannot close.

@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
-from rigfem.dynamics.kinematics import Motion
+from rigfem.linkage.kinematics import Motion
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 matplotlib.use("Agg")

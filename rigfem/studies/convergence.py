@@ -410,15 +410,15 @@ def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict 
     """Check settings and {part: cases_for} of a scene, ``cases_for(n_dir)`` giving the part's
     [(mode, PartCase)] with ``n_dir`` bearing directions (the dynamics run once)."""
     from rigfem.check import load_check_scene
+    from rigfem.dynamics.cycle import simulate
     from rigfem.dynamics.history import peaks
-    from rigfem.dynamics.mechanisms import simulate
     from rigfem.loads.cases import part_cases
 
     o = dict(overrides or {})
     if parts:
         o["parts"] = list(parts)
     cs = load_check_scene(scene, o)
-    h = simulate(cs.scene.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
+    h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     if h.meta.get("singular"):
         raise InputError(f"{scene}: the linkage passes a toggle (singular) position; no part loads")
     pk = peaks(h)

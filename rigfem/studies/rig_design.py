@@ -1,6 +1,6 @@
 """From a synthesised four-bar to the nearest buildable rig configurations, each checked.
 
-A synthesised linkage (``rigfem.dynamics.synthesis``) has any lengths; the rig builds only
+A synthesised linkage (``rigfem.linkage.synthesis``) has any lengths; the rig builds only
 lengths on the 60 mm hole grid that obey every rig rule (RIG.md §2).  This module ranks the
 rig's four-bars by how well they do the wanted job and attaches each one's rule table and
 stress verdict (the sweep's superposed unit solutions, ``rigfem.studies.sweep.evaluate``):
@@ -25,12 +25,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.kinematics import fourbar_motion
-from rigfem.dynamics.loops import BRANCHES, fourbar_angles
-from rigfem.dynamics.synthesis import crank_in_order, parse_function
 from rigfem.errors import ComputeError, InputError
+from rigfem.linkage.kinematics import fourbar_motion
+from rigfem.linkage.loops import BRANCHES, fourbar_angles
+from rigfem.linkage.synthesis import crank_in_order, parse_function
 from rigfem.rig.rules import HOLE_PITCH_MM, fourbar_rules
-from rigfem.studies.sweep import SweepParams, build_bases, enumerate_configs, evaluate
+from rigfem.studies.sweep import evaluate
+from rigfem.studies.sweep_bases import build_bases
+from rigfem.studies.sweep_configs import SweepParams, enumerate_configs
 
 __all__ = ["rig_fourbars", "snap_function", "snap_motion", "rule_table", "stress_verdicts"]
 
@@ -68,7 +70,7 @@ def _function_error(L: np.ndarray, sgn: int, start_deg: np.ndarray, rel_in: np.n
 
 def snap_function(r: dict, top: int = 5, p: SweepParams | None = None) -> list[dict]:
     """The ``top`` rig four-bars that generate ``r``'s function best (``r`` from
-    :func:`rigfem.dynamics.synthesis.synthesize_function`), each with its branch, the crank and
+    :func:`rigfem.linkage.synthesis.synthesize_function`), each with its branch, the crank and
     rocker angles at X0 (where the input and output scales start), its structural error
     (largest |generated − ideal| in y and in % of the output range) and its rule table.
 
@@ -164,7 +166,7 @@ def _off_rail(cp: tuple[float, float], p: SweepParams | None) -> float:
 
 def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParams | None = None) -> list[dict]:
     """The ``top`` rig four-bars nearest the three-position design ``r`` (from
-    :func:`rigfem.dynamics.synthesis.three_position` and ``check_three_position``), ranked by
+    :func:`rigfem.linkage.synthesis.three_position` and ``check_three_position``), ranked by
     motion error; ``scale`` = rig mm per unit of the positions (None: every scale that fits)."""
     P = np.asarray(r["points"], float)
     span = float(np.max(np.linalg.norm(P[:, None] - P[None], axis=2)))

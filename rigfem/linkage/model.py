@@ -1,22 +1,9 @@
-"""General planar rigid-body linkage solver: bodies, revolute and prismatic joints, one driver.
+"""A planar one-degree-of-freedom linkage as data: bodies, revolute and prismatic joints, one
+driver, and the motion record of a body over a crank turn.
 
-Coordinates: per moving body the global position of its frame origin and the angle
-of its x axis, q = (x, y, phi) (SI inside: m, rad).  The ground is fixed at the
-origin with zero angle and has no coordinates.  With one driver constraint the
-constraint Jacobian Phi_q is square:
-
-* positions: Newton on Phi(q, theta) = 0.  A sequential continuation in crank angle
-  theta (third-order predictor, step halving, sign of det(Phi_q) kept) follows one
-  assembly branch through the turn; all samples are then solved at once by Newton
-  from a quintic Hermite predictor through the continuation points, and checked to be
-  on the same branch;
-* velocities: Phi_q qdot = -Phi_t;  accelerations: Phi_q qddot = gamma;
-* inverse dynamics: Phi_q^T lambda = Q_ext - Q_inertia (Newton–Euler about the centre
-  of mass of every body, point masses as particles), giving every joint reaction and
-  the driver torque (or force).
-
-Every stage after the continuation pass is vectorised over crank angles.
-The public interface is in mm, N, N·m, degrees (see ``rigfem.dynamics.history``).
+Lengths in mm, angles in rad, masses in kg (a body's mass data is plain data here; the
+forces it causes are :mod:`rigfem.dynamics`' business).  The general planar solver that
+moves such a linkage is :mod:`rigfem.linkage.general`.
 """
 
 from __future__ import annotations
@@ -26,7 +13,6 @@ from typing import Callable
 
 import numpy as np
 
-from rigfem.dynamics.history import BodyHistory
 from rigfem.errors import ComputeError, InputError
 
 GROUND = "ground"
@@ -63,6 +49,27 @@ class AssemblyError(ComputeError):
 
 
 @dataclass
+class BodyHistory:
+    """Motion and mass data of one moving body (frame origin at its first joint, a bar's x
+    axis towards its second joint).  ``mass_kg``/``com_local_mm``/``inertia_com_kg_mm2`` are the
+    body's own (e.g. the guide rail); ``point_masses`` the particles it carries."""
+
+    name: str
+    angle_rad: np.ndarray
+    omega_rad_s: np.ndarray
+    alpha_rad_s2: np.ndarray
+    origin_mm: np.ndarray
+    origin_acc_mm_s2: np.ndarray
+    mass_kg: float
+    com_local_mm: np.ndarray
+    inertia_com_kg_mm2: float
+    point_masses: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
+    joint_local_mm: dict[str, np.ndarray] = field(default_factory=dict)
+    #: velocity of the frame origin (mm/s); None where the source does not give it
+    origin_vel_mm_s: np.ndarray | None = None
+
+
+@dataclass
 class Body:
     """A rigid body: own mass (kg), centre of mass and inertia about it (local frame, mm, kg·mm²).
 
@@ -87,19 +94,6 @@ class Body:
         inertia = self.inertia_com_kg_mm2 * 1e-6 + self.mass_kg * np.sum((c0 - c) ** 2)
         inertia += sum(pm * np.sum((pos - c) ** 2) for pm, pos in pts)
         return m, c, float(inertia)
-
-    def inertia_load(self, phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, acc_origin: np.ndarray,
-                     gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Gravity plus d'Alembert force at the centre of mass (N, (n, 2)) and its moment about
-        the body's frame origin (N·m, (n,)), from the body's motion (SI: rad, rad/s, rad/s², m/s²).
-
-        The one home of the Newton–Euler body terms: the general solver and the closed forms
-        (``rigfem.dynamics.closed``) both balance the joint forces against these.
-        """
-        m, c, inertia = self.totals()
-        rc = rotate(phi, c)
-        f = m * (gravity - (acc_origin + perp(rc) * alpha[:, None] - rc * (omega**2)[:, None]))
-        return f, cross(rc, f) - inertia * alpha
 
     def history(self, phi, omega, alpha, origin_m, vel_m, acc_m) -> BodyHistory:
         """The body's :class:`BodyHistory` from its motion (SI in, mm out); joint points empty."""
@@ -158,16 +152,6 @@ class Load:
     body: str
     local_mm: tuple[float, float]
     force: Callable[[dict], np.ndarray]
-
-    def applied(self, theta_rad: np.ndarray, origin_m: np.ndarray, phi: np.ndarray, q: np.ndarray,
-                qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The force (N, (n, 2)) and its moment about the body's origin (N·m) at driver phases
-        ``theta_rad``, the body at ``origin_m``/``phi``; ``q``, ``qd`` the solver's coordinates."""
-        s = rotate(phi, np.asarray(self.local_mm, float) / 1000)
-        f = np.asarray(self.force({"theta_rad": theta_rad, "point_mm": (origin_m + s) * 1000, "q": q, "qd": qd}),
-                       float).reshape(len(theta_rad), 2)
-        return f, cross(s, f)
-
 
 @dataclass
 class Linkage:

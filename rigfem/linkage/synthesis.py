@@ -6,7 +6,7 @@ from the ground line O2→O4, O4 at (d, 0)).  The loop a e2 + b e3 = d + c e4 sq
 Freudenstein's equation  K1 cos θ4 − K2 cos θ2 + K3 = cos(θ2 − θ4),
 K1 = d/a, K2 = d/c, K3 = (a² − b² + c² + d²)/(2ac), linear in K at each precision point.
 The generated function is then computed by the closed-form kinematics
-(:mod:`rigfem.dynamics.kinematics`), independently of these equations.
+(:mod:`rigfem.linkage.kinematics`), independently of these equations.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import operator
 
 import numpy as np
 
-from rigfem.dynamics.kinematics import fourbar_motion, fourbar_turn
+from rigfem.linkage.kinematics import fourbar_motion, fourbar_turn
 from rigfem.errors import ComputeError, InputError
 
 _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
@@ -243,7 +243,7 @@ def check_three_position(r: dict) -> dict:
     closed-form kinematics at the three crank angles (global frame), their largest distance
     from the wanted points, defects (branch, order, crank cannot turn), and the transmission
     angle range over a turn."""
-    from rigfem.dynamics.kinematics import fourbar_turn, grashof_class
+    from rigfem.linkage.kinematics import fourbar_turn, grashof_class
 
     L = r["lengths"]
     b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]

@@ -1,8 +1,8 @@
 """Loop-closure closed forms of the four-bar and the slider-crank: angles, rates and
 accelerations of the links from the crank's, vectorised (and broadcast over lengths).
 
-The lowest layer of the linkage code: the kinematics (``rigfem.dynamics.kinematics``), the
-closed-form dynamics (``rigfem.dynamics.closed``), the 2013 program and the builders all
+The lowest layer of the linkage code: the kinematics (``rigfem.linkage.kinematics``), the
+closed-form dynamics (``rigfem.linkage.closed``), the 2013 program and the builders all
 take their closure formulas from here.
 
 Derivation (four-bar): the loop b2 e2 + b3 e3 = d ex + b4 e4 (e_i = (cos th_i, sin th_i))
@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles",
-           "slider_crank_angles"]
+           "slider_crank_angles", "singular_ranges"]
 
-#: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.dynamics.original)
+#: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.linkage.original)
 BRANCHES = {"open": 1, "crossed": -1}
 
 #: a four-bar is at a toggle when its transmission angle mu is within this angle of 0 or
@@ -78,3 +78,13 @@ def slider_crank_angles(b2: float, b3: float, offset: float, th2: np.ndarray, w2
         a3 = (b2 * w2**2 * sn2 - b2 * a2 * c2 + b3 * w3**2 * s3) / (b3 * c3)
     return dict(theta3=th3, omega3=w3, alpha3=a3, x=b2 * c2 + b3 * c3, v=-b2 * w2 * sn2 - b3 * w3 * s3,
                 acc=-b2 * (a2 * sn2 + w2**2 * c2) - b3 * (a3 * s3 + w3**2 * c3))
+
+
+def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list[float]] | None:
+    """Contiguous crank-angle ranges [start, end] (deg) where ``mask`` is True; None if none."""
+    if mask is None or not np.any(mask):
+        return None
+    idx = np.flatnonzero(mask)
+    breaks = np.flatnonzero(np.diff(idx) != 1)
+    starts, ends = np.r_[idx[0], idx[breaks + 1]], np.r_[idx[breaks], idx[-1]]
+    return [[float(crank_deg[a]), float(crank_deg[b])] for a, b in zip(starts, ends)]

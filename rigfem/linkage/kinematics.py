@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigfem.dynamics.loops import (
+from rigfem.linkage.loops import (
     BRANCHES,
     fourbar_angles,
     fourbar_closes,
@@ -28,6 +28,8 @@ from rigfem.dynamics.loops import (
     transmission_angle_deg,
 )
 from rigfem.errors import InputError, check_range
+from rigfem.linkage.general import move
+from rigfem.linkage.model import GROUND, Prismatic
 
 
 @dataclass
@@ -297,43 +299,75 @@ def slider_crank_turn(b2: float, b3: float, offset: float = 0.0) -> dict:
 
 
 # ----------------------------------------------------------------------------- general solver
-def motion_from_history(h) -> Motion:
-    """:class:`Motion` from a :class:`rigfem.dynamics.history.ReactionHistory` of the general
-    solver: every body's angle and rates, every joint's point with velocity and acceleration
-    (from the pose of the joint's second body)."""
+def _body_point(b, loc) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity and acceleration (mm, mm/s, mm/s²) of the point ``loc`` (local mm) of
+    a body's motion record, with its arm from the origin (global mm)."""
+    c, s = np.cos(b.angle_rad), np.sin(b.angle_rad)
+    r = np.stack([c * loc[0] - s * loc[1], s * loc[0] + c * loc[1]], -1)
+    rp = np.stack([-r[:, 1], r[:, 0]], -1)
+    w, a = b.omega_rad_s[:, None], b.alpha_rad_s2[:, None]
+    return b.origin_mm + r, b.origin_vel_mm_s + w * rp, b.origin_acc_mm_s2 + a * rp - w**2 * r
+
+
+def _from_bodies(crank_deg, bodies: dict, joints, meta: dict, w2: float) -> Motion:
+    """:class:`Motion` from every body's motion record (``rigfem.linkage.model.BodyHistory``):
+    every body's angle and rates, every joint's point with velocity and acceleration (from the
+    pose of the joint's second body)."""
     links, points, bars = {}, {}, {}
-    for name, b in h.bodies.items():
+    for name, b in bodies.items():
         links[name] = _link(b.angle_rad, b.omega_rad_s, b.alpha_rad_s2)
-    for name, j in h.joints.items():
-        bn = j.body_b
-        b = h.bodies[bn]
-        loc = b.joint_local_mm[name]
-        c, s = np.cos(b.angle_rad), np.sin(b.angle_rad)
-        r = np.stack([c * loc[0] - s * loc[1], s * loc[0] + c * loc[1]], -1)
-        rp = np.stack([-r[:, 1], r[:, 0]], -1)
-        w, a = b.omega_rad_s[:, None], b.alpha_rad_s2[:, None]
-        points[name] = _point(b.origin_mm + r, b.origin_vel_mm_s + w * rp,
-                              b.origin_acc_mm_s2 + a * rp - w**2 * r)
+    for j in joints:
+        b = bodies[j.body_b]
+        points[j.name] = _point(*_body_point(b, b.joint_local_mm[j.name]))
         for body in (j.body_a, j.body_b):
-            if body != "ground":
+            if body != GROUND:
                 bars.setdefault(body, [])
-                if name not in bars[body]:
-                    bars[body].append(name)
-    meta = {k: v for k, v in h.meta.items() if k in ("type", "lengths_mm", "branch")}
-    w2 = 2 * np.pi * float(h.meta.get("speed_hz", 1.0))
+                if j.name not in bars[body]:
+                    bars[body].append(j.name)
     slider = None
     for body in ("ram", "slider"):      # a body sliding along the ground's x axis
-        if body in h.bodies and h.bodies[body].origin_vel_mm_s is not None:
-            b = h.bodies[body]
+        if body in bodies and bodies[body].origin_vel_mm_s is not None:
+            b = bodies[body]
             slider = {"position_mm": b.origin_mm[:, 0], "velocity_mm_s": b.origin_vel_mm_s[:, 0],
                       "acceleration_mm_s2": b.origin_acc_mm_s2[:, 0]}
             links.pop(body)
-    return Motion(np.asarray(h.crank_deg, float), w2, 0.0, links, points, bars, slider=slider, meta=meta)
+    return Motion(np.asarray(crank_deg, float), w2, 0.0, links, points, bars, slider=slider,
+                  meta={k: v for k, v in meta.items() if k in ("type", "lengths_mm", "branch")})
+
+
+def motion_from_history(h) -> Motion:
+    """:class:`Motion` from a :class:`rigfem.dynamics.history.ReactionHistory` of the general
+    solver (its bodies' motion records and its joints)."""
+    return _from_bodies(h.crank_deg, h.bodies, h.joints.values(), h.meta, 2 * np.pi * float(h.meta.get("speed_hz", 1.0)))
+
+
+def _along_link(lk, bodies: dict) -> dict[str, np.ndarray] | None:
+    """Position, velocity and acceleration (mm, mm/s, mm/s²) of the block along the moving link
+    it slides on: the first prismatic joint between two moving bodies, measured on the link's
+    slide line from the link's point of it (the inverted slider-crank: from the foot of the arm,
+    O4A when arm = 0).  None where every slide is on the ground."""
+    j = next((j for j in lk.joints if isinstance(j, Prismatic) and GROUND not in (j.body_a, j.body_b)), None)
+    if j is None:
+        return None
+    a, b = bodies[j.body_a], bodies[j.body_b]
+    pa, va, aa = _body_point(a, np.asarray(j.local_a_mm, float))
+    pb, vb, ab = _body_point(b, np.asarray(j.local_b_mm, float))
+    ax = np.asarray(j.axis_a, float) / np.hypot(*j.axis_a)
+    c, s = np.cos(a.angle_rad), np.sin(a.angle_rad)
+    u = np.stack([c * ax[0] - s * ax[1], s * ax[0] + c * ax[1]], -1)
+    n = np.stack([-u[:, 1], u[:, 0]], -1)
+    w, al = a.omega_rad_s[:, None], a.alpha_rad_s2[:, None]
+    d, vd, ad = pb - pa, vb - va, ab - aa
+    # s = d·u, u' = w n, n' = -w u
+    return {"position_mm": np.sum(d * u, 1), "velocity_mm_s": np.sum(vd * u + d * w * n, 1),
+            "acceleration_mm_s2": np.sum(ad * u + 2 * vd * w * n + d * (al * n - w**2 * u), 1)}
 
 
 def linkage_motion(lk, crank_deg, omega: float, alpha: float = 0.0) -> Motion:
     """Motion of a builder-made Linkage (``lk.meta`` gives type and lengths): the closed form
-    for a four-bar or slider-crank, otherwise the general solver (constant speed only)."""
+    for a four-bar or slider-crank, otherwise the general solver (constant speed only); a
+    block sliding on a moving link (inverted slider-crank) gets its position along the link
+    as ``slider``."""
     m, L = lk.meta, lk.meta.get("lengths_mm", {})
     if m.get("type") == "four-bar":
         cp = m.get("coupler_point")
@@ -344,12 +378,14 @@ def linkage_motion(lk, crank_deg, omega: float, alpha: float = 0.0) -> Motion:
     if alpha != 0.0:
         raise InputError(f"a driver acceleration (alpha = {alpha:g} rad/s²) is supported for the four-bar and "
                          f"slider-crank only, not {m.get('type')!r}")
-    from rigfem.dynamics.solver import solve
-
     deg = np.atleast_1d(np.asarray(crank_deg, float))
     order = np.argsort(deg)
-    h = solve(lk, deg[order], omega / (2 * np.pi))
-    mo = motion_from_history(h)
+    bodies = move(lk, deg[order], omega / (2 * np.pi))
+    mo = _from_bodies(deg[order], bodies, lk.joints, m, omega)
+    if mo.slider is None:
+        mo.slider = _along_link(lk, bodies)
+        if mo.slider is not None:
+            mo.meta["slider"] = "block along the link it slides on, from the link's slide point (mm)"
     inv = np.argsort(order)
     mo.crank_deg = deg
     for group in (*mo.links.values(), *mo.points.values(), mo.slider or {}):

@@ -1,19 +1,16 @@
-"""Rig linkages built on the general solver, with the rig's masses from one catalogue.
+"""The catalogue of mechanisms: the rig's linkages built as data, with the rig's masses from one
+catalogue.
 
-Builders (lengths in mm, angles in degrees) return a :class:`rigfem.dynamics.linkage.Linkage`:
-``four_bar``, ``slider_crank``, ``inverted_slider_crank``, ``quick_return``.  Their
-``start_deg`` is the crank angle at which the initial assembly (hence the branch) is
-computed; lengths below 10 mm are rejected as probable metres.
-``simulate`` turns a linkage (or a config dict / builder arguments) into a
-:class:`rigfem.dynamics.history.ReactionHistory` over one crank turn; it is what the
-stress checker calls.
+Builders (lengths in mm, angles in degrees) return a :class:`rigfem.linkage.model.Linkage`:
+``four_bar``, ``slider_crank``, ``inverted_slider_crank``, ``quick_return``; ``build`` makes
+the one a scene names.  Their ``start_deg`` is the crank angle at which the initial assembly
+(hence the branch) is computed; lengths below 10 mm are rejected as probable metres.
 
-Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar of the
-catalogue's linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind
-the bar's first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from
-that joint, I_G = m L_i²/12), carriages, plates and couplings as particles at their joints;
-``"original"`` — the 2013 program (four-bar only, ``rigfem.dynamics.original``), with the study's
-rail mass and its pivot at the guide's end.
+Mass data (RIG.md §3), ``masses="rig"``: every rail is a uniform bar of the catalogue's
+linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind the bar's
+first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from that joint,
+I_G = m L_i²/12), carriages, plates and couplings as particles at their joints.  The forces
+they cause are computed by :mod:`rigfem.dynamics`.
 """
 
 from __future__ import annotations
@@ -23,29 +20,20 @@ from typing import Any
 
 import numpy as np
 
-from rigfem.dynamics.history import (
-    BodyHistory,
-    JointHistory,
-    ReactionHistory,
-    merge_ranges,
-    singular_ranges,
-)
-from rigfem.dynamics.loops import MU_TOGGLE_DEG, fourbar_closes, transmission_angle_deg
-from rigfem.dynamics.linkage import (
-    GROUND,
-    Body,
-    ClosureError,
-    CrankDriver,
-    Linkage,
-    Load,
-    Prismatic,
-    Revolute,
-)
-from rigfem.dynamics.solver import solve
 from rigfem.errors import InputError
+from rigfem.linkage.loops import (
+    BRANCHES,
+    MU_TOGGLE_DEG,
+    fourbar_angles,
+    fourbar_closes,
+    singular_ranges,
+    transmission_angle_deg,
+)
+from rigfem.linkage.model import GROUND, Body, BodyHistory, ClosureError, CrankDriver, Linkage, Load, Prismatic, Revolute
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
 
-MODELS = ("rigid-body", "original")
+__all__ = ["four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "inverted_slider_crank",
+           "quick_return", "BUILDERS", "build", "crank_angles"]
 
 
 def _rail(name: str, length_mm: float, cat: RigMasses, points: list) -> Body:
@@ -116,11 +104,9 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
                             f"for crank angles {_ranges_text(grid, ~ok)}")
     if branch not in ("open", "crossed"):
         raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
-    from rigfem.dynamics.original import fourbar_kinematics
-
-    sgn = 1 if branch == "open" else -1
-    k = fourbar_kinematics(b2, b3, b4, d, np.radians([start_deg]), 1.0, sgn)
-    A, th3, th4 = k["A"][0], k["theta3"][0], k["theta4"][0]
+    th = np.radians(start_deg)
+    k = fourbar_angles(b2, b3, b4, d, np.array([th]), 1.0, 0.0, BRANCHES[branch])
+    A, th3, th4 = b2 * np.array([np.cos(th), np.sin(th)]), k["theta3"][0], k["theta4"][0]
     if masses == "rig":
         c = catalogue
         L2, L3, L4 = rails_mm
@@ -156,8 +142,9 @@ def transmission_angle(bodies: dict[str, BodyHistory]) -> np.ndarray:
     return transmission_angle_deg(bodies["coupler"].angle_rad, bodies["rocker"].angle_rad)
 
 
-def coupler_point_path(h: ReactionHistory) -> np.ndarray:
-    """Global position (mm) of the four-bar coupler point recorded in ``h.meta`` (n, 2)."""
+def coupler_point_path(h) -> np.ndarray:
+    """Global position (mm) of the four-bar coupler point recorded in ``h.meta`` (n, 2), from a
+    history's coupler motion (``h.bodies["coupler"]``)."""
     cp = h.meta["coupler_point"]
     c = h.bodies["coupler"]
     ang = c.angle_rad + np.radians(cp["angle_deg"])
@@ -214,20 +201,6 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
     meta = dict(type="slider-crank", lengths_mm=dict(b2=b2, b3=b3, offset=offset),
                 rails_mm=list(rails_mm), masses=masses or "custom", singular_fn=toggle)
     return Linkage(bodies, joints, CrankDriver("crank"), guess, loads, gravity_mm_s2, meta)
-
-
-def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,
-                         c_mm: float = 100.0):
-    """MECHANISMS.md #5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
-
-    V1 ∝ L - c - b3 + b2 (bottom dead centre), V2 ∝ L - c - x (x = piston distance from O2).
-    """
-    def force(state: dict) -> np.ndarray:
-        x = state["point_mm"][:, 0]
-        f = p_N * ((L_mm - c_mm - b3 + b2) / (L_mm - c_mm - x) - 1.0)
-        return np.stack([-f, np.zeros_like(f)], -1)
-
-    return force
 
 
 # ----------------------------------------------------------------------------- inverted slider-crank
@@ -333,96 +306,18 @@ BUILDERS = {"four-bar": four_bar, "slider-crank": slider_crank,
             "inverted-slider-crank": inverted_slider_crank, "quick-return": quick_return}
 
 
+def build(scene, slider_force: Any = None) -> Linkage:
+    """The linkage a scene (:class:`rigfem.scene.Scene`: type, builder arguments) describes:
+    geometry, driver and masses; ``slider_force`` an external force on a slider-crank's slider."""
+    kwargs = dict(scene.params)
+    if slider_force is not None:
+        kwargs["slider_force"] = slider_force
+    lk = BUILDERS[scene.linkage_type](**kwargs)
+    lk.meta["scene"] = scene.name
+    lk.meta["textbook"] = scene.textbook
+    return lk
+
+
 def crank_angles(samples: int, start_deg: float = 0.0) -> np.ndarray:
     """``samples`` evenly spaced crank angles over one turn (deg), 360 excluded."""
     return start_deg + 360.0 * np.arange(samples) / samples
-
-
-def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: float = 1.0,
-             model: str = "rigid-body") -> ReactionHistory:
-    """Reaction history of one constant-speed crank turn (N, N·m, mm, deg).
-
-    ``linkage_or_config`` is a Linkage or a dict ``{"type": "four-bar", "b2": .., ...}``
-    (builder keyword arguments).  ``model="original"`` (four-bar only) reproduces the 2013
-    program; ``"rigid-body"`` is the physically consistent default.  ``meta["singular"]``
-    lists the toggle crank-angle ranges (None if none); ``meta["mu_deg"]`` the
-    transmission-angle range of a four-bar.
-    """
-    if model not in MODELS:
-        raise InputError(f"model = {model!r} must be one of {', '.join(MODELS)}")
-    if int(samples) != samples or not 8 <= samples <= 1_000_000:
-        raise InputError(f"samples = {samples!r} must be a whole number in [8, 1000000]")
-    if not np.isfinite(speed_hz) or speed_hz == 0 or abs(speed_hz) > 100:
-        raise InputError(f"speed_hz = {speed_hz!r} must be non-zero and within [-100, 100] Hz")
-    if isinstance(linkage_or_config, dict):
-        cfg = dict(linkage_or_config)
-        typ = cfg.pop("type", None)
-        if typ not in BUILDERS:
-            raise InputError(f"linkage type = {typ!r} must be one of {', '.join(BUILDERS)}")
-        lk = BUILDERS[typ](**cfg)
-    else:
-        lk = linkage_or_config
-    deg = crank_angles(int(samples))
-    if model == "original":
-        if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":
-            raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
-                             f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
-        return simulate_original(lk, deg, speed_hz)
-    h = solve(lk, deg, speed_hz)
-    h.meta["model"] = "rigid-body"
-    if lk.meta.get("type") == "four-bar":
-        mu = transmission_angle(h.bodies)
-        h.meta["mu_deg"] = dict(min=float(mu.min()), max=float(mu.max()))
-    return h
-
-
-def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
-    """ReactionHistory of the 2013 program (rigfem.dynamics.original) for a four-bar Linkage."""
-    from rigfem.dynamics.original import original_reactions
-
-    L = lk.meta["lengths_mm"]
-    b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]
-    sgn = 1 if lk.meta.get("branch", "open") == "open" else -1
-    template = solve(lk, deg[:1] if deg.size else deg, speed_hz, check_closure=False)
-    bodies_tpl = template.bodies
-
-    def build(angles: np.ndarray) -> ReactionHistory:
-        a = np.atleast_1d(np.asarray(angles, float))
-        r = original_reactions(b2, b3, b4, d, np.radians(a), speed_hz, RigMasses(**lk.meta["catalogue"]),
-                               tuple(lk.meta["rails_mm"]), branch=sgn)
-        k = r["kin"]
-        w2 = 2 * np.pi * speed_hz
-        pos = {"O2": np.zeros((a.size, 2)), "A": k["A"] * 1000, "B": k["B"] * 1000,
-               "O4": np.tile([d, 0.0], (a.size, 1))}
-        joints = {"O2": JointHistory("O2", GROUND, "crank", r["R12"], pos["O2"]),
-                  "A": JointHistory("A", "crank", "coupler", r["R23"], pos["A"]),
-                  "B": JointHistory("B", "coupler", "rocker", r["R34"], pos["B"]),
-                  "O4": JointHistory("O4", GROUND, "rocker", r["R14"], pos["O4"])}
-        zero = np.zeros(a.size)
-        aA = -(w2**2) * k["A"] * 1000
-        bodies = {}
-        for name, th, om, al, org, acc in (
-                ("crank", k["theta2"], k["omega2"], zero, pos["O2"], np.zeros((a.size, 2))),
-                ("coupler", k["theta3"], k["omega3"], k["alpha3"], pos["A"], aA),
-                ("rocker", k["theta4"], k["omega4"], k["alpha4"], pos["O4"], np.zeros((a.size, 2)))):
-            t = bodies_tpl[name]
-            bodies[name] = BodyHistory(name, th, om, al, org, acc, t.mass_kg, t.com_local_mm,
-                                       t.inertia_com_kg_mm2, t.point_masses, t.joint_local_mm)
-        mu = r["mu_deg"]
-        bad = np.sin(np.radians(mu)) < np.sin(np.radians(MU_TOGGLE_DEG))
-        bad |= ~np.all(np.isfinite(np.c_[r["R12"], r["R23"], r["R34"], r["R14"], r["M2"]]), axis=1)
-        meta = dict(lk.meta)
-        meta.pop("singular_fn", None)
-        meta.update(model="original", speed_hz=speed_hz, driver_unit="N·m",
-                    mu_deg=dict(min=float(mu.min()), max=float(mu.max())),
-                    singular=singular_ranges(a, bad))
-        for j in joints.values():
-            j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)
-        return ReactionHistory(a, joints, np.nan_to_num(r["M2"]), bodies, meta,
-                               singular_mask=bad if bad.any() else None)
-
-    h = build(deg)
-    # toggles between the samples: the closed-form model is cheap on a 0.1 deg grid
-    h.meta["singular"] = merge_ranges(h.meta["singular"], build(crank_angles(3600)).meta["singular"])
-    h.evaluator = build
-    return h
