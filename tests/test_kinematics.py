@@ -2,6 +2,8 @@
 positions, against the general planar solver on every MECHANISMS.md linkage, and the
 MECHANISMS.md §6 instant against a hand-derived closed form."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,7 @@ from rigfem.dynamics import solve
 from rigfem.errors import InputError
 from rigfem.linkage import (
     build,
+    inverted_slider_crank,
     crank_angles,
     fourbar_motion,
     fourbar_turn,
@@ -187,3 +190,38 @@ def test_bad_input_is_one_line_error():
         fourbar_motion(36, 64, 54, 52, [0.0], branch="upside")
     with pytest.raises(InputError, match="cannot be assembled"):
         slider_crank_motion(300, 200, 0.0, [90.0])
+
+
+@pytest.mark.parametrize("arm", [0.0, 120.0])
+def test_inverted_slider_crank_gives_the_block_along_the_link(arm):
+    """The block's position along the link it slides on (O4A when arm = 0), its sliding speed
+    and acceleration, against the closed form s² = b2² + d² − 2 b2 d cos θ − arm², in the JSON,
+    the CSV and the table of ``rigfem kinematics``."""
+    d, b2, w = 500.0, 200.0, 3.0
+    deg = np.array([0.0, 30.0, 90.0, 200.0, 300.0])
+    m = linkage_motion(inverted_slider_crank(d, b2, arm, masses=None), deg, w)
+    th = np.radians(deg)
+    s = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(th) - arm**2)
+    v = b2 * d * w * np.sin(th) / s                       # d(s²)/dt = 2 b2 d w sin θ
+    a = (b2 * d * w**2 * np.cos(th) - v**2) / s           # d²(s²)/dt² / 2 = v² + s a
+    assert np.allclose(m.slider["position_mm"], s, rtol=1e-9, atol=1e-9)
+    assert np.allclose(m.slider["velocity_mm_s"], v, rtol=1e-7, atol=1e-6)
+    assert np.allclose(m.slider["acceleration_mm_s2"], a, rtol=1e-6, atol=1e-4)
+
+
+def test_inverted_slider_crank_cli_reports_the_slider(tmp_path, capsys):
+    from rigfem.cli import main
+
+    assert main(["kinematics", "mech3-inverted-slider-crank", "--at", "90", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)["angles"][0]
+    # d = 500, b2 = 200, arm = 200 mm: at 90 deg s = sqrt(200² + 500² − 200²) = 500 mm
+    assert rec["slider"]["position_mm"] == pytest.approx(500.0, rel=1e-9)
+    assert main(["kinematics", "mech3-inverted-slider-crank", "--at", "90", "--csv", str(tmp_path / "k.csv")]) == 0
+    head, row = (tmp_path / "k.csv").read_text().splitlines()[:2]
+    assert float(dict(zip(head.split(","), row.split(",")))["slider_position_mm"]) == pytest.approx(500.0)
+    capsys.readouterr()
+    assert main(["kinematics", "mech3-inverted-slider-crank", "--at", "90"]) == 0
+    table = capsys.readouterr().out.splitlines()
+    head = next(r for r in table if r.lstrip().startswith("crank deg"))
+    row = table[table.index(head) + 1].split()
+    assert head.split()[-6:-4] == ["slider", "mm"] and float(row[-3]) == pytest.approx(500.0)

@@ -33,11 +33,11 @@ COMMANDS: dict[str, str] = {
 }
 
 
-def _available() -> dict[str, object]:
-    mods = {}
-    for name, module in COMMANDS.items():
-        mods[name] = importlib.import_module(f"rigfem.cli.{module}")
-    return mods
+def _available(only: str | None = None) -> dict[str, object]:
+    """The subcommand modules: ``only`` that one when it names one (a kinematics run then loads
+    no dynamics, FE or mesh code), else all (for the command list)."""
+    names = [only] if only in COMMANDS else list(COMMANDS)
+    return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in names}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -47,12 +47,13 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"rigfem: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser = _Parser(prog="rigfem", description="Stress checker for the configurable-bar linkage rig.",
                      epilog=TABLE)
     parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name, mod in _available().items():
+    words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
+    for name, mod in _available(words[0] if words else None).items():
         p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=TABLE)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
@@ -68,7 +69,7 @@ def _on_sigterm(signum, frame) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
