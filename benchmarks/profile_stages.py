@@ -20,7 +20,7 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 
 #: stage -> (module file suffix, function name) whose cumulative time it is
 STAGES = {
-    "dynamics (reactions over the turn)": [("dynamics/mechanisms.py", "simulate"), ("dynamics/history.py", "peaks")],
+    "dynamics (reactions over the turn)": [("dynamics/cycle.py", "simulate"), ("dynamics/history.py", "peaks")],
     "geometry (OpenCASCADE)": [("mesh/geometry.py", "build")],
     "meshing (gmsh, linear; the rest of mesh_part)": [("mesh/mesher.py", "mesh_part")],
     "second-order nodes (gmsh)": [("mesh/mesher.py", "second_order")],
@@ -36,7 +36,7 @@ STAGES = {
     "pictures": [("report/pictures.py", "field_picture"), ("report/pictures.py", "reactions_plot"),
                  ("report/pictures.py", "_plot_peaks")],
     "VTU/PVD writing": [("report/vtu.py", "write_vtu")],
-    "sweep: unit-field peaks": [("studies/sweep.py", "case_peak")],
+    "sweep: unit-field peaks": [("studies/sweep_bases.py", "case_peak")],
     "sweep: load cases": [("loads/cases.py", "part_cases")],
 }
 
