@@ -108,7 +108,7 @@ def study(fidelity: str) -> tuple[list[dict], list[str], object]:
         rows.append({"variant": name, "what": what, "dims": dims, **sec,
                      "kg_per_m": mass_kg(rail) / rail["length"] * 1000,
                      "peak_mpa": res.peak.value, "surface": res.peak.surface,
-                     "xyz": [round(c, 2) for c in res.peak.xyz], "zz_error": res.peak.error,
+                     "xyz": [round(c, 2) for c in res.peak.xyz], "zz_error": res.peak.zz_error,
                      "utilisation_pct": verdict_of(res, cs.settings)["utilisation_pct"],
                      "nodes": len(res.mesh.points), "seconds": time.perf_counter() - t})
         print(f"{fidelity} {name}: {rows[-1]['kg_per_m']:.3f} kg/m, peak {res.peak.value:.1f} MPa at "

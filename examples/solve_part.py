@@ -20,7 +20,7 @@ model = build_model(pm, steel, order=2)
 supports = [ShaftInHole("screw_1"), ShaftInHole("screw_2")]
 sol = solve(model, supports, [BearingLoad("bore", (2000.0, 0.0, 0.0))])  # N, along x
 peak = sol.peak()
-v = half_ultimate(peak.value, steel.sigma_u, 100 * peak.error)
-print(f"{len(pm.points)} nodes; peak von Mises {peak.value:.1f} MPa ± {100 * peak.error:.1f} % "
+v = half_ultimate(peak.value, steel.sigma_u, peak.error_pct)
+print(f"{len(pm.points)} nodes; peak von Mises {peak.value:.1f} MPa ± {peak.error_pct:.1f} % (error estimate) "
       f"on '{peak.surface}' at {[round(float(t), 1) for t in peak.xyz]} mm")
 print(f"{v.utilisation_pct:.1f} % of σu/2 = {v.limit_mpa:.0f} MPa: {v.verdict}")

@@ -64,7 +64,7 @@ def test_shaft_in_hole_reactions_and_bearing_half():
     front, back = on & (x[:, 0] < -1.0), on & (x[:, 0] > 1.0)
     assert np.abs(rn[back]).sum() < 0.01 * np.abs(rn[front]).sum()
     p = sol.peak()
-    assert np.isfinite(p.value) and p.error >= 0
+    assert np.isfinite(p.value) and p.error_pct >= 0
     with pytest.raises(InputError, match="hole 'h7'"):
         solve(model, [ShaftInHole("h7")], [BearingLoad("h1", (F, 0, 0))])
 

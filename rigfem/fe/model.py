@@ -15,7 +15,7 @@
 >>> sol.U.shape[1], bool(sol.equilibrium_error.max() < 1e-7)
 (2, True)
 >>> peak = sol.peak(np.array([1.0, 0.5]))   # superposed case: σ = 1·σ_0 + 0.5·σ_1
->>> bool(peak.value > 0 and peak.error >= 0)
+>>> bool(peak.value > 0 and peak.error_pct >= 0)
 True
 >>> problem = StaticProblem(model, [Fixed("root")])   # factorise once ...
 >>> more = problem.solve([SurfaceForce("tip", (5, 0, 0))])   # ... solve later batches on the same factors

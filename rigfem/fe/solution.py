@@ -11,20 +11,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigfem.fe.stress import zz_error
+from rigfem.fe.stress import error_band_pct, zz_error
 from rigfem.fe.tensors import peak_von_mises, principal, von_mises
 
 
 @dataclass(frozen=True)
 class Peak:
-    """Peak von Mises stress with its location and discretisation-error estimate."""
+    """Peak von Mises stress with its location and discretisation-error estimate.
+
+    ``error_pct`` is the band every report shows, ``peak·(1 ± error_pct/100)``: an estimate of the
+    discretisation error (calibrated ZZ recovery), not a bound; ``zz_error`` is the raw estimator it is
+    calibrated from (a fraction)."""
 
     value: float  #: MPa
     node: int
     xyz: tuple[float, float, float]
     surface: str  #: named surface (a hole first), "(unnamed boundary)" or "(interior)"
     surfaces: tuple[str, ...]  #: every named surface the node lies on
-    error: float  #: relative ZZ error estimate of ``value`` (recovered vs raw stress on the node's patch)
+    zz_error: float  #: raw ZZ estimate, a fraction of ``value`` (recovered vs raw stress on the node's patch)
+    error_pct: float  #: the error band's half-width, % of ``value``: ``zz_error`` × the order's calibrated factor
 
 
 @dataclass
@@ -91,7 +96,8 @@ class Solution:
         err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s)
         names = self.surfaces_of(n)
         where = names[0] if names else "(unnamed boundary)" if n in self._boundary_nodes() else "(interior)"
-        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), where, names, err)
+        return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), where, names, err,
+                    error_band_pct(err, fm.order))
 
     def surfaces_of(self, node: int) -> tuple[str, ...]:
         """Named surfaces containing ``node``, holes first."""

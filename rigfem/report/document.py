@@ -110,8 +110,9 @@ def render_markdown(r: dict) -> str:
               f"- fidelity `{r['settings']['fidelity']}`: P{r['settings']['order']} tetrahedra, "
               f"global size {r['settings']['size_mm']:g} mm, {r['settings']['local_size_mm']:g} mm at "
               f"loaded interfaces",
-              "- error estimate: recovery-based (difference between the raw and the recovered "
-              "stress at the peak); a peak whose error band contains the limit is *undecided*",
+              "- error estimate (an estimate, not a bound): recovery-based (difference between the raw and the "
+              "recovered stress at the peak) times a per-order factor calibrated so the band covers the converged "
+              "peak (results/convergence/band_coverage.md); a peak whose band contains the limit is *undecided*",
               f"- files: {', '.join(r.get('files', []))}", ""]
     return "\n".join(lines)
 

@@ -52,7 +52,7 @@ def _img(folder: Path, name: str, alt: str) -> str:
 
 
 def _util_bar(p: dict) -> str:
-    """Utilisation bar with its error band (0..120 % of the allowable)."""
+    """Utilisation bar with its error-estimate band (0..120 % of the allowable)."""
     u, e = p["utilisation_pct"], p["error_pct"]
     lo, hi = u * (1 - e / 100), u * (1 + e / 100)
     w = lambda x: f"{min(max(x, 0.0), 120.0) / 1.2:.1f}%"
@@ -78,7 +78,7 @@ def render_html(report: dict, folder: str | Path) -> str:
     out.append(f"<p>Overall verdict {_badge(r['verdict'], big=True)} &nbsp; criterion: peak von Mises "
                f"&lt; {s['limit_factor']:g}·σu = <b>{r['limit_mpa']:.0f} MPa</b> "
                f"({_e(s['material'])}, σu = {s['sigma_u_mpa']:g} MPa); utilisation = peak / allowable, "
-               f"with the peak's discretisation-error band.</p>")
+               f"with the peak's discretisation-error estimate as a band (an estimate, not a bound).</p>")
     if r.get("rule_violations"):
         out.append("<p><b>NOT MOUNTABLE: this configuration breaks rig rules and was checked only because "
                    "--allow-rule-violations was passed; its overall verdict is FAIL whatever its stresses.</b></p><ul>"

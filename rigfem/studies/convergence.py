@@ -235,7 +235,7 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
         S = r.solution.nodal_stress
         pk = r.peak
         entry = {"peak_mpa": float(pk.value), "crank_deg": float(r.case.rows[r.row]), "surface": pk.surface,
-                 "xyz": [round(float(v), 3) for v in pk.xyz], "zz_error": float(pk.error)}
+                 "xyz": [round(float(v), 3) for v in pk.xyz], "zz_error": float(pk.zz_error)}
         mask = away_from_singular_edges(r.case.part, r.case.params, r.solution.model.mesh.nodes)
         if mask is not None:
             sub = S[:, mask]

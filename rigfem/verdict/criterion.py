@@ -2,7 +2,8 @@
 
 The 2013 study's criterion is ``σvm,peak < σu/2`` (half the ultimate strength, the classic
 estimate of the endurance limit).  A peak whose discretisation-error band straddles the
-limit is *undecided*, never silently passed.  Beside it, :func:`goodman` checks the stress
+limit is *undecided*, never silently passed; the band is an estimate (calibrated ZZ recovery,
+:func:`rigfem.fe.stress.error_band_pct`), not a bound.  Beside it, :func:`goodman` checks the stress
 cycle at the critical point (mean and alternating von Mises stress over one crank turn)
 against a Goodman line with a Marin-corrected endurance limit (Shigley, *Mechanical
 Engineering Design*, 10th ed., §6-9 and §6-12).
@@ -22,7 +23,7 @@ class Verdict:
     peak_mpa: float
     limit_mpa: float
     utilisation_pct: float
-    error_pct: float  #: relative discretisation-error estimate of the peak, in %
+    error_pct: float  #: discretisation-error estimate of the peak (the band's half-width), in % of the peak
     verdict: str  #: "pass", "fail" or "undecided" (the error band contains the limit)
 
     def as_dict(self) -> dict:
@@ -41,7 +42,7 @@ def allowable_stress(sigma_u_mpa: float, factor: float = LIMIT_FACTOR) -> float:
 
 def half_ultimate(peak_mpa: float, sigma_u_mpa: float, error_pct: float = 0.0,
                   factor: float = LIMIT_FACTOR) -> Verdict:
-    """Check ``peak < factor·σu`` with the error band ``peak·(1 ± error)``.
+    """Check ``peak < factor·σu`` with the error-estimate band ``peak·(1 ± error_pct/100)``.
 
     >>> half_ultimate(300.0, 750.0, error_pct=2.0).verdict
     'pass'
