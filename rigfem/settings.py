@@ -55,7 +55,7 @@ POST = "PF_4b_003_v2"
 
 
 #: parts of each linkage type: rails (pivot joint, far joint, default length mm) and fittings
-#: (part, joint, rail it is screwed to).  RIG.md §3-4.
+#: (part, joint, rail it is screwed to).  geometry/RIG.md §3-4.
 PARTS: dict[str, dict[str, dict]] = {
     "four-bar": {
         "crank_rail": {"part": RAIL, "pivot": "O2", "far": "A", "length": 700.0, "driven": True},

@@ -8,7 +8,7 @@ computed; lengths below 10 mm are rejected as probable metres.
 :class:`rigfem.dynamics.history.ReactionHistory` over one crank turn; it is what the
 stress checker calls.
 
-Mass models (RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar of the
+Mass models (geometry/RIG.md §3): ``"rigid-body"`` (default) — every rail is a uniform bar of the
 catalogue's linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind
 the bar's first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from
 that joint, I_G = m L_i²/12), carriages, plates and couplings as particles at their joints;
@@ -100,7 +100,7 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
 
     Bodies ``crank`` (O2->A), ``coupler`` (A->B), ``rocker`` (O4->B); joints O2, A, B, O4.
     ``masses="rig"``: rails of ``rails_mm`` with plate+carriage at A on the crank, coupling
-    at A and plate+carriage at B on the coupler, coupling at B on the rocker (RIG.md §3).
+    at A and plate+carriage at B on the coupler, coupling at B on the rocker (geometry/RIG.md §3).
     ``masses=None``: massless unless ``body_masses`` (name -> Body keyword dict) says so.
     ``coupler_point`` (distance mm from A, angle deg from the coupler line) is recorded
     in meta and reported by :func:`coupler_point_path`.  Raises AssemblyError naming the
@@ -218,7 +218,7 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
 
 def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,
                          c_mm: float = 100.0):
-    """MECHANISMS.md #5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
+    """geometry/MECHANISMS.md §5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
 
     V1 ∝ L - c - b3 + b2 (bottom dead centre), V2 ∝ L - c - x (x = piston distance from O2).
     """
