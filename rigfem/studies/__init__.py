@@ -8,6 +8,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
+        "closed_form": ["kt_plate_hole", "plate_hole_peak_mpa"],
         "convergence": ["RATIO", "H_DIRECTIONS", "TARGETS", "NOISE", "AWAY_MM", "EXTEND", "Extrapolation", "richardson", "StepSpec", "away_from_singular_edges", "run_step", "h_levels", "preset_steps", "study", "needs_finer", "fine_step", "analyse", "scene_cases", "to_json"],
         "le10": ["INNER", "OUTER", "HALF_THICKNESS", "PRESSURE", "POINT_D", "TARGET_SYY", "STEEL", "SURFACES", "supports", "load", "le10_mesh", "node_at", "solve_le10"],
         "sweep": ["TYPES", "GROUND_RAIL_MM", "ORIGINAL_DIRECTIONS", "TOP_NODES", "BOUND_GROUPS", "ROW_CHUNK", "JOINTS", "LENGTHS", "SweepParams", "rail_lengths", "enumerate_configs", "rules_row", "UnitBasis", "build_bases", "case_peak", "superposed_peaks", "evaluate", "run_chunk", "run_sweep"],
