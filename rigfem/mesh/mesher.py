@@ -67,7 +67,7 @@ def estimate_tets(volume: float, refined_area: float, s: MeshSettings, concentra
 
     The size grows linearly from ``near_mm`` (half that on concentrators) at a refined surface
     to ``size_mm`` at ``dist_mm``; a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3)
-    over 0..dist extra tets (at most the whole volume at the refined size).
+    over 0..dist_mm extra tets (at most the whole volume at the refined size).
     """
     h, D = s.size_mm, s.dist_mm
 
@@ -203,8 +203,8 @@ def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
 
 
-def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
-    """A gmsh Threshold field: ``size_near`` on the surfaces ``tags``, growing to ``s.size_mm`` at ``s.dist_mm``."""
+def _threshold(tags: list[int], near_mm: float, s: MeshSettings) -> int:
+    """A gmsh Threshold field: ``near_mm`` on the surfaces ``tags``, growing to ``s.size_mm`` at ``s.dist_mm``."""
     import gmsh
 
     f = gmsh.model.mesh.field
@@ -213,10 +213,10 @@ def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
     extent = max(float(np.ptp(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3), axis=0).max())
                  for t in tags)
     # sample points on each surface about half a refined element apart (within 20..500 per direction)
-    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / size_near), 20, 500)))
+    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / near_mm), 20, 500)))
     th = f.add("Threshold")
     f.setNumber(th, "InField", dist)
-    f.setNumber(th, "SizeMin", min(size_near, s.size_mm))
+    f.setNumber(th, "SizeMin", min(near_mm, s.size_mm))
     f.setNumber(th, "SizeMax", s.size_mm)
     f.setNumber(th, "DistMin", 0.0)
     f.setNumber(th, "DistMax", s.dist_mm)
