@@ -168,7 +168,7 @@ def test_cache_hit_on_repeat_and_miss_on_change(tmp_path):
 
 def test_memory_guard_refuses_before_meshing():
     part = load_part("rail_size25", {"length": 1000})
-    with pytest.raises(InputError, match="increase --size"):
+    with pytest.raises(InputError, match=r"increase size_mm \(--size\)"):
         mesh_part(part, MeshSettings(0.1), use_cache=False)
 
 

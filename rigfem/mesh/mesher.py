@@ -268,7 +268,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
             raise InputError(f"size_mm = {settings.size_mm:g} mm (local_size_mm = {settings.near_mm:g} mm) "
                              f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
                              f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
-                             f"more than the machine's {machine_gib:g} GiB: increase size_mm")
+                             f"more than the machine's {machine_gib:g} GiB: increase size_mm (--size)")
         _set_fields(refine_tags, conc_tags, settings)
         gmsh.model.mesh.generate(3)
         q = _quality()
