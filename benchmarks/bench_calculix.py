@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--refine-size", type=float, default=1.25, help="element size on the loaded holes, mm")
     ap.add_argument("--cases", type=int, default=4, help="unit load cases of the multi-case comparison")
     args = ap.parse_args(argv)
-    settings = MeshSettings(size=args.size, refine=HOLES, refine_size=args.refine_size)
+    settings = MeshSettings(size_mm=args.size, refine=HOLES, local_size_mm=args.refine_size)
     load0 = os.getloadavg()
     rig, ccx, agree, multi = [], [], [], []
     with tempfile.TemporaryDirectory(prefix="bench-ccx-") as tmp:

@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     cases = part_cases(h, peaks(h), cs.settings)
     s = cs.settings
-    mesh_case(cases[0][1], s.size_mm, s.local_size_mm)  # meshed once, outside the timing (same mesh for both)
+    mesh_case(cases[0][1], s)  # meshed once, outside the timing (same mesh for both)
     rig = []
     for _ in range(a.repeats):
         shutil.rmtree(Path(os.environ["RIGFEM_CACHE"]) / "solutions", ignore_errors=True)  # solve every time

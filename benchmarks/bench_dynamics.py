@@ -157,7 +157,7 @@ def accuracy_tables() -> None:
     comp = model_comparison()
     md = ["# Rigid-body vs original (2013) mass model, calibration case", "",
           "b2=540 b3=840 b4=780 d=1020 mm, 1 Hz, rig masses.  'original' reproduces the 2013 "
-          "program (RIG.md §3); 'rigid-body' uses uniform rails over their full guide length, "
+          "program (geometry/RIG.md §3); 'rigid-body' uses uniform rails over their full guide length, "
           "particles at the joints and moments about each body's centre of mass.", "",
           "| peak | 2013 study | original model | rel. to study | rigid-body | rigid vs original |",
           "|---|---:|---:|---:|---:|---:|"]
@@ -173,7 +173,7 @@ def accuracy_tables() -> None:
            f"(the meshed rail's profile weighs the same), the 2013 program the study's "
            f"{cat.study_rail_kg_m:g} kg/m; and each rail reaches {cat.rail_behind_mm:g} mm behind its "
            "pivot joint (the pivot coupling's screws sit in its 1st and 3rd holes), where the 2013 "
-           "program puts the pivot at the guide's end.  RIG.md §3 quirks: the 2013 inertias use the "
+           "program puts the pivot at the guide's end.  geometry/RIG.md §3 quirks: the 2013 inertias use the "
            "joint distances, not the 1000 mm guides — rocker about O4 "
            f"m4 b4²/3 = {m4 * 0.78**2 / 3:.3f} kg·m² vs the guide's m L4²/12 + m c² = "
            f"{r4 / 12 + r4 * c4**2:.3f} kg·m² (c = {c4 * 1000:g} mm), coupler "

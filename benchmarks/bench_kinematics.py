@@ -14,7 +14,7 @@ import numpy as np
 from rigfem.linkage import crank_angles, fourbar_motion, fourbar_turn
 
 RUNS, N, TARGET_MS = 15, 5000, 5.0
-CASE = (540.0, 840.0, 780.0, 1020.0)       # the rig's reference four-bar (RIG.md §3)
+CASE = (540.0, 840.0, 780.0, 1020.0)       # the rig's reference four-bar (geometry/RIG.md §3)
 
 
 def main() -> None:

@@ -9,14 +9,15 @@ Run: python examples/solve_part.py
 
 from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve
 from rigfem.material import get_material
-from rigfem.mesh import MeshSettings, mesh_part
+from rigfem.mesh import mesh_part
 from rigfem.rig import load_part
+from rigfem.settings import preset
 from rigfem.verdict import half_ultimate
 
 steel = get_material("rig_steel")
 plate = load_part("PF_4b_006")
-pm = mesh_part(plate, MeshSettings(size=6.0, refine=("bore", "screw_1", "screw_2"), refine_size=1.2))
-model = build_model(pm, steel, order=2)
+pm = mesh_part(plate, preset("standard").refined(("bore", "screw_1", "screw_2")))  # 6 mm, 1.2 mm there
+model = build_model(pm, steel, order=preset("standard").order)
 supports = [ShaftInHole("screw_1"), ShaftInHole("screw_2")]
 sol = solve(model, supports, [BearingLoad("bore", (2000.0, 0.0, 0.0))])  # N, along x
 peak = sol.peak()

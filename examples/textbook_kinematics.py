@@ -1,4 +1,4 @@
-"""How a textbook linkage moves: MECHANISMS.md's four-bar with a coupler point.
+"""How a textbook linkage moves: geometry/MECHANISMS.md's four-bar with a coupler point.
 
 Loads the built-in scene, solves positions, velocities and accelerations over one turn
 with the general planar solver, and prints the transmission-angle range and the size of

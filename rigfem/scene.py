@@ -56,7 +56,7 @@ class Scene:
     #: crank angular acceleration (rad/s²) and the crank angle of the instant of interest (deg)
     alpha_rad_s2: float = 0.0
     instant_deg: float | None = None
-    #: a textbook linkage (MECHANISMS.md), not a rig configuration: the rig rules do not apply
+    #: a textbook linkage (geometry/MECHANISMS.md), not a rig configuration: the rig rules do not apply
     textbook: bool = False
     raw: dict = field(default_factory=dict)  #: the whole scene file (raw TOML, validated)
     #: ``[linkage.gas]``: the compressor's gas force on the slider (p_N, L_mm, c_mm), or None

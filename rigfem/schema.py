@@ -67,7 +67,7 @@ class _Linkage(_Table):
     bodies: Annotated[dict[Annotated[str, Field(max_length=40)], Body], Field(max_length=10)] = {}
     instant_deg: Annotated[float, Field(ge=-360.0, le=360.0)] | None = None
     alpha_rad_s2: Annotated[float, Field(ge=-1e7, le=1e7)] = 0.0  #: crank angular acceleration
-    textbook: bool = False  #: a textbook linkage (MECHANISMS.md), not a rig configuration
+    textbook: bool = False  #: a textbook linkage (geometry/MECHANISMS.md), not a rig configuration
     speed_hz: Annotated[float, Field(ge=-100.0, le=100.0)] | None = None
     rpm: Annotated[float, Field(ge=-6000.0, le=6000.0)] | None = None
     omega_rad_s: Annotated[float, Field(ge=-100.0, le=100.0)] | None = None

@@ -23,20 +23,74 @@ lengths come from the linkage (``[linkage] rails_mm``), so dynamics and FE use t
 from __future__ import annotations
 
 import difflib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 from rigfem.errors import InputError
 from rigfem.material import Material, get_material, material_from_dict
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """How to mesh a part (mm): a global size, and a finer one near the surfaces that carry load.
+
+    The one settings type from a preset to the mesher: a :class:`Preset` (and a check's
+    :class:`CheckSettings`) *is* one, so ``mesh_part(part, preset("standard").refined(("hole",)))``
+    meshes any part, built-in or custom, at a fidelity preset.
+    """
+
+    size_mm: float  #: global (largest) element size
+    refine: tuple[str, ...] = ()  #: surface groups carrying load: refined, everything else coarse
+    local_size_mm: float | None = None  #: size on the refined surfaces (default size_mm/4)
+    refine_dist_mm: float | None = None  #: distance over which the size grows back (default 2*size_mm)
+    min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
+    concentrate: tuple[str, ...] = ()  #: refined groups that raise stress (fillets): half the local size
+
+    @property
+    def near_mm(self) -> float:
+        """The size on the refined surfaces: ``local_size_mm``, or size_mm/4 when not given."""
+        return self.local_size_mm if self.local_size_mm is not None else self.size_mm / 4
+
+    @property
+    def dist_mm(self) -> float:
+        """The grading distance: ``refine_dist_mm``, or 2*size_mm when not given."""
+        return self.refine_dist_mm if self.refine_dist_mm is not None else 2 * self.size_mm
+
+    def refined(self, refine: tuple[str, ...], concentrate: tuple[str, ...] = ()):
+        """The same settings, refined on the surface groups ``refine`` (``concentrate`` among them)."""
+        return replace(self, refine=tuple(refine), concentrate=tuple(concentrate))
+
+    def key(self) -> dict:
+        """The mesh fields only (what the mesh depends on), resolved: the mesh cache's key."""
+        return {"size_mm": self.size_mm, "refine": sorted(self.refine), "local_size_mm": self.near_mm,
+                "refine_dist_mm": self.dist_mm, "min_quality": self.min_quality,
+                "concentrate": sorted(self.concentrate)}
+
+
+@dataclass(frozen=True)
+class Preset(MeshSettings):
+    """A fidelity preset: mesh settings plus the FE fields, element order and bearing directions."""
+
+    order: int = 2  #: element order (1 | 2)
+    bearing_directions: int = 8  #: directions of the unit bearing loads (cycle mode)
+
 
 #: fidelity presets: element order, global and local mesh size (mm), bearing directions
 #: (8 directions are within 0.7 % of 48 on the reference parts: results/convergence/sampling.md;
 #: errors against the extrapolated peaks per part: results/convergence/summary.md — plate and
 #: post within 5 / 1.7 / 0.9 %, rails up to 13 / 8 / 5 % low where a groove or hole facets)
-FIDELITY: dict[str, dict] = {
-    "draft": {"order": 2, "size_mm": 8.0, "local_size_mm": 1.7, "bearing_directions": 8},
-    "standard": {"order": 2, "size_mm": 6.0, "local_size_mm": 1.2, "bearing_directions": 8},
-    "fine": {"order": 2, "size_mm": 4.0, "local_size_mm": 0.6, "bearing_directions": 12},
+FIDELITY: dict[str, Preset] = {
+    "draft": Preset(size_mm=8.0, local_size_mm=1.7, order=2, bearing_directions=8),
+    "standard": Preset(size_mm=6.0, local_size_mm=1.2, order=2, bearing_directions=8),
+    "fine": Preset(size_mm=4.0, local_size_mm=0.6, order=2, bearing_directions=12),
 }
+
+
+def preset(name: str) -> Preset:
+    """The fidelity preset ``name`` (draft | standard | fine)."""
+    if name not in FIDELITY:
+        raise InputError(f"fidelity = {str(name)[:40]!r} must be one of {', '.join(FIDELITY)}")
+    return FIDELITY[name]
+
 #: accuracy target of each preset against the extrapolated peak, % (met by every converging
 #: peak: results/convergence/summary.md); the sweep uses it as its error band
 PRESET_ERROR_PCT: dict[str, float] = {"draft": 10.0, "standard": 3.0, "fine": 1.0}
@@ -58,7 +112,7 @@ POST = "PF_4b_003_v2"
 
 
 #: parts of each linkage type: rails (pivot joint, far joint, default length mm) and fittings
-#: (part, joint, rail it is screwed to).  RIG.md §3-4.
+#: (part, joint, rail it is screwed to).  geometry/RIG.md §3-4.
 PARTS: dict[str, dict[str, dict]] = {
     "four-bar": {
         "crank_rail": {"part": RAIL, "pivot": "O2", "far": "A", "length": 700.0, "driven": True},
@@ -77,18 +131,14 @@ PARTS: dict[str, dict[str, dict]] = {
 }
 
 
-@dataclass(frozen=True)
-class CheckSettings:
-    """Validated ``[check]`` settings of a scene."""
+@dataclass(frozen=True, kw_only=True)
+class CheckSettings(Preset):
+    """Validated ``[check]`` settings of a scene: its preset (possibly overridden) and the check's own fields."""
 
     linkage_type: str
     parts: dict[str, dict]  #: instance name -> spec (see PARTS), only those to check
     modes: tuple[str, ...] = MODES
     fidelity: str = "standard"
-    order: int = FIDELITY["standard"]["order"]
-    size_mm: float = FIDELITY["standard"]["size_mm"]
-    local_size_mm: float = FIDELITY["standard"]["local_size_mm"]
-    bearing_directions: int = FIDELITY["standard"]["bearing_directions"]
     material: Material = field(default_factory=lambda: get_material("rig_steel"))
     load_factor: float = 1.4
     limit_factor: float = 0.5
@@ -124,15 +174,18 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
         if on:  # a fitting needs its rail's placement (not a check of the rail)
             parts[p] = dict(catalogue[p], rail=catalogue[on])
     fid = table.get("fidelity", "standard")
-    preset = dict(FIDELITY[fid])
-    size = float(table.get("size_mm", preset["size_mm"]))
-    local = float(table.get("local_size_mm", preset["local_size_mm"]))
+    chosen_preset = replace(preset(fid), **{k: table[k] for k in ("order", "size_mm", "local_size_mm",
+                                                                  "bearing_directions") if k in table})
+    size, local = float(chosen_preset.size_mm), float(chosen_preset.near_mm)
     if local > size:
         raise InputError(f"[check].local_size_mm = {local:g} mm must not exceed size_mm = {size:g} mm")
     mat = table.get("material", "rig_steel")
     material = material_from_dict(mat) if isinstance(mat, dict) else get_material(str(mat))
     fatigue = {"surface": "machined", "reliability": 0.9, "size_mm": 19.0, **table.get("fatigue", {})}
+    mesh = {f.name: getattr(chosen_preset, f.name) for f in fields(Preset)}
+    mesh.update(size_mm=size, local_size_mm=local, order=int(chosen_preset.order),
+                bearing_directions=int(chosen_preset.bearing_directions))
     return CheckSettings(
-        linkage_type, parts, tuple(table.get("modes", MODES)), fid, int(table.get("order", preset["order"])),
-        size, local, int(table.get("bearing_directions", preset["bearing_directions"])), material,
-        float(table.get("load_factor", 1.4)), float(table.get("limit_factor", 0.5)), fatigue)
+        **mesh, linkage_type=linkage_type, parts=parts, modes=tuple(table.get("modes", MODES)), fidelity=fid,
+        material=material, load_factor=float(table.get("load_factor", 1.4)),
+        limit_factor=float(table.get("limit_factor", 0.5)), fatigue=fatigue)

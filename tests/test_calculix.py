@@ -241,7 +241,7 @@ def test_rail_rigfem_vs_calculix(tmp_path):
     from rigfem.rig import load_part
 
     holes = ("hole_00", "hole_01", "hole_10", "hole_11")
-    pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size=16.0, refine=holes, refine_size=5.0),
+    pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size_mm=16.0, refine=holes, local_size_mm=5.0),
                    use_cache=False)
     model = build_model(pm, get_material("rig_steel"), order=2)
     # pins in the pivot holes; on hole_00 only the side the pin bears on (springs on half the wall)

@@ -28,7 +28,7 @@ def test_four_bar_turn_and_csv(capsys, tmp_path):
     res = _json(capsys, ["kinematics", "--four-bar", "540", "840", "780", "1020", "--samples", "36", "--json",
                          "--csv", str(out)])
     assert res["turn"]["grashof"] == "crank-rocker" and len(res["angles"]) == 36
-    assert res["transmission_angle_deg"]["min"] == pytest.approx(34.2160, abs=1e-4)   # RIG.md §3
+    assert res["transmission_angle_deg"]["min"] == pytest.approx(34.2160, abs=1e-4)   # geometry/RIG.md §3
     rows = np.genfromtxt(out, delimiter=",", names=True)
     assert rows.size == 36 and np.allclose(rows["crank_deg"], np.arange(36) * 10.0)
 

@@ -101,8 +101,8 @@ def test_memory_guard_names_the_parameter_and_acts_before_meshing(monkeypatch):
     with pytest.raises(InputError) as e:
         mesh_part(part, MeshSettings(0.2), use_cache=False)
     msg = str(e.value)
-    assert msg.startswith("size = 0.2 mm") and "\n" not in msg
-    assert "GiB" in msg and "increase --size" in msg
+    assert msg.startswith("size_mm = 0.2 mm") and "\n" not in msg
+    assert "GiB" in msg and "increase size_mm (--size)" in msg
     # the guard compares with the machine size it is given: a 4 mm rail on a 1e-4 GiB machine
     with pytest.raises(InputError, match=r"more than the machine's 0.0001 GiB"):
         mesh_part(part, MeshSettings(4.0), use_cache=False, machine_gib=1e-4)

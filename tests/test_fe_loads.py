@@ -12,10 +12,15 @@ from rigfem.fe import (
     Inertia,
     Pressure,
     SurfaceForce,
+    Symmetry,
     Torque,
+    Traction,
+    build_model,
     fe_mesh,
     load_vector,
+    solve,
 )
+from rigfem.material import get_material
 
 RHO = 7.85e-9
 
@@ -69,6 +74,32 @@ def test_surface_force_and_pressure_resultants():
     assert np.allclose(force, [1, 2, 3], atol=1e-13)
     force, _ = resultant(fm, load_vector(fm, {}, RHO, Pressure("ymax", 5.0)), 0)
     assert np.allclose(force, [0, -5.0 * 3 * 1, 0], atol=1e-12)  # p·A into the body (−y on the y=2 face)
+
+
+def test_traction_in_mpa_is_force_per_area(bar):
+    """A traction t (MPa) on a face of area A gives the resultant t·A (N): on a flat face and on
+    a curved hole wall (π d t of the bar's hole, followed by the curved P2 faces)."""
+    fm = fe_mesh(box(3, 2, 1, 3, 2, 2), 2)
+    force, _ = resultant(fm, load_vector(fm, {}, RHO, Traction("xmax", (10.0, -4.0, 2.5))), 0)
+    assert np.allclose(force, np.array([10.0, -4.0, 2.5]) * 2 * 1, atol=1e-12)
+    part, fm = bar
+    force, _ = resultant(fm, load_vector(fm, part.holes, RHO, Traction("h1", (0, 0, 3.0))), 0)
+    assert force[2] == pytest.approx(3.0 * np.pi * 8 * 10, rel=1e-4)
+    with pytest.raises(InputError, match="traction_mpa"):
+        load_vector(fm, part.holes, RHO, Traction("h1", (np.nan, 0, 0)))
+
+
+def test_bar_in_tension_by_a_traction_has_uniform_stress():
+    """Bar 40 × 6 × 4 mm, end face pulled by σ = 50 MPa, held by symmetry planes at the other end:
+    σxx = σ everywhere, the other components 0, end displacement σL/E (exact for a linear field)."""
+    sigma, L = 50.0, 40.0
+    steel = get_material("rig_steel")
+    model = build_model(box(L, 6, 4, 8, 2, 2), steel, 2)
+    sol = solve(model, [Symmetry("xmin"), Symmetry("ymin"), Symmetry("zmin")], [Traction("xmax", (sigma, 0, 0))])
+    s = sol.stress()
+    assert np.allclose(s[:, 0], sigma, rtol=1e-8) and np.abs(s[:, 1:]).max() < 1e-8 * sigma
+    tip = np.isclose(model.mesh.nodes[:, 0], L)
+    assert np.allclose(sol.displacement()[tip, 0], sigma * L / steel.E, rtol=1e-8)
 
 
 def test_gravity_and_inertia_match_rigid_body_dynamics():

@@ -1,5 +1,5 @@
 """A regular (non-editable) install works from any folder: the wheel carries the part
-definitions of geometry/ and the built-in scenes."""
+definitions of geometry/, the rig reference they cite, and the built-in scenes."""
 
 import os
 import subprocess
@@ -19,6 +19,8 @@ def test_wheel_runs_from_another_folder(tmp_path):
     wheel = next(wheels.glob("rigfem-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     assert "rigfem/geometry/rail_size25.toml" in names and "rigfem/scenes/final-cm.toml" in names
+    docs = {p.name for p in (ROOT / "geometry").glob("*.md")}  # the rig reference the part files cite
+    assert docs and docs <= {n.rpartition("/")[2] for n in names if n.startswith("rigfem/geometry/")}
     site = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(site), str(wheel)],
                    check=True, capture_output=True)

@@ -1,6 +1,6 @@
 """Closed-form kinematics (rigfem.linkage.kinematics) against finite differences of its own
-positions, against the general planar solver on every MECHANISMS.md linkage, and the
-MECHANISMS.md §6 instant against a hand-derived closed form."""
+positions, against the general planar solver on every geometry/MECHANISMS.md linkage, and the
+geometry/MECHANISMS.md §6 instant against a hand-derived closed form."""
 
 import json
 

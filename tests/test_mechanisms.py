@@ -1,4 +1,4 @@
-"""The seven MECHANISMS.md linkages, read from the shipped scene files, against closed-form
+"""The seven geometry/MECHANISMS.md linkages, read from the shipped scene files, against closed-form
 kinematics (and, for #5, a hand-solved Newton–Euler force analysis)."""
 
 import numpy as np

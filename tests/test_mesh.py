@@ -9,6 +9,7 @@ import pytest
 from rigfem.errors import InputError
 from rigfem.mesh import (
     MeshSettings,
+    curvature_n,
     estimate,
     fit_cylinder,
     mesh_part,
@@ -167,7 +168,7 @@ def test_cache_hit_on_repeat_and_miss_on_change(tmp_path):
 
 def test_memory_guard_refuses_before_meshing():
     part = load_part("rail_size25", {"length": 1000})
-    with pytest.raises(InputError, match="increase --size"):
+    with pytest.raises(InputError, match=r"increase size_mm \(--size\)"):
         mesh_part(part, MeshSettings(0.1), use_cache=False)
 
 
@@ -286,4 +287,4 @@ def test_concentrators_meshed_at_half_the_refined_size():
 
 def test_curved_surfaces_refine_with_the_global_size():
     """Curvature sizing follows the global size (48 mm / size elements per 2 pi, at least 6)."""
-    assert [MeshSettings(s).curvature_n for s in (11.3, 8.0, 6.0, 4.0, 2.0)] == [6, 6, 8, 12, 24]
+    assert [curvature_n(MeshSettings(s)) for s in (11.3, 8.0, 6.0, 4.0, 2.0)] == [6, 6, 8, 12, 24]

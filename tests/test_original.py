@@ -1,4 +1,4 @@
-"""The 2013 program reproduced: calibration case of RIG.md §3 to better than 1e-4 relative."""
+"""The 2013 program reproduced: calibration case of geometry/RIG.md §3 to better than 1e-4 relative."""
 
 import numpy as np
 import pytest
@@ -6,7 +6,7 @@ import pytest
 from rigfem.dynamics import fourbar_kinematics, original_program, peaks, simulate
 from rigfem.linkage import four_bar
 
-#: RIG.md §3, the study's printed figures for b2=540 b3=840 b4=780 d=1020 mm at 1 Hz
+#: geometry/RIG.md §3, the study's printed figures for b2=540 b3=840 b4=780 d=1020 mm at 1 Hz
 CALIBRATION = {"O2": 641.9099, "A": 578.8140, "B": 379.4016, "O4": 366.4701,
                "torque_Nm": 199.7707, "mu_max_deg": 148.6930, "mu_min_deg": 34.2160}
 
@@ -29,7 +29,7 @@ def test_original_model_through_simulate_matches_calibration():
 
 
 def test_transmission_angle_extremes_closed_form():
-    """RIG.md §2: cos mu_min/max from the crank aligned with the ground line."""
+    """geometry/RIG.md §2: cos mu_min/max from the crank aligned with the ground line."""
     b2, b3, b4, d = 540, 840, 780, 1020
     mu_min = np.degrees(np.arccos((b3**2 + b4**2 - (d - b2) ** 2) / (2 * b3 * b4)))
     mu_max = np.degrees(np.arccos((b3**2 + b4**2 - (d + b2) ** 2) / (2 * b3 * b4)))

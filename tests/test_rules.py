@@ -1,4 +1,4 @@
-"""RIG.md §2 rules: each rule passes and fails where the table says."""
+"""geometry/RIG.md §2 rules: each rule passes and fails where the table says."""
 
 import numpy as np
 import pytest

@@ -1,7 +1,8 @@
 """The ``rigfem`` command: one module per subcommand in this package.
 
 Each subcommand module defines ``HELP`` (one line), ``add_arguments(parser)`` and
-``run(args) -> int`` (the exit code).  Bad input raises :class:`rigfem.errors.InputError`
+``run(args) -> int`` (the exit code); a command without a verdict also defines ``SUCCESS``,
+the meaning of its exit code 0 (its ``--help`` then lists no verdict codes).  Bad input raises :class:`rigfem.errors.InputError`
 (one line on stderr, exit 2); what rigfem could not compute raises
 :class:`rigfem.errors.ComputeError` (exit 3).  Any other exception is an internal error: one
 line and exit 3, the traceback only with ``--debug``.  Ctrl-C and SIGTERM end quietly.
@@ -15,7 +16,7 @@ import signal
 import sys
 import traceback
 
-from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, TABLE, TERMINATED
+from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, TABLE, TERMINATED, table
 from rigfem.errors import ComputeError, InputError
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
@@ -54,7 +55,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
     for name, mod in _available(words[0] if words else None).items():
-        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=TABLE)
+        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=table(getattr(mod, "SUCCESS", None)))
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser

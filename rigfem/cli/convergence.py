@@ -186,8 +186,8 @@ def summary(results: list[dict]) -> str:
              "Error = preset peak vs the Richardson-extrapolated peak of the h sequence (P2, three finest "
              "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in TARGETS.items()) + ". "
              "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
-             "Presets: " + "; ".join(f"{n}: P{f['order']}, {f['size_mm']:g}/{f['local_size_mm']:g} mm, "
-                                     f"{f['bearing_directions']} dirs" for n, f in FIDELITY.items()) + ".",
+             "Presets: " + "; ".join(f"{n}: P{f.order}, {f.size_mm:g}/{f.near_mm:g} mm, "
+                                     f"{f.bearing_directions} dirs" for n, f in FIDELITY.items()) + ".",
              "Uncertainty: GCI of the finest h level (Roache, safety factor 1.25). Oscillating and "
              "noise-limited sequences (last changes ≤ 1 %, not growing) have no Richardson limit: their "
              "reference is the finest level, the uncertainty its last change (× 1.25 if noise-limited).",

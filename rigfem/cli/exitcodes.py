@@ -13,6 +13,16 @@ INTERRUPTED, TERMINATED = 130, 143
 #: verdict of a check -> exit code
 EXIT = {"pass": PASS, "fail": FAIL, "undecided": FAIL}
 
+
+
+def table(success: str | None = None) -> str:
+    """The exit codes of a command, for its ``--help``: a check's verdict codes (0, 1), or, for a
+    command that has no verdict, 0 with its ``success`` meaning (no 1)."""
+    first = (f"0 {success}" if success else
+             "0 every part passes, 1 a part fails or cannot be decided")
+    return (f"exit codes: {first}, 2 bad input, 3 could not compute (mesher, solver or internal error), "
+            "130 Ctrl-C, 143 SIGTERM")
+
+
 #: the table printed by ``rigfem --help`` and README
-TABLE = ("exit codes: 0 every part passes, 1 a part fails or cannot be decided, 2 bad input, "
-         "3 could not compute (mesher, solver or internal error), 130 Ctrl-C, 143 SIGTERM")
+TABLE = table()

@@ -3,23 +3,31 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from rigfem.errors import InputError, check_range
-from rigfem.mesh.mesher import DEFAULT_SIZE, MeshSettings, mesh_part
-from rigfem.mesh.partmesh import write_mesh
+from rigfem.mesh.mesher import DEFAULT_SIZE, mesh_part
+from rigfem.mesh.partmesh import PartMesh, write_mesh
 from rigfem.rig.parts import load_part
+from rigfem.settings import FIDELITY, MeshSettings, preset
 
 HELP = "mesh a part (known name or .geo/.step/.brep file) and write .vtu or .msh"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "mesh written"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("part", metavar="PART", help="part name (see `rigfem parts`) or geometry file")
     parser.add_argument("--length", type=float, metavar="MM", help="part length, mm (rails: any length)")
+    parser.add_argument("--fidelity", choices=list(FIDELITY), metavar="PRESET",
+                        help=f"start from a check's mesh preset ({' | '.join(FIDELITY)}); --size and "
+                             f"--local-size override it")
     parser.add_argument("--size", type=float, metavar="MM",
-                        help=f"global element size, mm (default by kind: {DEFAULT_SIZE})")
+                        help=f"global element size, mm (default: the preset's, else by kind: {DEFAULT_SIZE})")
     parser.add_argument("--refine", default="", metavar="G1,G2",
                         help="surface groups that carry load, refined (e.g. hole_10,hole_11)")
-    parser.add_argument("--refine-size", type=float, metavar="MM", help="size at refined groups (default size/4)")
+    parser.add_argument("--local-size", "--refine-size", dest="local_size", type=float, metavar="MM",
+                        help="size at the refined groups, mm (default: the preset's, else size/4)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="1: tetra, 2: tetra10 (default 1)")
     parser.add_argument("--set", action="append", default=[], metavar="DIM=VALUE",
                         help="override a dimension of the part file, mm (repeatable)")
@@ -40,20 +48,46 @@ def _overrides(args: argparse.Namespace) -> dict[str, float]:
     return out
 
 
+def _settings(args: argparse.Namespace, kind: str) -> MeshSettings:
+    """The preset (or the kind's default size), with the options given on top of it."""
+    base = preset(args.fidelity) if args.fidelity else MeshSettings(DEFAULT_SIZE[kind])
+    size = check_range("--size", args.size if args.size is not None else base.size_mm, 0.0, None, "mm",
+                       lo_open=True)
+    local = args.local_size if args.local_size is not None else (base.local_size_mm if args.fidelity else None)
+    if local is not None:
+        check_range("--local-size", local, 0.0, size, "mm", lo_open=True)
+    refine = tuple(g.strip() for g in args.refine.split(",") if g.strip())
+    return replace(base, size_mm=size, local_size_mm=local, refine=refine,
+                   min_quality=check_range("--min-quality", args.min_quality, 0.0, 1.0))
+
+
+def refinement(pm: PartMesh, settings: MeshSettings) -> str:
+    """Where the mesh is finer than the global size, by surface name: the groups refined on
+    request and the curved ones that curvature sizing meshes finer, or why nothing is."""
+    said = []
+    if settings.refine:
+        said.append(f"refined on {', '.join(settings.refine)} to {settings.near_mm:g} mm")
+    curved = pm.meta.get("curved", {})
+    if curved:
+        said.append("finer by curvature on " + ", ".join(f"{k} ({v:.2g} mm)" for k, v in sorted(curved.items())))
+    if not said:
+        return (f"no surface refined: every surface at the global size (name load-carrying groups with "
+                f"--refine; groups: {', '.join(sorted(pm.surfaces))})")
+    return "; ".join(said)
+
+
 def run(args: argparse.Namespace) -> int:
     part = load_part(args.part, _overrides(args))
-    size = args.size if args.size is not None else DEFAULT_SIZE[part.kind]
-    refine = tuple(g.strip() for g in args.refine.split(",") if g.strip())
-    settings = MeshSettings(check_range("--size", size, 0.0, None, "mm", lo_open=True), refine,
-                            args.refine_size, min_quality=args.min_quality)
+    settings = _settings(args, part.kind)
     if not args.out.lower().endswith((".vtu", ".msh")):
         raise InputError(f"--out {args.out}: file type must be .vtu or .msh")
     pm = mesh_part(part, settings, use_cache=not args.no_cache)
     write_mesh(pm, args.out, args.order)
     q, m = pm.quality, pm.meta
     dims = ", ".join(f"{k} {d.value:g}" for k, d in part.dims.items() if d.source == "override")
-    print(f"{part.name}{f' ({dims} mm)' if dims else ''}: {len(pm.points)} nodes, {len(pm.tets)} tets "
-          f"(size {settings.size:g} mm, refined {', '.join(refine) or 'nowhere'} at {settings.size_near:g} mm)")
+    print(f"{part.name}{f' ({dims} mm)' if dims else ''}: {len(pm.points)} nodes, {len(pm.tets)} tets, "
+          f"global size {settings.size_mm:g} mm{f' ({args.fidelity} preset)' if args.fidelity else ''}")
+    print(refinement(pm, settings))
     print(f"quality minSICN: min {q['min']:.3f}, p01 {q['p01']:.3f}, p05 {q['p05']:.3f}, median {q['median']:.3f}")
     how = "cache hit (meshed earlier in" if m["cache"] == "hit" else "meshed (cache miss) in"
     print(f"estimate {m['estimate_tets']} tets, {m['estimate_gib']:.3g} GiB; {how} {m['seconds']:.2f} s"

@@ -55,14 +55,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     _rig_arguments(f, motion=False)
     m = sub.add_parser("motion", help="three-position motion generation of a coupler point",
                        description="three-position motion generation of a coupler point (dyads in standard "
-                                   "form); without --beta/--gamma the free choices maximise the smallest "
+                                   "form); without the crank and rocker rotations the free choices maximise the smallest "
                                    "transmission angle")
     # "-15.12,-9" is a position, not an option: let argparse read negative coordinates
     m._negative_number_matcher = re.compile(r"^-\.?\d")
     m.add_argument("--points", nargs=3, required=True, metavar="X,Y", help="the three positions, in order")
-    m.add_argument("--alpha", nargs=2, metavar=("A2", "A3"), help="coupler rotations from position 1 (deg)")
-    m.add_argument("--beta", nargs=2, metavar=("B2", "B3"), help="crank rotations from position 1 (deg)")
-    m.add_argument("--gamma", nargs=2, metavar=("G2", "G3"), help="rocker rotations from position 1 (deg)")
+    m.add_argument("--coupler-rotations", "--alpha", dest="alpha", nargs=2, metavar=("A2", "A3"),
+                   help="coupler rotations from position 1 to 2 and 3 (deg; alias --alpha)")
+    m.add_argument("--crank-rotations", "--beta", dest="beta", nargs=2, metavar=("B2", "B3"),
+                   help="crank rotations from position 1 to 2 and 3 (deg; alias --beta)")
+    m.add_argument("--rocker-rotations", "--gamma", dest="gamma", nargs=2, metavar=("G2", "G3"),
+                   help="rocker rotations from position 1 to 2 and 3 (deg; alias --gamma)")
     m.add_argument("--json", action="store_true", help="print one JSON object")
     _rig_arguments(m, motion=True)
 
@@ -116,9 +119,11 @@ def _motion(args) -> int:
     def angles(flag, v):
         return None if v is None else [check_range(flag, a, -360, 360, "deg") for a in v]
 
-    al, be, ga = angles("--alpha", args.alpha), angles("--beta", args.beta), angles("--gamma", args.gamma)
+    al, be, ga = (angles("--coupler-rotations", args.alpha), angles("--crank-rotations", args.beta),
+                  angles("--rocker-rotations", args.gamma))
     if (be is None) != (ga is None) or (be is not None and al is None):
-        raise InputError("give --alpha, --beta and --gamma together (analytic), or none/only --alpha (optimised)")
+        raise InputError("give --coupler-rotations, --crank-rotations and --rocker-rotations together "
+                         "(analytic), or none/only --coupler-rotations (optimised)")
     r = three_position(P, al, be, ga) if be is not None else optimise_three_position(P, al)
     r["optimised"] = be is None
     r.update(check_three_position(r))

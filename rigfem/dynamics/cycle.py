@@ -1,7 +1,7 @@
 """One crank turn's reaction history, what the stress checker calls: the rigid-body model
 (``rigfem.dynamics.solver``) or the 2013 program (``rigfem.dynamics.original``).
 
-Mass models (RIG.md §3): ``"rigid-body"`` (default) — the bodies' mass data as the catalogue
+Mass models (geometry/RIG.md §3): ``"rigid-body"`` (default) — the bodies' mass data as the catalogue
 builds it (:mod:`rigfem.linkage.mechanisms`); ``"original"`` — the 2013 program (four-bar
 only), with the study's rail mass and its pivot at the guide's end.
 """

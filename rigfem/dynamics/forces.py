@@ -38,7 +38,7 @@ def applied(load: Load, theta_rad: np.ndarray, origin_m: np.ndarray, phi: np.nda
 
 def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,
                          c_mm: float = 100.0):
-    """MECHANISMS.md #5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
+    """geometry/MECHANISMS.md #5 gas force on the piston, F = p (V1/V2 - 1) pushing it towards the crank.
 
     V1 ∝ L - c - b3 + b2 (bottom dead centre), V2 ∝ L - c - x (x = piston distance from O2).
     """

@@ -1,4 +1,4 @@
-"""Exact reproduction of the 2013 four-bar dynamics program (RIG.md §3), quirks included.
+"""Exact reproduction of the 2013 four-bar dynamics program (geometry/RIG.md §3), quirks included.
 
 Closed-form four-bar kinematics at constant crank speed, then per crank angle the
 program's 9 linear equations (force balance of bars 2, 3, 4 and three moment

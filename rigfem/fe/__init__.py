@@ -10,7 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "assembly": ["TET_EDGES", "TRI_EDGES", "NODE_BARY", "MIN_JACOBIAN", "FEMesh", "fe_mesh", "tet_quadrature", "tri_quadrature", "shape_values", "shape_dL", "bary_gradients", "geometry", "points_at", "volume", "element_dofs", "stiffness", "block_pattern"],
         "cache": ["SOLUTION_RECIPE", "solution_key", "load_solution", "save_solution", "cached_solve"],
-        "forces": ["SurfaceForce", "Pressure", "BearingLoad", "Torque", "BoltCircleTorque", "Gravity", "Inertia", "Load", "outward_normals", "bearing_vector", "torque_vector", "body_vector", "load_vector"],
+        "forces": ["SurfaceForce", "Traction", "Pressure", "BearingLoad", "Torque", "BoltCircleTorque", "Gravity", "Inertia", "Load", "outward_normals", "bearing_vector", "torque_vector", "body_vector", "load_vector"],
         "model": ["Model", "LOCKING_NU", "build_model", "load_matrix", "ExportData", "export_data", "StaticProblem", "solve"],
         "partcase": ["CONCENTRATORS", "mesh_case", "supports_of", "fe_load", "relieved_cases", "CaseResult", "solve_cases"],
         "solution": ["Peak", "Solution"],

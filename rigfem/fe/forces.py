@@ -4,8 +4,10 @@ Every load is a small frozen dataclass; :func:`load_vector` turns it into the
 consistent nodal force vector (length 3·nodes) of a model.  Forces act *on*
 the part.
 
-* :class:`SurfaceForce` — a total force spread as uniform traction.
-* :class:`Pressure` — uniform pressure p on a surface (traction −p·n, n the
+* :class:`SurfaceForce` — a total force (N) spread as uniform traction.
+* :class:`Traction` — a uniform traction vector in MPa (N/mm², force per area) on a
+  surface: the load as an engineer states a stress (σ on an end face).
+* :class:`Pressure` — uniform pressure p in MPa on a surface (traction −p·n, n the
   outward normal; p > 0 pushes into the material).
 * :class:`BearingLoad` — a pin/bolt pushing on a hole with force F: normal
   pressure p0·cos θ over the half of the wall the pin pushes on (θ measured from
@@ -52,8 +54,16 @@ class SurfaceForce:
 
 
 @dataclass(frozen=True)
+class Traction:
+    """Uniform traction (3,) in MPa (N/mm²) on a named surface; its resultant is traction × area."""
+
+    surface: str
+    traction_mpa: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
 class Pressure:
-    """Uniform pressure (positive into the material) on a named surface."""
+    """Uniform pressure p in MPa (positive into the material) on a named surface."""
 
     surface: str
     p: float
@@ -100,7 +110,7 @@ class Inertia:
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
-Load = SurfaceForce | Pressure | BearingLoad | Torque | BoltCircleTorque | Gravity | Inertia
+Load = SurfaceForce | Traction | Pressure | BearingLoad | Torque | BoltCircleTorque | Gravity | Inertia
 
 
 def _assemble_surface(fm: FEMesh, name: str, traction, degree: int) -> np.ndarray:
@@ -220,6 +230,9 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
         F = _vec(f"SurfaceForce({load.surface!r}).force", load.force)
         pts, w, _, _ = surface_quadrature(fm, load.surface, 2)
         return _assemble_surface(fm, load.surface, lambda x: np.broadcast_to(F / w.sum(), x.shape), 2)
+    if isinstance(load, Traction):
+        t = _vec(f"Traction({load.surface!r}).traction_mpa", load.traction_mpa)
+        return _assemble_surface(fm, load.surface, lambda x: np.broadcast_to(t, x.shape), 2)
     if isinstance(load, Pressure):
         p = float(load.p)
         if not np.isfinite(p):
@@ -251,5 +264,5 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
             r = x - o
             return -(a0 + np.cross(al, r) + np.cross(om, np.cross(om, r)))
         return body_vector(fm, density, minus_accel)
-    raise InputError(f"loads: {load!r} is not a load (SurfaceForce, BearingLoad, Torque, BoltCircleTorque, "
+    raise InputError(f"loads: {load!r} is not a load (SurfaceForce, Traction, Pressure, BearingLoad, Torque, BoltCircleTorque, "
                      f"Gravity, Inertia)")

@@ -34,13 +34,13 @@ from rigfem.rig.parts import load_part
 CONCENTRATORS = ("fillets",)
 
 
-def mesh_case(case: PartCase, size_mm: float, local_size_mm: float) -> PartMesh:
-    """The (cached) mesh of a case's part, refined at the interfaces that carry its load and,
-    twice as finely, at the refined groups that concentrate stress (:data:`CONCENTRATORS`)."""
+def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
+    """The (cached) mesh of a case's part at ``settings`` (a preset or a check's settings), refined
+    at the interfaces that carry its load and, twice as finely, at the refined groups that
+    concentrate stress (:data:`CONCENTRATORS`)."""
     part = load_part(case.part, case.params or None)
     conc = tuple(g for g in case.refine if g in CONCENTRATORS)
-    return mesh_part(part, MeshSettings(size=size_mm, refine=tuple(g for g in case.refine if g not in conc),
-                                        refine_size=local_size_mm, concentrate=conc))
+    return mesh_part(part, settings.refined(tuple(g for g in case.refine if g not in conc), conc))
 
 
 def supports_of(case: PartCase) -> list:
@@ -140,7 +140,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
         t0 = time.perf_counter()
         refine = tuple(sorted({g for _, c in group for g in c.refine}))
         first = group[0][1]
-        pm = mesh_case(dataclasses.replace(first, refine=refine), settings.size_mm, settings.local_size_mm)
+        pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
         model = build_model(pm, settings.material, settings.order)
         t_model = time.perf_counter() - t0
         by_support: dict[tuple, list[tuple[str, PartCase]]] = {}

@@ -1,6 +1,6 @@
 """Closed-form kinematics of the four-bar and the slider-crank, vectorised over crank angles.
 
-Conventions (MECHANISMS.md): O2 at the origin, the ground line along +x, the crank angle
+Conventions (geometry/MECHANISMS.md): O2 at the origin, the ground line along +x, the crank angle
 theta2 counter-clockwise from +x (degrees in); four-bar O4 at (d, 0); slider-crank slider on
 the line y = offset on the +x side.  Link rates in rad/s and rad/s², points in mm, mm/s,
 mm/s².  The driver turns at ``omega`` (rad/s, negative = clockwise) with angular

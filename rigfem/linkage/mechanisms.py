@@ -6,7 +6,7 @@ Builders (lengths in mm, angles in degrees) return a :class:`rigfem.linkage.mode
 the one a scene names.  Their ``start_deg`` is the crank angle at which the initial assembly
 (hence the branch) is computed; lengths below 10 mm are rejected as probable metres.
 
-Mass data (RIG.md §3), ``masses="rig"``: every rail is a uniform bar of the catalogue's
+Mass data (geometry/RIG.md §3), ``masses="rig"``: every rail is a uniform bar of the catalogue's
 linear mass over its full guide length L_i, reaching ``rail_behind_mm`` behind the bar's
 first joint as the meshed rail does (centre of mass L_i/2 − rail_behind_mm from that joint,
 I_G = m L_i²/12), carriages, plates and couplings as particles at their joints.  The forces
@@ -88,7 +88,7 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
 
     Bodies ``crank`` (O2->A), ``coupler`` (A->B), ``rocker`` (O4->B); joints O2, A, B, O4.
     ``masses="rig"``: rails of ``rails_mm`` with plate+carriage at A on the crank, coupling
-    at A and plate+carriage at B on the coupler, coupling at B on the rocker (RIG.md §3).
+    at A and plate+carriage at B on the coupler, coupling at B on the rocker (geometry/RIG.md §3).
     ``masses=None``: massless unless ``body_masses`` (name -> Body keyword dict) says so.
     ``coupler_point`` (distance mm from A, angle deg from the coupler line) is recorded
     in meta and reported by :func:`coupler_point_path`.  Raises AssemblyError naming the

@@ -18,6 +18,7 @@ from rigfem.mesh.partmesh import (
     quality_summary,
     save_npz,
 )
+from rigfem.settings import MeshSettings
 
 #: bump when the meshing recipe changes, so cached meshes are not reused
 MESH_RECIPE = 5  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
@@ -38,35 +39,10 @@ TETS_PER_H3 = 8.4
 CURVATURE_MM = 48.0
 
 
-@dataclass(frozen=True)
-class MeshSettings:
-    """How to mesh a part: global size, and finer size near the surfaces that carry load."""
-
-    size: float  #: mm, global (largest) element size
-    refine: tuple[str, ...] = ()  #: surface groups carrying load: refined, everything else coarse
-    refine_size: float | None = None  #: mm, size on the refined surfaces (default size/4)
-    refine_dist: float | None = None  #: mm, distance over which the size grows back (default 2*size)
-    min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
-    concentrate: tuple[str, ...] = ()  #: refined groups that raise stress (fillets): half the refined size
-
-    @property
-    def size_near(self) -> float:
-        return self.refine_size if self.refine_size is not None else self.size / 4
-
-    @property
-    def dist(self) -> float:
-        return self.refine_dist if self.refine_dist is not None else 2 * self.size
-
-    def key(self) -> dict:
-        return {"size": self.size, "refine": sorted(self.refine), "refine_size": self.size_near,
-                "refine_dist": self.dist, "min_quality": self.min_quality,
-                "concentrate": sorted(self.concentrate)}
-
-    @property
-    def curvature_n(self) -> int:
-        """Elements per 2*pi on a curved surface: CURVATURE_MM / size (at least 6), so curved
-        faces (rail grooves, holes) get finer with the global size and a size sequence converges."""
-        return max(6, round(CURVATURE_MM / self.size))
+def curvature_n(s: MeshSettings) -> int:
+    """Elements per 2*pi on a curved surface: CURVATURE_MM / size (at least 6), so curved
+    faces (rail grooves, holes) get finer with the global size and a size sequence converges."""
+    return max(6, round(CURVATURE_MM / s.size_mm))
 
 
 #: default global element size per part kind, mm (rail: about 4 elements across its 23 x 24 section)
@@ -89,17 +65,17 @@ class Estimate:
 def estimate_tets(volume: float, refined_area: float, s: MeshSettings, concentrated_area: float = 0.0) -> int:
     """Tetrahedra gmsh will make: volume/h^3 plus a graded layer over the refined surfaces.
 
-    The size grows linearly from ``size_near`` (half that on concentrators) at a refined surface
-    to ``size`` at ``dist``; a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3)
-    over 0..dist extra tets (at most the whole volume at the refined size).
+    The size grows linearly from ``near_mm`` (half that on concentrators) at a refined surface
+    to ``size_mm`` at ``dist_mm``; a layer of area A then holds A * integral of (1/h(d)^3 - 1/size^3)
+    over 0..dist_mm extra tets (at most the whole volume at the refined size).
     """
-    h, D = s.size, s.dist
+    h, D = s.size_mm, s.dist_mm
 
     def layer(hn: float) -> float:
         hn = min(hn, h)
         return D / (h - hn) * (1 / (2 * hn**2) - 1 / (2 * h**2)) - D / h**3 if h - hn > 1e-12 else 0.0
 
-    hn = min(s.size_near, h)
+    hn = min(s.near_mm, h)
     extra = refined_area * layer(hn) + concentrated_area * layer(hn / 2)
     return int(TETS_PER_H3 * min(volume / h**3 + extra, volume / (hn / 2 if concentrated_area else hn)**3))
 
@@ -209,15 +185,15 @@ def second_order(groups: dict[str, list[int]], rtol: float = 1e-3):
 def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> None:
     import gmsh
 
-    gmsh.option.setNumber("Mesh.MeshSizeMax", s.size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", s.size_mm)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", s.curvature_n)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature_n(s))
     gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
     if not refine_tags:
         return
     f = gmsh.model.mesh.field
     plain = [t for t in refine_tags if t not in conc_tags]
-    ths = [_threshold(tags, size, s) for tags, size in ((plain, s.size_near), (conc_tags, s.size_near / 2))
+    ths = [_threshold(tags, size, s) for tags, size in ((plain, s.near_mm), (conc_tags, s.near_mm / 2))
            if tags]
     if len(ths) > 1:
         both = f.add("Min")
@@ -227,8 +203,8 @@ def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
 
 
-def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
-    """A gmsh Threshold field: ``size_near`` on the surfaces ``tags``, growing to ``s.size`` at ``s.dist``."""
+def _threshold(tags: list[int], near_mm: float, s: MeshSettings) -> int:
+    """A gmsh Threshold field: ``near_mm`` on the surfaces ``tags``, growing to ``s.size_mm`` at ``s.dist_mm``."""
     import gmsh
 
     f = gmsh.model.mesh.field
@@ -237,13 +213,13 @@ def _threshold(tags: list[int], size_near: float, s: MeshSettings) -> int:
     extent = max(float(np.ptp(np.array(gmsh.model.getBoundingBox(2, t)).reshape(2, 3), axis=0).max())
                  for t in tags)
     # sample points on each surface about half a refined element apart (within 20..500 per direction)
-    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / size_near), 20, 500)))
+    f.setNumber(dist, "Sampling", int(np.clip(np.ceil(2 * extent / near_mm), 20, 500)))
     th = f.add("Threshold")
     f.setNumber(th, "InField", dist)
-    f.setNumber(th, "SizeMin", min(size_near, s.size))
-    f.setNumber(th, "SizeMax", s.size)
+    f.setNumber(th, "SizeMin", min(near_mm, s.size_mm))
+    f.setNumber(th, "SizeMax", s.size_mm)
     f.setNumber(th, "DistMin", 0.0)
-    f.setNumber(th, "DistMax", s.dist)
+    f.setNumber(th, "DistMax", s.dist_mm)
     return th
 
 
@@ -259,9 +235,9 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     from rigfem.errors import InputError, check_range
     from rigfem.mesh.geometry import build, gmsh_session
 
-    check_range("size", settings.size, 0.0, None, "mm", lo_open=True)
-    check_range("refine_size", settings.size_near, 0.0, None, "mm", lo_open=True)
-    check_range("refine_dist", settings.dist, 0.0, None, "mm", lo_open=True)
+    check_range("size_mm", settings.size_mm, 0.0, None, "mm", lo_open=True)
+    check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
+    check_range("refine_dist_mm", settings.dist_mm, 0.0, None, "mm", lo_open=True)
     check_range("min_quality", settings.min_quality, 0.0, 1.0)
     key_src = {"part": part.content_hash(), "settings": settings.key(), "recipe": MESH_RECIPE,
                "gmsh": gmsh.__version__}
@@ -287,11 +263,12 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         refine_tags, conc_tags = (sorted({t for g in names for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
                                   for names in (settings.refine + settings.concentrate, settings.concentrate))
         est = _estimate_model(refine_tags, conc_tags, settings)
+        curved = _curved_groups(groups, settings)
         if est.gib > machine_gib:
-            raise InputError(f"size = {settings.size:g} mm (refine_size = {settings.size_near:g} mm) "
+            raise InputError(f"size_mm = {settings.size_mm:g} mm (local_size_mm = {settings.near_mm:g} mm) "
                              f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
                              f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
-                             f"more than the machine's {machine_gib:g} GiB: increase --size")
+                             f"more than the machine's {machine_gib:g} GiB: increase size_mm (--size)")
         _set_fields(refine_tags, conc_tags, settings)
         gmsh.model.mesh.generate(3)
         q = _quality()
@@ -304,20 +281,20 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
             q = _quality()
         if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
             raise InputError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
-                             f"min_quality = {settings.min_quality:g}; change size = {settings.size:g} mm "
-                             f"or refine_size = {settings.size_near:g} mm (or check thin walls in the part file)")
+                             f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
+                             f"or local_size_mm = {settings.near_mm:g} mm (or check thin walls in the part file)")
         points, tets, surfaces, edges, mids = second_order(
             {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()})
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
-        raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size = {settings.size:g} mm")
+        raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size_mm = {settings.size_mm:g} mm")
     if not holes:  # custom part: cylinders fitted to the meshed surfaces
         holes = {k: h for k, v in surfaces.items() if (h := fit_cylinder(points, v)) is not None}
     quality = quality_summary(q)  # of the linear mesh, before gmsh curved it
     meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
             "density": part.density, "settings": settings.key(), "hash": key,
-            "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
+            "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     if use_cache:
         save_npz(pm, path)
@@ -326,7 +303,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
 
 def _estimate_model(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -> Estimate:
     """Estimate from the current gmsh model's volume, the area of the refined surfaces and the
-    curved surfaces that curvature-based sizing meshes finer than ``s.size``."""
+    curved surfaces that curvature-based sizing meshes finer than ``s.size_mm``."""
     import gmsh
 
     occ_vols = gmsh.model.occ.getEntities(3)
@@ -334,7 +311,7 @@ def _estimate_model(refine_tags: list[int], conc_tags: list[int], s: MeshSetting
         volume = sum(gmsh.model.occ.getMass(3, t) for _, t in occ_vols)
         area = sum(gmsh.model.occ.getMass(2, t) for t in refine_tags if t not in conc_tags)
         conc = sum(gmsh.model.occ.getMass(2, t) for t in conc_tags)
-        curved = [(gmsh.model.occ.getMass(2, t), _curvature_size(t, s.curvature_n)) for _, t in gmsh.model.getEntities(2)
+        curved = [(gmsh.model.occ.getMass(2, t), _curvature_size(t, curvature_n(s))) for _, t in gmsh.model.getEntities(2)
                   if t not in refine_tags]
     else:  # built-in kernel: bounding box as an upper bound
         lo, hi = np.array(gmsh.model.getBoundingBox(-1, -1)).reshape(2, 3)
@@ -344,8 +321,24 @@ def _estimate_model(refine_tags: list[int], conc_tags: list[int], s: MeshSetting
         curved, conc = [], 0.0
     tets = estimate_tets(volume, area, s, conc)
     # a layer one curvature size hc thick over a curved surface: A*hc/hc^3 tets instead of A*hc/h^3
-    tets += int(TETS_PER_H3 * sum(a * (1 / hc**2 - hc / s.size**3) for a, hc in curved if hc < s.size))
+    tets += int(TETS_PER_H3 * sum(a * (1 / hc**2 - hc / s.size_mm**3) for a, hc in curved if hc < s.size_mm))
     return estimate(tets)
+
+
+def _curved_groups(groups: dict[str, int], s: MeshSettings) -> dict[str, float]:
+    """Surface groups not in ``s.refine`` that curvature sizing meshes finer than ``s.size_mm``:
+    name -> their smallest curvature size, mm (OpenCASCADE models; the built-in kernel gives none)."""
+    import gmsh
+
+    if not gmsh.model.occ.getEntities(3):
+        return {}
+    out = {}
+    for name, tag in groups.items():
+        if name not in s.refine:
+            h = min(_curvature_size(t, curvature_n(s)) for t in gmsh.model.getEntitiesForPhysicalGroup(2, tag))
+            if h < s.size_mm:
+                out[name] = round(float(h), 3)
+    return out
 
 
 def _curvature_size(tag: int, n: int) -> float:

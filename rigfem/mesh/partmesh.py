@@ -9,8 +9,8 @@ gmsh moved to keep the elements next to them valid), so P2 elements follow the g
 instead of faceting it (:func:`quadratic`).
 
 :func:`mesh_part` meshes a part of :mod:`rigfem.rig.parts` in gmsh (OpenCASCADE geometry, HXT
-linear tets, one thread so identical input gives an identical mesh): a global ``size`` and a
-Distance/Threshold field that grades down to ``refine_size`` at the surface groups that carry
+linear tets, one thread so identical input gives an identical mesh): a global ``size_mm`` and a
+Distance/Threshold field that grades down to ``local_size_mm`` at the surface groups that carry
 load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates the element count
 and the memory of the mesh and of a direct P2 solve on it and refuses requests above the
 machine (24 GiB); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and

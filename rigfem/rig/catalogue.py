@@ -1,4 +1,4 @@
-"""The rig's catalogue: rail lengths and the point masses of plates, carriages and couplings (RIG.md §3)."""
+"""The rig's catalogue: rail lengths and the point masses of plates, carriages and couplings (geometry/RIG.md §3)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class RigMasses:
-    """The rig's mass catalogue (RIG.md §3): rails, carriage, plate, coupling (kg).
+    """The rig's mass catalogue (geometry/RIG.md §3): rails, carriage, plate, coupling (kg).
 
     ``rail_kg_m`` is the catalogue's linear mass (geometry/rail_size25.toml), used by the
     rigid-body model; ``study_rail_kg_m`` the 2013 study's, used by the original model.

@@ -1,4 +1,4 @@
-"""Rig rules (RIG.md §2): what makes a configuration buildable and acceptable.
+"""Rig rules (geometry/RIG.md §2): what makes a configuration buildable and acceptable.
 
 Each rule is reported with its value, its limit and pass/fail, so a report can show
 how far a configuration is from every limit.  Lengths in mm, angles in degrees.
@@ -45,7 +45,7 @@ def _rule(name: str, value: float, relation: str, limit: float, unit: str = "mm"
 
 
 def transmission_angle_range(b2: float, b3: float, b4: float, d: float) -> tuple[float, float]:
-    """(mu_min, mu_max) in degrees with the crank along the ground line (RIG.md §2).
+    """(mu_min, mu_max) in degrees with the crank along the ground line (geometry/RIG.md §2).
 
     When the loop locks before reaching that position the cosine leaves [-1, 1] and the
     extreme is clipped to 0 or 180 deg (a toggle).

@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "band_coverage": ["CALIBRATION_SIZES", "CLOSED_FORMS", "PARTS", "PRESETS", "PART_CALIBRATION_STEPS", "preset_mesh", "closed_form_case", "part_cases", "required_factor", "inside", "calibrate", "run", "coverage", "markdown"],
+        "closed_form": ["kt_plate_hole", "plate_hole_peak_mpa"],
         "convergence": ["RATIO", "H_DIRECTIONS", "TARGETS", "NOISE", "AWAY_MM", "EXTEND", "Extrapolation", "richardson", "StepSpec", "away_from_singular_edges", "run_step", "h_levels", "preset_steps", "study", "needs_finer", "fine_step", "analyse", "scene_cases", "to_json"],
         "le10": ["INNER", "OUTER", "HALF_THICKNESS", "PRESSURE", "POINT_D", "TARGET_SYY", "STEEL", "SURFACES", "supports", "load", "le10_mesh", "node_at", "solve_le10"],
         "sweep_configs": ["TYPES", "GROUND_RAIL_MM", "ORIGINAL_DIRECTIONS", "TOP_NODES", "BOUND_GROUPS", "ROW_CHUNK", "JOINTS", "LENGTHS", "SweepParams", "rig_rail_layout", "rail_lengths", "enumerate_configs", "rules_row"],

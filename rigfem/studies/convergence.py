@@ -57,7 +57,7 @@ RATIO = 2 ** 0.5
 
 
 #: bearing directions of every h-sequence step (the finest preset's), so only the mesh changes
-H_DIRECTIONS = FIDELITY["fine"]["bearing_directions"]
+H_DIRECTIONS = FIDELITY["fine"].bearing_directions
 
 
 #: accuracy targets against the extrapolated peak, per preset (issue 6)
@@ -265,7 +265,7 @@ def h_levels(levels: int, ratio: float = RATIO, finest: tuple[float, float] | No
     ``finest``, then ``beyond`` finer levels (run only while a peak is not converging)."""
     levels = int(check_range("--levels", levels, 3, 8))
     ratio = check_range("--ratio", ratio, 1.1, 2.0)
-    g, loc = finest or (FIDELITY["fine"]["size_mm"], FIDELITY["fine"]["local_size_mm"])
+    g, loc = finest or (FIDELITY["fine"].size_mm, FIDELITY["fine"].near_mm)
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
     return [StepSpec(f"h{k}", "h", order, g * ratio ** (levels - 1 - k), loc * ratio ** (levels - 1 - k),
@@ -274,10 +274,10 @@ def h_levels(levels: int, ratio: float = RATIO, finest: tuple[float, float] | No
 
 def preset_steps() -> list[StepSpec]:
     """draft and standard as presets, and order 1 on the standard mesh (the p step)."""
-    out = [StepSpec(n, "preset", f["order"], f["size_mm"], f["local_size_mm"], f["bearing_directions"])
+    out = [StepSpec(n, "preset", f.order, f.size_mm, f.near_mm, f.bearing_directions)
            for n, f in FIDELITY.items() if n != "fine"]
     st = FIDELITY["standard"]
-    out.append(StepSpec("P1@standard", "p", 1, st["size_mm"], st["local_size_mm"], st["bearing_directions"]))
+    out.append(StepSpec("P1@standard", "p", 1, st.size_mm, st.near_mm, st.bearing_directions))
     return out
 
 
@@ -349,8 +349,8 @@ def needs_finer(res: dict) -> bool:
 def fine_step(hs: list[dict]) -> dict | None:
     """The h level at the ``fine`` preset's sizes (P2), if the sequence has one."""
     f = FIDELITY["fine"]
-    return next((s for s in hs if s["order"] == f["order"] and math.isclose(s["size_mm"], f["size_mm"])
-                 and math.isclose(s["local_size_mm"], f["local_size_mm"])), None)
+    return next((s for s in hs if s["order"] == f.order and math.isclose(s["size_mm"], f.size_mm)
+                 and math.isclose(s["local_size_mm"], f.near_mm)), None)
 
 
 def analyse(res: dict) -> dict:

@@ -1,7 +1,7 @@
 """From a synthesised four-bar to the nearest buildable rig configurations, each checked.
 
 A synthesised linkage (``rigfem.linkage.synthesis``) has any lengths; the rig builds only
-lengths on the 60 mm hole grid that obey every rig rule (RIG.md §2).  This module ranks the
+lengths on the 60 mm hole grid that obey every rig rule (geometry/RIG.md §2).  This module ranks the
 rig's four-bars by how well they do the wanted job and attaches each one's rule table and
 stress verdict (the sweep's superposed unit solutions, ``rigfem.studies.sweep.evaluate``):
 
@@ -16,7 +16,7 @@ stress verdict (the sweep's superposed unit solutions, ``rigfem.studies.sweep.ev
   fixed to the coupler, not on the hole grid, carrying no load) and the three crank angles
   are chosen by least squares; the motion error is the largest distance from a wanted
   position, in rig mm and in % of the positions' span.  ``off_rail_mm`` says how far the
-  marker sits from the coupler rail (the arm it needs; the rig has none, RIG.md is silent).
+  marker sits from the coupler rail (the arm it needs; the rig has none, geometry/RIG.md is silent).
 
 Units: mm, deg (the positions in their own unit, ``scale`` converts).
 """

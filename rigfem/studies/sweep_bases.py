@@ -110,7 +110,7 @@ def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
         geo = key[:2]
         refine = tuple(sorted({g for k2, (c, _) in specs.items() if k2[:2] == geo for g in c.refine}))
         if geo not in models:
-            pm = mesh_case(dataclasses.replace(case, refine=refine), s.size_mm, s.local_size_mm)
+            pm = mesh_case(dataclasses.replace(case, refine=refine), s)
             models[geo] = (pm, build_model(pm, s.material, s.order))
         pm, model = models[geo]
         supports = supports_of(case)

@@ -22,7 +22,7 @@ from rigfem.settings import FIDELITY, MODELS, PARTS, PLATE, RAIL, CheckSettings,
 TYPES = ("four-bar", "slider-crank")
 
 
-#: ground rail length (mm), RIG.md §3
+#: ground rail length (mm), geometry/RIG.md §3
 GROUND_RAIL_MM = 2500.0
 
 
@@ -121,7 +121,7 @@ def rail_lengths(length_mm: float, first: float = HOLE_PITCH_MM) -> list[float]:
 
 
 def enumerate_configs(p: SweepParams) -> list[dict]:
-    """Every mountable configuration: each length on the hole grid within its rail (RIG.md §1-2).
+    """Every mountable configuration: each length on the hole grid within its rail (geometry/RIG.md §1-2).
 
     Four-bar: b2, b3, b4 on their rails, d on the ground rail from 660 mm (the rule; shorter
     ground lengths collide and are not enumerated).  Slider-crank: b2, b3 on their rails,

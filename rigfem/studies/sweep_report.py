@@ -1,6 +1,6 @@
 """What a sweep table says: utilisation maps (PNG) and the worst configurations (Markdown).
 
-The worst list is set beside the 2013 study's hand-found worst cases (RIG.md §3: the largest
+The worst list is set beside the 2013 study's hand-found worst cases (geometry/RIG.md §3: the largest
 reactions for the smallest mechanisms and for transmission angles near the limits), with the
 rank correlations that test both statements on every configuration the sweep computed.
 """
@@ -16,7 +16,7 @@ from rigfem.studies.sweep import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
 WORST = 15
-#: the 2013 study's final design (RIG.md §3), marked on the maps
+#: the 2013 study's final design (geometry/RIG.md §3), marked on the maps
 FINAL_DESIGN = {"b2": 480.0, "b3": 840.0, "b4": 780.0, "d": 1020.0}
 
 
@@ -148,7 +148,7 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
              f"- computed: {len(ok)}; pass: {int((ok['verdict'] == 'pass').sum())}, "
              f"fail: {int((ok['verdict'] == 'fail').sum())}, undecided (the preset's error band "
              f"contains the limit): {int((ok['verdict'] == 'undecided').sum())}",
-             f"- comply with every rig rule (RIG.md §2): {n_rules}; of these computed "
+             f"- comply with every rig rule (geometry/RIG.md §2): {n_rules}; of these computed "
              f"{int(ok['rules_ok'].sum())}, failing the stress criterion "
              f"{int(((ok['verdict'] == 'fail') & ok['rules_ok']).sum())}"]
     if seconds is not None:
@@ -173,7 +173,7 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
               f"## The {WORST} largest peak reactions", "",
               _fmt(ok.nlargest(WORST, "max_reaction_N"), p)]
     lines += ["## Compared with the 2013 study's hand-found worst cases", "",
-              "The study (RIG.md §3) found the largest reactions *for the smallest mechanisms* and *for "
+              "The study (geometry/RIG.md §3) found the largest reactions *for the smallest mechanisms* and *for "
               "transmission angles near the limits* by trying hypotheses by hand. On every computed "
               "configuration (Spearman rank correlation, −1..1):", ""]
     lengths = [c for c in LENGTHS[p.linkage_type] if c != "offset"]

@@ -30,7 +30,7 @@ class Verdict:
         return asdict(self)
 
 
-#: the study's criterion: peak von Mises below half the ultimate strength (RIG.md §5)
+#: the study's criterion: peak von Mises below half the ultimate strength (geometry/RIG.md §5)
 LIMIT_FACTOR = 0.5
 
 

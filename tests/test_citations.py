@@ -1,0 +1,65 @@
+"""Every document the repository cites is in the repository, and every cited § is a heading in it.
+
+A citation is ``NAME.md §N`` (or ``§N-M``), or a Markdown path: ``dir/name.md``, or a bare
+``NAME.md`` whose name starts with a capital (a document such as the README; lower-case bare
+names are files a command writes, e.g. ``report.md``).  A cited path is resolved from the
+repository's top and from the citing file's folder.
+"""
+
+import pathlib
+import re
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+CITATION = re.compile(r"(?<![\w/.<{*$~-])((?:[\w.-]+/)*([\w-]+)\.md)(?:\s*§\s*(\d+)(?:\s*[-–]\s*(\d+))?)?")
+
+
+def _files() -> list[pathlib.Path]:
+    """The repository's .py, .md and .toml files (tracked or new, not ignored)."""
+    out = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT,
+                         capture_output=True, text=True, check=True).stdout.split()
+    return [ROOT / f for f in out if f.endswith((".py", ".md", ".toml")) and (ROOT / f).is_file()]
+
+
+def _sections(doc: pathlib.Path) -> set[int]:
+    """Numbers of the numbered headings of a Markdown file (``## 3. Title``)."""
+    return {int(m) for m in re.findall(r"^#+\s*(\d+)[.)\s]", doc.read_text(), re.M)}
+
+
+def citations(path: pathlib.Path) -> list[tuple[str, pathlib.Path | None, list[int]]]:
+    """(as written, the file it resolves to or None, the § numbers cited) of one file's citations."""
+    out = []
+    for m in CITATION.finditer(path.read_text(errors="ignore")):
+        ref, stem, a, b = m.groups()
+        if a is None and "/" not in ref and not stem[0].isupper():
+            continue  # a file a command writes (report.md), not a document
+        doc = next((p for p in (ROOT / ref, path.parent / ref) if p.is_file()), None)
+        secs = list(range(int(a), int(b or a) + 1)) if a else []
+        out.append((m.group(0), doc, secs))
+    return out
+
+
+def test_every_cited_document_and_section_exists():
+    bad = []
+    for f in _files():
+        if f == pathlib.Path(__file__).resolve():
+            continue
+        for text, doc, secs in citations(f):
+            if doc is None:
+                bad.append(f"{f.relative_to(ROOT)}: {text!r} cites a file the repository lacks")
+            elif missing := [s for s in secs if s not in _sections(doc)]:
+                bad.append(f"{f.relative_to(ROOT)}: {text!r}: no section {missing} in {doc.relative_to(ROOT)}")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("text, ok", [("see RIG.md §3", False), ("see geometry/RIG.md §3", True),
+                                      ("geometry/RIG.md §3-4", True), ("geometry/RIG.md §9", False),
+                                      ("geometry/MECHANISMS.md §5", True), ("writes report.md", True),
+                                      ("a NOTES.md file", False), ("docs/guide.md", False)])
+def test_the_checker_catches_a_bad_citation(tmp_path, text, ok):
+    f = tmp_path / "x.py"
+    f.write_text(f"# {text}\n")
+    found = [(doc is not None and all(s in _sections(doc) for s in secs)) for _, doc, secs in citations(f)]
+    assert all(found) == ok
