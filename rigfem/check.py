@@ -60,7 +60,8 @@ REFERENCE_SCENE = "final-cm"
 
 
 #: [check] fields about the dynamics and outputs (the rest is rigfem.settings)
-_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None}
+_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None,
+             "reactions_csv_missing": None}
 
 
 @dataclass
@@ -75,6 +76,7 @@ class CheckScene:
     frames: int  #: VTU frames of the cycle animation (0: none)
     reactions_csv: Path | None  #: external reaction history replacing the dynamics' forces
     rule_violations: list[str] = dataclasses.field(default_factory=list)  #: broken rig rules (allowed explicitly)
+    csv_missing: dict | None = None  #: values stated for columns the reactions CSV lacks
 
 
 def rule_violations(sc: Scene) -> list[str]:
@@ -118,9 +120,9 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
         if not csv_path.is_file():
             raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
                              f"next to the scene ({plain(str(csv_path), 120)})")
-        read_csv(csv_path)  # coverage, sampling and units refused now, not after the dynamics
+        read_csv(csv_path, dyn["reactions_csv_missing"])  # coverage, sampling, units, columns refused now
     return CheckScene(sc, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
-                      broken)
+                      broken, dyn["reactions_csv_missing"])
 
 
 def imported_history(cs: CheckScene) -> ReactionHistory:
@@ -129,10 +131,10 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     The CSV gives the joint forces and the driver torque; the linkage gives the joint
     positions and the bodies' motion at the CSV's crank angles (to place the loads on the
     parts and, in cycle mode, for the inertia loads).  Peaks are refined on a spline of the
-    CSV.  A CSV whose forces do not balance the linkage's inertia shows up as the relieved
-    imbalance of each free part.
+    CSV.  A CSV whose forces do not balance the linkage's inertia shows up as the force and
+    moment imbalance of each free part (above the tolerance the part is undecided).
     """
-    ext = read_csv(cs.reactions_csv)
+    ext = read_csv(cs.reactions_csv, cs.csv_missing)
     kin = solve(cs.scene.linkage, ext.crank_deg, cs.scene.speed_hz)
     missing = [n for n in kin.joints if n not in ext.joints]
     if missing:
@@ -141,7 +143,8 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     sign = {n: -1.0 if (ext.joints[n].body_a, ext.joints[n].body_b) == (j.body_b, j.body_a) else 1.0
             for n, j in kin.joints.items()}
     forces = spline_evaluator(ext)
-    meta = dict(kin.meta, model=f"imported from {cs.reactions_csv.name}", singular=None)
+    meta = dict(kin.meta, model=f"imported from {cs.reactions_csv.name}", singular=None,
+                assumed=ext.meta["assumed"])
 
     def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:
         joints = {n: JointHistory(n, j.body_a, j.body_b, sign[n] * f.joints[n].force_N, j.position_mm)
@@ -250,6 +253,10 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
     if h.meta.get("singular"):
         return h, []
     cases = part_cases(h, peaks(h), cs.settings)
+    if not any(np.any(case.coef) for _, case in cases):
+        raise InputError(f"scene {plain(cs.scene.name, 80)!r}: nothing loads its parts (every load case is zero: "
+                         f"no masses, zero speed or a massless linkage), so no stress can be checked; for its "
+                         f"motion alone use rigfem kinematics")
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step)
@@ -288,7 +295,7 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
     report = {
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
-        "rule_violations": cs.rule_violations,
+        "rule_violations": cs.rule_violations, "assumed": h.meta.get("assumed", []),
         # a configuration that cannot be mounted never passes, whatever its stresses
         "verdict": "fail" if cs.rule_violations else overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
