@@ -43,10 +43,10 @@ def allowable_stress(sigma_u_mpa: float, factor: float = LIMIT_FACTOR) -> float:
 
 #: largest relative imbalance of a free body's loads (force over the applied load Σ|F|, moment
 #: about the centroid over Σ|F| × the part's lever) a verdict accepts.  The FE part's mass
-#: distribution is not the dynamics model's (holes, the rail behind its pivot), which leaves up
-#: to about 1 % on the rig's rails; a history that lost a load (the crank's driver torque read
-#: as zero) leaves tens of %.  Above it the part is undecided: inertia relief would cancel the
-#: missing load and the stress would be too low.
+#: distribution is not the dynamics model's (holes, the rail behind its pivot), which leaves
+#: below 1 % on the rig's rails; a history that lost a load (the crank's driver torque read as
+#: zero) leaves tens of % (tests/test_trust.py measures both).  Above it the part is undecided:
+#: inertia relief would cancel the missing load and the stress would be too low.
 IMBALANCE_TOL = 0.05
 
 
