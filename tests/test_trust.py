@@ -57,7 +57,7 @@ def test_csv_without_torque_is_refused_naming_the_column(no_torque, capsys):
 
 @pytest.mark.parametrize("table, field", [
     ('reactions_csv_missing = { torque_Nm = 0 }', "reactions_csv_missing is given without reactions_csv"),
-    ('reactions_csv = "notorque.csv"\nreactions_csv_missing = { torque = 0 }', "reactions_csv_missing"),
+    ('reactions_csv = "notorque.csv"\nreactions_csv_missing = { torque = 0 }', "reactions_csv_missing.torque_Nm is missing"),
     ('reactions_csv = "notorque.csv"\nreactions_csv_missing = { torque_Nm = "zero" }', "torque_Nm"),
 ])
 def test_stated_column_is_validated(no_torque, capsys, table, field):
@@ -79,7 +79,9 @@ def test_lost_torque_leaves_the_crank_undecided_not_passed(no_torque, capsys):
     code = main(["check", str(no_torque / "stated.toml"), "--out", str(out), "--parts", "crank_rail",
                  "--modes", "cycle", "--fidelity", "draft", "--frames", "0", "--quiet"])
     assert code == 1
-    assert "overall: UNDECIDED" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "overall: UNDECIDED" in text and "ASSUMED: the reaction CSV" in text
+    assert "free body out of balance: force" in text and "moment" in text
     r = json.loads((out / "report.json").read_text())
     (part,) = r["parts"]
     imb = part["solve"]["imbalance"]

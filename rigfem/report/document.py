@@ -14,7 +14,7 @@ from pathlib import Path
 from rigfem.errors import plain
 
 #: version of report.json's layout (README: report.json); raised when a field changes meaning or goes
-REPORT_SCHEMA = 2
+REPORT_SCHEMA = 3
 
 
 def finite(obj, where: str = "report"):

@@ -52,7 +52,7 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "peak_mpa": v.peak_mpa, "crank_deg": float(res.case.rows[res.row]),
         "surface": pk.surface, "location_mm": [round(float(t), 3) for t in pk.xyz],
         "error_pct": v.error_pct, "limit_mpa": v.limit_mpa, "utilisation_pct": v.utilisation_pct,
-        "verdict": v.verdict,
+        "verdict": v.verdict, "reason": v.reason,
         "max_displacement_mm": float(np.linalg.norm(sol.displacement(c), axis=1).max()),
         "fatigue": _fatigue(res, settings),
         "mesh": {"nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
