@@ -129,6 +129,8 @@ def test_unloaded_part_among_loaded_ones_is_not_a_pass(tmp_path, monkeypatch, ca
     verdicts = {p["name"]: p["verdict"] for p in r["parts"]}
     assert verdicts == {"plate_A": "pass", "plate_B": "not loaded"} and r["verdict"] == "undecided"
     assert "NOT LOADED" in capsys.readouterr().out
+    assert 'class="badge not-loaded"' in (tmp_path / "o" / "report.html").read_text()
+    assert "**not loaded**" in (tmp_path / "o" / "report.md").read_text()
 
 
 def test_criterion_never_passes_unloaded_or_unbalanced():

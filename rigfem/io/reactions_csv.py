@@ -177,17 +177,8 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     if not joints:
         raise InputError(f"reaction CSV {str(p)!r}: no joint force columns (<joint>_fx_N, <joint>_fy_N)")
     tcol = next((lower.index(c.lower()) for c in _TORQUE_COLS + ("driver_force_N",) if c.lower() in lower), None)
-    assumed = []
-    if tcol is not None:
-        torque = arr[:, tcol]
-    elif missing and "torque_Nm" in missing:
-        torque = np.full(arr.shape[0], float(missing["torque_Nm"]))
-        assumed.append(f"the reaction CSV {p.name} has no driver-torque column: the torque is taken as "
-                       f"{float(missing['torque_Nm']):g} N·m at every crank angle ([check].reactions_csv_missing)")
-    else:
-        raise InputError(f"reaction CSV {str(p)!r}: no driver-torque column (one of "
-                         f"{', '.join(_TORQUE_COLS + ('driver_force_N',))}): the crank's load is unknown; add it, or "
-                         f"state its value in the scene, e.g. [check] reactions_csv_missing = {{torque_Nm = 0}}")
+    stated = (missing or {}).get("torque_Nm")
+    torque = arr[:, tcol] if tcol is not None else np.full(arr.shape[0], float(stated or 0.0))
     sing = arr[:, lower.index("singular")] > 0.5 if "singular" in lower else np.zeros(arr.shape[0], bool)
     bad = ~sing & (~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0))
     if np.any(bad):
@@ -200,6 +191,14 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
         raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
     _check_turn(str(p), head[ang], arr[:, ang], deg)
     _check_forces(str(p), deg, {n: j.force_N for n, j in joints.items()}, sing)
+    assumed = []
+    if tcol is None and stated is None:
+        raise InputError(f"reaction CSV {str(p)!r}: no driver-torque column (one of "
+                         f"{', '.join(_TORQUE_COLS + ('driver_force_N',))}): the crank's load is unknown; add it, or "
+                         f"state its value in the scene, e.g. [check] reactions_csv_missing = {{torque_Nm = 0}}")
+    if tcol is None:
+        assumed.append(f"the reaction CSV {p.name} has no driver-torque column: the torque is taken as "
+                       f"{float(stated):g} N·m at every crank angle ([check].reactions_csv_missing)")
     for j in joints.values():
         j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)        # blank singular rows
     meta = {"source": str(p), "model": "imported", "assumed": assumed}

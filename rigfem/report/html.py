@@ -20,7 +20,7 @@ h1{margin-bottom:.2em} h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margi
 table{border-collapse:collapse;margin:.6em 0;font-size:.93em} th,td{border:1px solid #ccc;padding:.3em .6em}
 th{background:#f3f3f3;text-align:left} td.num{text-align:right;font-variant-numeric:tabular-nums}
 .badge{display:inline-block;padding:.15em .6em;border-radius:.3em;color:#fff;font-weight:700}
-.pass{background:#2e7d32}.fail{background:#c62828}.undecided{background:#ef6c00}
+.pass{background:#2e7d32}.fail{background:#c62828}.undecided{background:#ef6c00}.not-loaded{background:#6d4c41}
 .big{font-size:1.5em} img{max-width:100%;border:1px solid #ddd;margin:.4em 0}
 .bar{background:#eee;width:160px;height:.8em;display:inline-block;position:relative;vertical-align:middle}
 .bar span{position:absolute;top:0;bottom:0;background:#1565c0}.bar i{position:absolute;top:0;bottom:0;
@@ -39,7 +39,7 @@ def _num(x, digits: int) -> str:
 
 def _badge(verdict: str, big: bool = False) -> str:
     v = str(verdict)
-    return f'<span class="badge {_e(v)}{" big" if big else ""}">{_e(v.upper())}</span>'
+    return f'<span class="badge {_e(v.replace(" ", "-"))}{" big" if big else ""}">{_e(v.upper())}</span>'
 
 
 def _img(folder: Path, name: str, alt: str) -> str:
