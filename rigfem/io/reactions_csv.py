@@ -127,10 +127,10 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     ``driver``) or driver force in N (``driver_force_N``).  A CSV without the driver column is
     refused (a torque read as zero unloads the crank) unless ``missing`` states its value, e.g.
     ``{"torque_Nm": 0.0}`` (``[check].reactions_csv_missing``); the history's
-    ``meta["assumed"]`` then says so.  Lines starting with ``#`` are comments.  Refused (InputError naming the problem): angles
-    that do not cover one full turn in steps of at most :data:`MAX_STEP_DEG`, angles or forces
-    that do not fit their declared unit (radians in a degree column, kN), and sampling too
-    coarse to bracket the peaks (see :func:`_check_forces`).
+    ``meta["assumed"]`` then says so.  Lines starting with ``#`` are comments.  Refused
+    (InputError naming the problem): angles that do not cover one full turn in steps of at most
+    :data:`MAX_STEP_DEG`, angles or forces that do not fit their declared unit (radians in a
+    degree column, kN), and sampling too coarse to bracket the peaks (see :func:`_check_forces`).
     """
     p = Path(path)
     if not p.is_file():

@@ -36,7 +36,7 @@ import numpy as np
 
 from rigfem.dynamics.history import peaks
 from rigfem.dynamics.mechanisms import MODELS, four_bar, simulate, slider_crank
-from rigfem.errors import InputError, check_range
+from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.loads.cases import (
     PartCase,
     UnitLoad,
@@ -133,8 +133,8 @@ class SweepParams:
 
     def key(self) -> str:
         """Short hash of the parameters and of everything else a stored chunk depends on: the
-        part files, the mass catalogue and the source that computes a row (:data:`SWEEP_CODE`;
-        a change to any of them must not resume from chunks computed before it)."""
+        part files, the mass catalogue and the source files that compute a row (a change to any
+        of them must not resume from chunks computed before it)."""
         from rigfem.fe.cache import SOLUTION_CODE
         from rigfem.mesh.cache import code_hash
         from rigfem.rig.catalogue import RIG_MASSES
@@ -143,13 +143,10 @@ class SweepParams:
         parts = sorted({spec["part"] for spec in PARTS[self.linkage_type].values()})
         src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS,
                    parts={n: load_part(n).content_hash() for n in parts},
-                   masses=dataclasses.asdict(RIG_MASSES), code=code_hash(*SOLUTION_CODE, *SWEEP_CODE))
+                   masses=dataclasses.asdict(RIG_MASSES),
+                   code=code_hash(*SOLUTION_CODE, "studies/sweep.py", "dynamics/*.py", "loads/*.py", "rig/*.py",
+                                  "verdict/*.py", "settings.py", "schema.py", "fe/partcase.py", "fe/tensors.py"))
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
-
-
-#: the source files that compute a table row besides the FE solution's (rigfem.fe.cache.SOLUTION_CODE)
-SWEEP_CODE = ("studies/sweep.py", "dynamics/*.py", "loads/*.py", "rig/*.py", "verdict/*.py", "settings.py",
-              "schema.py", "fe/partcase.py", "fe/tensors.py")
 
 
 # ----------------------------------------------------------------------------- enumeration
@@ -444,7 +441,6 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
     worst, verdicts = ("", 0.0), []
     for mode, case in part_cases(h, pk, s):
         peak, deg = case_peak(bases[_case_key(case)], case)
-        # the history is rigfem's own dynamics (balanced); a case with no load is never a pass
         v = half_ultimate(peak, s.material.sigma_u, err, s.limit_factor, loaded=bool(np.any(case.coef)))
         row[f"{case.name}_{mode}_mpa"] = peak
         row[f"{case.name}_{mode}_deg"] = deg
@@ -487,10 +483,12 @@ def _chunk(work: Path, key: str, i: int, configs: list[dict]) -> tuple[Path, dic
 def _write_chunk(work: Path, key: str, i: int, configs: list[dict], rows: list[dict]) -> None:
     import pandas as pd
 
-    from rigfem.mesh.cache import write_entry
+    from rigfem.mesh.cache import read_entry, write_entry
 
-    write_entry(*_chunk(work, key, i, configs),
-                lambda d: pd.DataFrame(rows).to_csv(d / "rows.csv", index=False, float_format="%.10g"))
+    folder, inputs = _chunk(work, key, i, configs)
+    text = pd.DataFrame(rows).to_csv(index=False, float_format="%.10g")
+    if not (write_entry(folder, inputs, lambda d: (d / "rows.csv").write_text(text)) or read_entry(folder, inputs)):
+        raise ComputeError(f"could not store sweep chunk {i} in {work} (disk full or not writable?)")
 
 
 def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 1,
