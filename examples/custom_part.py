@@ -32,7 +32,7 @@ sol = solve(model, supports, [Traction("loaded", (SIGMA_MPA, 0.0, 0.0))])  # MPa
 peak = sol.peak()
 exact = plate_hole_peak_mpa(SIGMA_MPA, WIDTH_MM, HOLE_MM)
 diff = peak.value / exact - 1
-band = 100 * peak.error
+band = peak.error_pct
 print(f"{len(pm.points)} nodes (preset standard: {settings.size_mm:g} mm, {settings.near_mm:g} mm at the hole)")
 print(f"peak von Mises {peak.value:.1f} MPa ± {band:.1f} % (error estimate) on '{peak.surface}'")
 print(f"Peterson Kt closed form {exact:.1f} MPa: FE {100 * diff:+.2f} %, "

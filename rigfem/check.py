@@ -61,8 +61,14 @@ from rigfem.verdict.part import verdict_of
 REFERENCE_SCENE = "final-cm"
 
 
+#: a reaction history whose joint forces (N) and driver load (N·m or N) all stay below this loads
+#: nothing: the scene is refused rather than passed at 0 % (a rig's lightest crank carries ~15 N)
+UNLOADED = 1e-6
+
+
 #: [check] fields about the dynamics and outputs (the rest is rigfem.settings)
-_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None}
+_DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reactions_csv": None,
+             "reactions_csv_missing": None}
 
 
 @dataclass
@@ -78,6 +84,7 @@ class CheckScene:
     frames: int  #: VTU frames of the cycle animation (0: none)
     reactions_csv: Path | None  #: external reaction history replacing the dynamics' forces
     rule_violations: list[str] = dataclasses.field(default_factory=list)  #: broken rig rules (allowed explicitly)
+    csv_missing: dict | None = None  #: values stated for columns the reactions CSV lacks
 
 
 def rule_violations(sc: Scene, lk: Linkage) -> list[str]:
@@ -122,9 +129,9 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
         if not csv_path.is_file():
             raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
                              f"next to the scene ({plain(str(csv_path), 120)})")
-        read_csv(csv_path)  # coverage, sampling and units refused now, not after the dynamics
+        read_csv(csv_path, dyn["reactions_csv_missing"])  # coverage, sampling, units, columns refused now
     return CheckScene(sc, lk, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
-                      broken)
+                      broken, dyn["reactions_csv_missing"])
 
 
 def imported_history(cs: CheckScene) -> ReactionHistory:
@@ -133,10 +140,10 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     The CSV gives the joint forces and the driver torque; the linkage gives the joint
     positions and the bodies' motion at the CSV's crank angles (to place the loads on the
     parts and, in cycle mode, for the inertia loads).  Peaks are refined on a spline of the
-    CSV.  A CSV whose forces do not balance the linkage's inertia shows up as the relieved
-    imbalance of each free part.
+    CSV.  A CSV whose forces do not balance the linkage's inertia shows up as the force and
+    moment imbalance of each free part (above the tolerance the part is undecided).
     """
-    ext = read_csv(cs.reactions_csv)
+    ext = read_csv(cs.reactions_csv, cs.csv_missing)
     kin = solve(cs.linkage, ext.crank_deg, cs.scene.speed_hz)
     missing = [n for n in kin.joints if n not in ext.joints]
     if missing:
@@ -145,7 +152,8 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     sign = {n: -1.0 if (ext.joints[n].body_a, ext.joints[n].body_b) == (j.body_b, j.body_a) else 1.0
             for n, j in kin.joints.items()}
     forces = spline_evaluator(ext)
-    meta = dict(kin.meta, model=f"imported from {cs.reactions_csv.name}", singular=None)
+    meta = dict(kin.meta, model=f"imported from {cs.reactions_csv.name}", singular=None,
+                assumed=ext.meta["assumed"])
 
     def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:
         joints = {n: JointHistory(n, j.body_a, j.body_b, sign[n] * f.joints[n].force_N, j.position_mm)
@@ -253,7 +261,13 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
          simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
     if h.meta.get("singular"):
         return h, []
+    force = max(float(np.abs(j.force_N).max()) for j in h.joints.values())
+    torque = float(np.abs(h.torque_Nm).max())
     cases = part_cases(h, peaks(h), cs.settings)
+    if max(force, torque) < UNLOADED or not any(np.any(case.coef) for _, case in cases):
+        raise InputError(f"scene {plain(cs.scene.name, 80)!r}: nothing loads its parts (largest joint force "
+                         f"{force:.3g} N, driver {torque:.3g}: no masses or a massless linkage), so a stress "
+                         f"check would pass at 0 %; for its motion alone use rigfem kinematics")
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step)
@@ -292,7 +306,7 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
     report = {
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
-        "rule_violations": cs.rule_violations,
+        "rule_violations": cs.rule_violations, "assumed": h.meta.get("assumed", []),
         # a configuration that cannot be mounted never passes, whatever its stresses
         "verdict": "fail" if cs.rule_violations else overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],

@@ -139,6 +139,12 @@ class Fatigue(_Table):
     size_mm: Annotated[float, Field(ge=1.0, le=500.0)] = 19.0
 
 
+class CsvMissing(_Table):
+    """``[check.reactions_csv_missing]``: the value of a column the reactions CSV lacks, stated explicitly."""
+
+    torque_Nm: Annotated[float, Field(ge=-1e5, le=1e5)]
+
+
 class CheckTable(_Table):
     """``[check]``: what a check does (defaults: rigfem.settings and rigfem.check)."""
 
@@ -157,9 +163,12 @@ class CheckTable(_Table):
     mass_model: Literal[tuple(MODELS)] | None = None  # type: ignore[valid-type]
     frames: Annotated[int, Field(ge=0, le=360)] | None = None
     reactions_csv: Annotated[str, Field(min_length=1, max_length=1000)] | None = None
+    reactions_csv_missing: CsvMissing | None = None
 
     @model_validator(mode="after")
     def _sizes(self):
+        if self.reactions_csv_missing is not None and self.reactions_csv is None:
+            raise ValueError("reactions_csv_missing is given without reactions_csv")
         if self.modes is not None and len(set(self.modes)) != len(self.modes):
             raise ValueError(f"modes = {self.modes} lists a mode twice")
         if self.size_mm is not None and self.local_size_mm is not None and self.local_size_mm > self.size_mm:

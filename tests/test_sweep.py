@@ -158,11 +158,11 @@ def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
     assert full.attrs["compute_seconds"] > 0
     num = full.select_dtypes("number")
     assert not np.isinf(num.to_numpy()).any() and num[full["status"] == "ok"].notna().all().all()
-    chunk = sorted(tmp_path.glob("*/chunk_*.csv"))
+    chunk = sorted(tmp_path.glob("*/chunk_*/rows.csv"))
     text = "".join(c.read_text().lower() for c in chunk)
     assert "nan" not in text and "inf" not in text
     assert len(chunk) == 3
-    chunk[1].unlink()  # an interrupted sweep: the second chunk never finished
+    chunk[1].write_text(chunk[1].read_text()[:40])  # a damaged (truncated) chunk is computed again
     import rigfem.studies.sweep as sw
 
     calls = []
@@ -219,10 +219,10 @@ def test_default_local_cluster_equals_serial(params, bases, tmp_path):
     pd.testing.assert_frame_equal(serial, local)
 
 
-def test_stored_chunks_are_keyed_by_geometry_masses_and_mesh_recipe(monkeypatch):
-    """A sweep resumed after a change to a part file, the mass catalogue or the meshing recipe
-    must not reuse chunks computed before it."""
-    import rigfem.mesh.mesher
+def test_stored_chunks_are_keyed_by_geometry_masses_and_code(monkeypatch):
+    """A sweep resumed after a change to a part file, the mass catalogue or the code that
+    computes a row (meshing, FE, dynamics, loads, verdict) must not reuse chunks computed before it."""
+    import rigfem.mesh.cache
     import rigfem.rig.catalogue
     from rigfem.rig import PartDef
 
@@ -230,7 +230,7 @@ def test_stored_chunks_are_keyed_by_geometry_masses_and_mesh_recipe(monkeypatch)
     k0 = p.key()
     assert SweepParams().key() == k0
     with monkeypatch.context() as m:
-        m.setattr(rigfem.mesh.mesher, "MESH_RECIPE", rigfem.mesh.mesher.MESH_RECIPE + 1)
+        m.setattr(rigfem.mesh.cache, "code_hash", lambda *files: "edited" if "dynamics/*.py" in files else "")
         assert p.key() != k0
     with monkeypatch.context() as m:
         m.setattr(rigfem.rig.catalogue, "RIG_MASSES",

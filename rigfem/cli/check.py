@@ -67,10 +67,12 @@ def _summary(r: dict) -> str:
             lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>9s} {'-':>7s} {'-':>7s} {'-':>7s}  "
                          f"{p['verdict'].upper():7s}  {p['notes'][0]}")
             continue
+        why = f": {plain(p['reason'])}" if p.get("reason") else ""
         lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:9.1f} {p['crank_deg']:7.1f} "
                      f"{p['error_pct']:6.1f}% {p['utilisation_pct']:6.1f}%  {p['verdict'].upper():7s}  "
-                     f"{p['surface']}")
-    lines[1:1] = [f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
+                     f"{p['surface']}{why}")
+    lines[1:1] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
+                  + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
     lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa)")
     return "\n".join(lines)
 

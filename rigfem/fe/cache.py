@@ -5,28 +5,36 @@ decide its solution completely, whatever the configuration that asked for it.  A
 configuration of the sweep) that needs the same part model again loads the stored arrays
 (displacements, loads, reactions, recovered stresses) instead of assembling, factorising and
 solving; the stored arrays are the solver's own float64 results, so a warm run reproduces a
-cold one exactly.  Entries live under ``$RIGFEM_CACHE/solutions`` (default
-``~/.cache/rigfem``), one folder per key; delete the folder to reclaim the space.
+cold one exactly.  Entries are verified cache entries (:mod:`rigfem.mesh.cache`) under
+``$RIGFEM_CACHE/solutions``; a loaded solution must also pass :func:`check_energy`, an
+invariant no stored file can fake: a non-zero load does positive work.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
-import hashlib
 import json
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from rigfem import __version__
+from rigfem.errors import ComputeError
 from rigfem.fe.solution import Solution
+from rigfem.mesh.cache import (
+    cache_dir,
+    code_hash,
+    discard,
+    entry_key,
+    load_arrays,
+    read_entry,
+    save_arrays,
+    write_entry,
+)
+from rigfem.mesh.mesher import MESH_CODE
 
-#: bump when what a solution holds, or how it is computed, changes
-SOLUTION_RECIPE = 1
+#: the source files that compute a solution (with the mesh's): an edit invalidates the entries
+SOLUTION_CODE = (*MESH_CODE, "material.py", "fe/assembly.py", "fe/forces.py", "fe/supports.py", "fe/solver.py",
+                 "fe/model.py", "fe/stress.py", "fe/solution.py", "fe/cache.py")
 _ARRAYS = ("F", "U", "reactions", "nodal_stress", "residuals", "backward_errors")
 
 
@@ -44,65 +52,65 @@ def _plain(obj):
     return obj
 
 
-@functools.lru_cache(maxsize=1)
-def _code_hash() -> str:
-    """Hash of the source that computes a solution (meshing, FE), so an edit invalidates entries."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    shaping = ("assembly", "forces", "supports", "solver", "model", "stress")
-    for f in sorted([*(root / "fe" / f"{m}.py" for m in shaping), *root.glob("mesh/*.py"), root / "material.py"]):
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def solution_key(model, supports: list, cases: list, solver: str, rtol: float) -> str | None:
-    """Hash of everything that shapes the solution, or None for a mesh without a cache key."""
+def solution_inputs(model, supports: list, cases: list, solver: str, rtol: float) -> dict | None:
+    """Everything that shapes the solution (the entry's key), or None for a mesh without a cache key."""
     mesh_key = model.part.meta.get("hash")
     if not mesh_key:
         return None
-    src = {"mesh": mesh_key, "order": model.mesh.order, "material": _plain(model.material),
-           "supports": _plain(supports), "cases": _plain(cases), "solver": solver, "rtol": rtol,
-           "recipe": SOLUTION_RECIPE, "rigfem": __version__, "code": _code_hash()}
-    return hashlib.sha256(json.dumps(src, sort_keys=True, default=str).encode()).hexdigest()[:32]
+    return {"mesh": mesh_key, "order": model.mesh.order, "material": _plain(model.material),
+            "supports": _plain(supports), "cases": _plain(cases), "solver": solver, "rtol": rtol,
+            "code": code_hash(*SOLUTION_CODE)}
 
 
-def _folder(key: str) -> Path:
-    from rigfem.mesh.mesher import cache_dir
-
-    return cache_dir() / "solutions" / key
+def _folder(inputs: dict) -> Path:
+    return cache_dir() / "solutions" / entry_key(inputs)
 
 
-def load_solution(model, key: str) -> Solution | None:
-    """The cached solution of ``key`` for ``model``, or None (missing or unreadable entry)."""
-    d = _folder(key)
+def check_energy(sol: Solution) -> str:
+    """Why ``sol`` cannot be right ("" if it can): every array finite, and every load column
+    with a force on an unsupported DOF storing positive strain energy ``U·(F + reactions) = UᵀKU``."""
+    bad = [k for k in _ARRAYS if not np.all(np.isfinite(getattr(sol, k)))]
+    if bad:
+        return f"non-finite values in {', '.join(bad)}"
+    free = np.ones(len(sol.F), bool)
+    for d in sol.support_dofs.values():
+        free[d] = False
+    peak = np.abs(sol.F[free]).max(axis=0, initial=0.0)
+    loaded = peak > 1e-12 * peak.max(initial=0.0)  # not a column of round-off (a relieved self-balance)
+    energy = np.einsum("ik,ik->k", sol.U, sol.F + sol.reactions)
+    zero = np.flatnonzero(loaded & ~(energy > 0))
+    return f"load case(s) {zero.tolist()} carry load but store no strain energy" if zero.size else ""
+
+
+def load_solution(model, inputs: dict) -> Solution | None:
+    """The cached solution of ``inputs`` for ``model``, or None (missing, or a bad entry: discarded)."""
+    d = read_entry(_folder(inputs), inputs)
+    if d is None:
+        return None
     try:
         info = json.loads((d / "info.json").read_text())
-        arrays = {k: np.load(d / f"{k}.npy") for k in _ARRAYS}
-        dofs = np.load(d / "support_dofs.npz")
-    except (OSError, ValueError, KeyError):
-        return None
-    if arrays["U"].shape[0] != model.mesh.ndof:
-        return None
-    return Solution(model=model, support_dofs={k: dofs[k] for k in dofs.files}, method=info["method"],
-                    free_body=info["free_body"], times={**info["times"], "cache": 1.0}, **arrays)
+        arrays = load_arrays(d, _ARRAYS)
+        with np.load(d / "support_dofs.npz", allow_pickle=False) as z:
+            dofs = {k: z[k] for k in z.files}
+        sol = Solution(model=model, support_dofs=dofs, method=info["method"], free_body=info["free_body"],
+                       times={**info["times"], "cache": 1.0}, **arrays)
+        why = "" if sol.U.shape[0] == model.mesh.ndof else "another mesh size"
+        why = why or check_energy(sol)
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        why = f"unreadable: {type(e).__name__}"
+    if why:
+        return discard(d, why)
+    return sol
 
 
-def save_solution(sol: Solution, key: str) -> None:
-    """Store ``sol`` under ``key``: written to a temporary folder, then renamed into place."""
-    d = _folder(key)
-    if d.exists():
-        return
-    d.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{key}-", dir=d.parent))
-    try:
-        for k in _ARRAYS:
-            np.save(tmp / f"{k}.npy", getattr(sol, k))
+def save_solution(sol: Solution, inputs: dict) -> None:
+    """Store ``sol`` as a verified entry of ``inputs`` (see :mod:`rigfem.mesh.cache`)."""
+    def write(tmp: Path) -> None:
+        save_arrays(tmp, {k: getattr(sol, k) for k in _ARRAYS})
         np.savez(tmp / "support_dofs.npz", **sol.support_dofs)
         (tmp / "info.json").write_text(json.dumps({"method": sol.method, "free_body": sol.free_body,
                                                    "times": sol.times}))
-        os.replace(tmp, d)
-    except OSError:  # a full disk or a concurrent writer: the cache is an optimisation only
-        shutil.rmtree(tmp, ignore_errors=True)
+    write_entry(_folder(inputs), inputs, write)
 
 
 def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10,
@@ -110,12 +118,15 @@ def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol:
     """:func:`rigfem.fe.model.solve`, through the disk cache when the model's mesh has a key."""
     from rigfem.fe.model import solve
 
-    key = solution_key(model, supports, cases, solver, rtol) if use_cache else None
-    if key is not None:
-        sol = load_solution(model, key)
+    inputs = solution_inputs(model, supports, cases, solver, rtol) if use_cache else None
+    if inputs is not None:
+        sol = load_solution(model, inputs)
         if sol is not None:
             return sol
     sol = solve(model, supports, cases, solver=solver, rtol=rtol)
-    if key is not None:
-        save_solution(sol, key)
+    why = check_energy(sol)
+    if why:
+        raise ComputeError(f"the solution of part {model.part.name} cannot be right: {why}")
+    if inputs is not None:
+        save_solution(sol, inputs)
     return sol

@@ -82,9 +82,9 @@ def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndar
     """Each load plus the rigid-acceleration inertia field that cancels its resultant.
 
     Returns the FE load cases, the resultants (6, k) that were relieved (force, moment about
-    the centroid) and each load's force magnitude scale (k,), to judge a combination.  A
-    bearing load's resultant is exact by construction (its force through the hole centre), so
-    only body forces are integrated here.
+    the centroid) and each load's force magnitude scale (k,), to judge a combination
+    (:func:`imbalance`).  A bearing load's resultant is exact by construction (its force
+    through the hole centre), so only body forces are integrated here.
     """
     x = model.mesh.nodes
     c = x.mean(0)
@@ -120,8 +120,26 @@ class CaseResult:
     cycle_nodes: np.ndarray | None  #: nodes that peak at some row (the fatigue candidates)
     cycle_stress: np.ndarray | None  #: (n_rows, len(cycle_nodes), 6) stress history there, MPa
     mesh: PartMesh
-    imbalance: float  #: largest relieved load imbalance of a row (free bodies), relative
+    imbalance: tuple[float, float]  #: largest relative (force, moment) imbalance of a row (free bodies)
     seconds: dict
+
+
+def imbalance(model: Model, coef: np.ndarray, R: np.ndarray, scale: np.ndarray) -> tuple[float, float]:
+    """Largest relative (force, moment) imbalance over the rows of a free body's combination.
+
+    Row by row: the net force ``|Σ c_k F_k|`` over the applied load ``Σ |c_k| |F_k|``, and the
+    net moment about the centroid over that load times the part's lever (its farthest node
+    from the centroid).  A balanced free body gives ≈ 0 in both; a history that lost a load
+    (a driver torque read as zero) leaves a moment the inertia relief would silently cancel.
+    """
+    load = np.abs(coef) @ scale
+    safe = np.where(load > 0, load, 1.0)
+    x = model.mesh.nodes
+    lever = float(np.linalg.norm(x - x.mean(0), axis=1).max())
+    net = coef @ R.T  # (rows, 6): force (N) and moment (N·mm) about the centroid
+    force = np.linalg.norm(net[:, :3], axis=1) / safe
+    moment = np.linalg.norm(net[:, 3:], axis=1) / (safe * lever)
+    return float(force.max()), float(moment.max())
 
 
 def _key(case: PartCase) -> tuple:
@@ -178,10 +196,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
         for j, u in enumerate(case.loads):
             ratio = case.mass_kg / fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
             coef[:, unique[u]] += ratio * case.coef[:, j]
-        imbalance = 0.0
-        if free:
-            load = np.abs(coef) @ scale
-            imbalance = float((np.linalg.norm(coef @ R[:3].T, axis=1) / np.where(load > 0, load, 1)).max())
+        unbalanced = imbalance(model, coef, R, scale) if free else (0.0, 0.0)
         vm_rows, peak_nodes = sol.peak_sweep(coef)
         row = int(np.argmax(vm_rows))
         nodes = hist = None
@@ -191,6 +206,6 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
             nodes = np.unique(peak_nodes)
             hist = np.einsum("rk,knc->rnc", coef, sol.nodal_stress[:, nodes])
         out.append(CaseResult(case, mode, sol, coef, vm_rows, row, sol.peak(coef[row]), nodes, hist, pm,
-                              imbalance, {"solve (shared)": t_solve,
+                              unbalanced, {"solve (shared)": t_solve,
                                           "superpose": time.perf_counter() - t1}))
     return out

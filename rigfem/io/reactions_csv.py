@@ -117,17 +117,20 @@ def _check_forces(where: str, deg: np.ndarray, forces: dict[str, np.ndarray], si
                              f"{100 * gap[k] / peak:.2g} % of the peak > {MAX_MIDPOINT_PCT:g} %); give more crank angles")
 
 
-def read_csv(path: str | Path) -> ReactionHistory:
+def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> ReactionHistory:
     """Import a reaction history (rigfem's own CSV or an external one, e.g. from MATLAB).
 
     Needed columns (names case-insensitive): a crank-angle column in degrees (``crank_deg``,
     ``theta_deg``, ``angle_deg``, ``theta``, ``angle``) or radians (``crank_rad``, ``theta_rad``,
     ``angle_rad``), and per joint ``<J>_fx_N``/``<J>_fy_N`` (also ``<J>_fx``/``<J>_fy`` or
-    ``<J>x``/``<J>y``) in N; optional torque column in N·m (``torque_Nm``, ``torque``, ``M2``).
-    Lines starting with ``#`` are comments.  Refused (InputError naming the problem): angles
-    that do not cover one full turn in steps of at most :data:`MAX_STEP_DEG`, angles or forces
-    that do not fit their declared unit (radians in a degree column, kN), and sampling too
-    coarse to bracket the peaks (see :func:`_check_forces`).
+    ``<J>x``/``<J>y``) in N; the driver torque in N·m (``torque_Nm``, ``torque``, ``M2``,
+    ``driver``) or driver force in N (``driver_force_N``).  A CSV without the driver column is
+    refused (a torque read as zero unloads the crank) unless ``missing`` states its value, e.g.
+    ``{"torque_Nm": 0.0}`` (``[check].reactions_csv_missing``); the history's
+    ``meta["assumed"]`` then says so.  Lines starting with ``#`` are comments.  Refused
+    (InputError naming the problem): angles that do not cover one full turn in steps of at most
+    :data:`MAX_STEP_DEG`, angles or forces that do not fit their declared unit (radians in a
+    degree column, kN), and sampling too coarse to bracket the peaks (see :func:`_check_forces`).
     """
     p = Path(path)
     if not p.is_file():
@@ -174,7 +177,8 @@ def read_csv(path: str | Path) -> ReactionHistory:
     if not joints:
         raise InputError(f"reaction CSV {str(p)!r}: no joint force columns (<joint>_fx_N, <joint>_fy_N)")
     tcol = next((lower.index(c.lower()) for c in _TORQUE_COLS + ("driver_force_N",) if c.lower() in lower), None)
-    torque = arr[:, tcol] if tcol is not None else np.zeros(arr.shape[0])
+    stated = (missing or {}).get("torque_Nm")
+    torque = arr[:, tcol] if tcol is not None else np.full(arr.shape[0], float(stated or 0.0))
     sing = arr[:, lower.index("singular")] > 0.5 if "singular" in lower else np.zeros(arr.shape[0], bool)
     bad = ~sing & (~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0))
     if np.any(bad):
@@ -187,9 +191,17 @@ def read_csv(path: str | Path) -> ReactionHistory:
         raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
     _check_turn(str(p), head[ang], arr[:, ang], deg)
     _check_forces(str(p), deg, {n: j.force_N for n, j in joints.items()}, sing)
+    assumed = []
+    if tcol is None and stated is None:
+        raise InputError(f"reaction CSV {str(p)!r}: no driver-torque column (one of "
+                         f"{', '.join(_TORQUE_COLS + ('driver_force_N',))}): the crank's load is unknown; add it, or "
+                         f"state its value in the scene, e.g. [check] reactions_csv_missing = {{torque_Nm = 0}}")
+    if tcol is None:
+        assumed.append(f"the reaction CSV {p.name} has no driver-torque column: the torque is taken as "
+                       f"{float(stated):g} N·m at every crank angle ([check].reactions_csv_missing)")
     for j in joints.values():
         j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)        # blank singular rows
-    meta = {"source": str(p), "model": "imported"}
+    meta = {"source": str(p), "model": "imported", "assumed": assumed}
     if "driver_force_N" in head:
         meta["driver_unit"] = "N"
     h = ReactionHistory(deg, joints, np.where(np.isfinite(torque), torque, 0.0), None, meta,

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
 from rigfem.mesh.partmesh import (
     Hole,
     PartMesh,
@@ -20,12 +18,10 @@ from rigfem.mesh.partmesh import (
 )
 from rigfem.settings import MeshSettings
 
-#: bump when the meshing recipe changes, so cached meshes are not reused
-MESH_RECIPE = 5  # 2: I-profile root fillets, Delaunay retry after a flat HXT tet; 3: group fillets;
+#: the source files that make a mesh: a change to any of them invalidates the cached meshes
+MESH_CODE = ("mesh/*.py", "rig/parts.py", "settings.py")
 
 
-#                  4: curvature sizing with the global size, concentrators at half the refined size;
-#                  5: mid-edge points of curved boundary edges
 #: machine memory the estimate is checked against, GiB: this machine's physical memory
 MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 
@@ -89,11 +85,6 @@ def estimate(tets: int) -> Estimate:
     """
     n = 3 * 1.4 * tets
     return Estimate(tets, 1000.0 * tets, 12.0 * (80 * n + 8 * n ** (4 / 3)))
-
-
-def cache_dir() -> Path:
-    """Folder of cached meshes: $RIGFEM_CACHE or ~/.cache/rigfem (outside the repository)."""
-    return Path(os.environ.get("RIGFEM_CACHE") or Path.home() / ".cache" / "rigfem")
 
 
 def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Hole | None:
@@ -239,18 +230,14 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
     check_range("refine_dist_mm", settings.dist_mm, 0.0, None, "mm", lo_open=True)
     check_range("min_quality", settings.min_quality, 0.0, 1.0)
-    key_src = {"part": part.content_hash(), "settings": settings.key(), "recipe": MESH_RECIPE,
-               "gmsh": gmsh.__version__}
-    key = hashlib.sha256(json.dumps(key_src, sort_keys=True).encode()).hexdigest()[:32]
-    path = cache_dir() / "meshes" / f"{part.name}-{key}.npz"
-    if use_cache and path.is_file():
-        try:
-            pm = load_npz(path)
-        except (OSError, KeyError, ValueError):  # unreadable cache entry: mesh again, overwrite it
-            pass
-        else:
-            pm.meta["cache"] = "hit"
-            return pm
+    inputs = {"part": part.name, "geometry": part.content_hash(), "settings": settings.key(),
+              "gmsh": gmsh.__version__, "code": code_hash(*MESH_CODE)}
+    key = entry_key(inputs)
+    folder = cache_dir() / "meshes" / f"{part.name}-{key}"
+    if use_cache and read_entry(folder, inputs):
+        pm = load_npz(folder / "mesh.npz")
+        pm.meta["cache"] = "hit"
+        return pm
     t0 = time.perf_counter()
     with gmsh_session(part.name):
         gmsh.option.setNumber("General.NumThreads", 1)
@@ -297,7 +284,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
             "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     if use_cache:
-        save_npz(pm, path)
+        write_entry(folder, inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm
 
 

@@ -15,8 +15,8 @@ load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates t
 and the memory of the mesh and of a direct P2 solve on it and refuses requests above the
 machine (24 GiB); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
 refuses a mesh below ``min_quality``; then makes the mesh second order (:func:`second_order`).
-Results are cached as .npz under $RIGFEM_CACHE or
-~/.cache/rigfem, keyed by a hash of the part definition, the settings and the gmsh version.
+Results are cached as .npz in verified cache entries (:mod:`rigfem.mesh.cache`), keyed by the
+part definition, the settings, the gmsh version and the meshing code.
 The FE solver builds P2 from :func:`quadratic`; :func:`write_mesh` exports .vtu/.msh (tetra or
 tetra10).
 """

@@ -14,7 +14,7 @@ from pathlib import Path
 from rigfem.errors import plain
 
 #: version of report.json's layout (README: report.json); raised when a field changes meaning or goes
-REPORT_SCHEMA = 2
+REPORT_SCHEMA = 3
 
 
 def finite(obj, where: str = "report"):
@@ -52,6 +52,11 @@ def _fmt(x, nd: int = 1) -> str:
     return "–" if x is None else f"{x:.{nd}f}"
 
 
+def _tolerance(r: dict) -> str:
+    tol = {p["solve"]["imbalance"]["tolerance_pct"] for p in r["parts"] if p.get("solve")}
+    return ", ".join(f"{t:g} %" for t in sorted(tol)) or "–"
+
+
 def render_markdown(r: dict) -> str:
     """Human-readable report: configuration, rules, reactions, one table per mode."""
     cfg = r["configuration"]
@@ -61,6 +66,9 @@ def render_markdown(r: dict) -> str:
                   "checked only because --allow-rule-violations was passed, and its overall verdict is FAIL "
                   "whatever its stresses:**", ""]
         lines += [f"- {md_text(v)}" for v in r["rule_violations"]] + [""]
+    if r.get("assumed"):
+        lines += ["**ASSUMED: the input lacked data the model needs; the scene stated its value:**", ""]
+        lines += [f"- {md_text(v)}" for v in r["assumed"]] + [""]
     lines += [
              md_text(r.get("description", "")).strip(), "",
              f"**Overall verdict: {r['verdict'].upper()}** — criterion σvm,peak < "
@@ -113,6 +121,10 @@ def render_markdown(r: dict) -> str:
               "- error estimate (an estimate, not a bound): recovery-based (difference between the raw and the "
               "recovered stress at the peak) times a per-order factor calibrated so the band covers the converged "
               "peak (results/convergence/band_coverage.md); a peak whose band contains the limit is *undecided*",
+              "- free-body imbalance (force, moment; relative to the applied load, tolerance "
+              f"{_tolerance(r)}): " + "; ".join(f"{p['name']} {p['mode']} {p['solve']['imbalance']['force_pct']:.2f} %, "
+                                                f"{p['solve']['imbalance']['moment_pct']:.2f} %"
+                                                for p in r["parts"] if p.get("solve")),
               f"- files: {', '.join(r.get('files', []))}", ""]
     return "\n".join(lines)
 

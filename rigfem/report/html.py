@@ -20,7 +20,7 @@ h1{margin-bottom:.2em} h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margi
 table{border-collapse:collapse;margin:.6em 0;font-size:.93em} th,td{border:1px solid #ccc;padding:.3em .6em}
 th{background:#f3f3f3;text-align:left} td.num{text-align:right;font-variant-numeric:tabular-nums}
 .badge{display:inline-block;padding:.15em .6em;border-radius:.3em;color:#fff;font-weight:700}
-.pass{background:#2e7d32}.fail{background:#c62828}.undecided{background:#ef6c00}
+.pass{background:#2e7d32}.fail{background:#c62828}.undecided{background:#ef6c00}.not-loaded{background:#6d4c41}
 .big{font-size:1.5em} img{max-width:100%;border:1px solid #ddd;margin:.4em 0}
 .bar{background:#eee;width:160px;height:.8em;display:inline-block;position:relative;vertical-align:middle}
 .bar span{position:absolute;top:0;bottom:0;background:#1565c0}.bar i{position:absolute;top:0;bottom:0;
@@ -39,7 +39,7 @@ def _num(x, digits: int) -> str:
 
 def _badge(verdict: str, big: bool = False) -> str:
     v = str(verdict)
-    return f'<span class="badge {_e(v)}{" big" if big else ""}">{_e(v.upper())}</span>'
+    return f'<span class="badge {_e(v.replace(" ", "-"))}{" big" if big else ""}">{_e(v.upper())}</span>'
 
 
 def _img(folder: Path, name: str, alt: str) -> str:
@@ -83,6 +83,9 @@ def render_html(report: dict, folder: str | Path) -> str:
         out.append("<p><b>NOT MOUNTABLE: this configuration breaks rig rules and was checked only because "
                    "--allow-rule-violations was passed; its overall verdict is FAIL whatever its stresses.</b></p><ul>"
                    + "".join(f"<li>{_e(v)}</li>" for v in r["rule_violations"]) + "</ul>")
+    if r.get("assumed"):
+        out.append("<p><b>ASSUMED: the input lacked data the model needs; the scene stated its value:</b></p><ul>"
+                   + "".join(f"<li>{_e(v)}</li>" for v in r["assumed"]) + "</ul>")
     for w in r.get("warnings") or []:
         out.append(f'<p class="note">⚠ {_e(w)}</p>')
     if r.get("singular"):
@@ -162,7 +165,8 @@ def render_html(report: dict, folder: str | Path) -> str:
                               f"DOF (P{p['mesh']['order']}), quality min {p['mesh']['quality_min']:.2f}, "
                               f"{p['mesh']['straightened']} curved elements straightened"),
                      ("solve", f"{_e(p['solve']['method'])}, {p['solve']['load_cases']} load cases, "
-                               f"{p['solve']['rows']} crank angles, residual ≤ {p['solve']['residual_max']:.1e}")]
+                               f"{p['solve']['rows']} crank angles, residual ≤ {p['solve']['residual_max']:.1e}"),
+                     ("free-body imbalance", _imbalance(p["solve"]["imbalance"]))]
             fat = p.get("fatigue")
             if fat:
                 items.append(("Goodman fatigue", f"{_badge(fat['verdict'])} safety factor {fat['safety_factor']:.2f} "
@@ -183,6 +187,11 @@ def render_html(report: dict, folder: str | Path) -> str:
     out += ["</ul>", f'<p class="note">Also: {_e(", ".join(f for f in r.get("files", []) if f not in vtk))}</p>',
             "</body></html>"]
     return "\n".join(x for x in out if x)
+
+
+def _imbalance(b: dict) -> str:
+    return (f"force {b['force_pct']:.2f} %, moment {b['moment_pct']:.2f} % of the applied load "
+            f"(tolerance {b['tolerance_pct']:g} %)")
 
 
 def write_html(report: dict, folder: str | Path) -> Path:

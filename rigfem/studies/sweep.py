@@ -34,7 +34,7 @@ import numpy as np
 
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
-from rigfem.errors import InputError, check_range
+from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import part_cases
 from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
@@ -107,7 +107,7 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
     worst, verdicts = ("", 0.0), []
     for mode, case in part_cases(h, pk, s):
         peak, deg = case_peak(bases[case_key(case)], case)
-        v = half_ultimate(peak, s.material.sigma_u, err, s.limit_factor)
+        v = half_ultimate(peak, s.material.sigma_u, err, s.limit_factor, loaded=bool(np.any(case.coef)))
         row[f"{case.name}_{mode}_mpa"] = peak
         row[f"{case.name}_{mode}_deg"] = deg
         row[f"{case.name}_{mode}_util_pct"] = v.utilisation_pct
@@ -140,16 +140,21 @@ def _column_order(cols: list[str], p: SweepParams) -> list[str]:
     return [c for c in lead + rules + rest + tail if c in cols]
 
 
-def _chunk_path(work, i: int):
-    return work / f"chunk_{i:05d}.csv"
+def _chunk(work: Path, key: str, i: int, configs: list[dict]) -> tuple[Path, dict]:
+    """Folder and inputs of stored chunk ``i`` of the sweep ``key``: a verified cache entry
+    (rigfem.mesh.cache), so a damaged chunk is computed again, never read."""
+    return work / f"chunk_{i:05d}", {"sweep": key, "configs": configs}
 
 
-def _write_chunk(work, i: int, rows: list[dict]) -> None:
+def _write_chunk(work: Path, key: str, i: int, configs: list[dict], rows: list[dict]) -> None:
     import pandas as pd
 
-    tmp = work / f".chunk_{i:05d}.tmp"
-    pd.DataFrame(rows).to_csv(tmp, index=False, float_format="%.10g")
-    tmp.replace(_chunk_path(work, i))
+    from rigfem.mesh.cache import read_entry, write_entry
+
+    folder, inputs = _chunk(work, key, i, configs)
+    text = pd.DataFrame(rows).to_csv(index=False, float_format="%.10g")
+    if not (write_entry(folder, inputs, lambda d: (d / "rows.csv").write_text(text)) or read_entry(folder, inputs)):
+        raise ComputeError(f"could not store sweep chunk {i} in {work} (disk full or not writable?)")
 
 
 def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 1,
@@ -167,17 +172,20 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     import pandas as pd
     from tqdm import tqdm
 
+    from rigfem.mesh.cache import read_entry
+
     t0 = time.perf_counter()
     check_range("chunk_size", chunk_size, 1, 100_000)
     check_range("workers", workers, 1, 256)
     configs = enumerate_configs(p) if configs is None else configs
     tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
-    work = Path(work_dir) / f"{p.key()}-{tag}"
+    key = p.key()
+    work = Path(work_dir) / f"{key}-{tag}"
     work.mkdir(parents=True, exist_ok=True)
     (Path(work_dir) / ".gitignore").write_text("*\n")  # stored chunks never enter the repository
     (work / "params.json").write_text(json.dumps(dataclasses.asdict(p), indent=1, default=str))
     chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
-    todo = [i for i in range(len(chunks)) if not _chunk_path(work, i).is_file()]
+    todo = [i for i in range(len(chunks)) if read_entry(*_chunk(work, key, i, chunks[i])) is None]
     bar = tqdm(total=len(configs), unit="cfg", disable=not progress or None, desc=p.linkage_type,
                initial=sum(len(chunks[i]) for i in range(len(chunks)) if i not in set(todo)))
     with bar:
@@ -189,17 +197,18 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
             if distributed is None:
                 distributed = workers > 1 or scheduler is not None
             if distributed:
-                _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar)
+                _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar)
             else:
                 for i in todo:
-                    _write_chunk(work, i, run_chunk(chunks[i], p, bases))
+                    _write_chunk(work, key, i, chunks[i], run_chunk(chunks[i], p, bases))
                     bar.update(len(chunks[i]))
     timing = work / "timing.json"
     spent = json.loads(timing.read_text())["seconds"] if timing.is_file() else 0.0
     if todo:  # compute time over every run that computed chunks of this sweep
         spent += time.perf_counter() - t0
         timing.write_text(json.dumps({"seconds": spent}))
-    table = pd.concat([pd.read_csv(_chunk_path(work, i), keep_default_na=False, na_values=[""])
+    table = pd.concat([pd.read_csv(_chunk(work, key, i, chunks[i])[0] / "rows.csv", keep_default_na=False,
+                                   na_values=[""])
                        for i in range(len(chunks))], ignore_index=True)
     table = table[_column_order(list(table.columns), p)]
     table.attrs["compute_seconds"] = spent or None
@@ -231,7 +240,7 @@ def _map_bases(bases: dict[tuple, UnitBasis], folder: Path) -> dict[tuple, UnitB
     return out
 
 
-def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:
+def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> None:
     from contextlib import nullcontext
 
     import dask
@@ -251,5 +260,5 @@ def _run_dask(chunks, todo, p, bases, work, workers, scheduler, bar) -> None:
         futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
         for fut in as_completed(futures):
             i = futures.pop(fut)
-            _write_chunk(work, i, fut.result())
+            _write_chunk(work, key, i, chunks[i], fut.result())
             bar.update(len(chunks[i]))

@@ -88,16 +88,20 @@ class SweepParams:
 
     def key(self) -> str:
         """Short hash of the parameters and of everything else a stored chunk depends on: the
-        part files, the mass catalogue and the meshing recipe (a change to any of them must not
-        resume from chunks computed before it)."""
-        from rigfem.mesh.mesher import CURVATURE_MM, MESH_RECIPE
+        part files, the mass catalogue and the source files that compute a row (a change to any
+        of them must not resume from chunks computed before it)."""
+        from rigfem.fe.cache import SOLUTION_CODE
+        from rigfem.mesh.cache import code_hash
         from rigfem.rig.catalogue import RIG_MASSES
         from rigfem.rig.parts import load_part
 
         parts = sorted({spec["part"] for spec in PARTS[self.linkage_type].values()})
-        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, version=3,
+        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS,
                    parts={n: load_part(n).content_hash() for n in parts},
-                   masses=dataclasses.asdict(RIG_MASSES), mesh=[MESH_RECIPE, CURVATURE_MM])
+                   masses=dataclasses.asdict(RIG_MASSES),
+                   code=code_hash(*SOLUTION_CODE, "studies/sweep*.py", "linkage/*.py", "dynamics/*.py", "loads/*.py",
+                                  "rig/*.py", "verdict/*.py", "settings.py", "schema.py", "fe/partcase.py",
+                                  "fe/tensors.py"))
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
 
 

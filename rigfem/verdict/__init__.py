@@ -8,7 +8,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "criterion": ["Verdict", "LIMIT_FACTOR", "allowable_stress", "half_ultimate", "overall"],
+        "criterion": ["Verdict", "LIMIT_FACTOR", "IMBALANCE_TOL", "allowable_stress", "half_ultimate", "overall"],
         "fatigue": ["SURFACE", "RELIABILITY", "LOADING", "marin_endurance", "goodman"],
         "part": ["verdict_of"],
     },

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigfem.errors import ComputeError
 from rigfem.fe.model import LOCKING_NU
 from rigfem.fe.partcase import CaseResult
 from rigfem.rig.parts import load_part
-from rigfem.verdict.criterion import half_ultimate
+from rigfem.verdict.criterion import IMBALANCE_TOL, half_ultimate
 from rigfem.verdict.fatigue import goodman
 
 
@@ -45,7 +46,10 @@ def verdict_of(res: CaseResult, settings) -> dict:
     """Report entry of a case result (plain data, MPa, mm, deg)."""
     mat = settings.material
     pk = res.peak
-    v = half_ultimate(pk.value, mat.sigma_u, pk.error_pct, settings.limit_factor)
+    loaded = bool(np.any(res.coef != 0))
+    if loaded and not pk.value > 0:  # an invariant no cache entry can hide: load without stress is a bug
+        raise ComputeError(f"part {res.case.name} ({res.mode}): loaded, but its peak von Mises is {pk.value!r} MPa")
+    v = half_ultimate(pk.value, mat.sigma_u, pk.error_pct, settings.limit_factor, res.imbalance, loaded)
     sol = res.solution
     c = res.coef[res.row]
     eq = float(np.max(sol.equilibrium_error))
@@ -54,7 +58,7 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "peak_mpa": v.peak_mpa, "crank_deg": float(res.case.rows[res.row]),
         "surface": pk.surface, "location_mm": [round(float(t), 3) for t in pk.xyz],
         "error_pct": v.error_pct, "limit_mpa": v.limit_mpa, "utilisation_pct": v.utilisation_pct,
-        "verdict": v.verdict,
+        "verdict": v.verdict, "reason": v.reason,
         "max_displacement_mm": float(np.linalg.norm(sol.displacement(c), axis=1).max()),
         "fatigue": _fatigue(res, settings),
         "mesh": {"nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
@@ -66,17 +70,21 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "solve": {"method": sol.method, "load_cases": int(sol.U.shape[1]),
                   "rows": int(len(res.case.rows)),
                   "residual_max": float(sol.residuals.max()), "equilibrium_error": eq,
-                  "relieved_imbalance": res.imbalance,
+                  "imbalance": {"force_pct": 100 * res.imbalance[0], "moment_pct": 100 * res.imbalance[1],
+                                "tolerance_pct": 100 * IMBALANCE_TOL},
                   "seconds": {k: round(t, 3) for k, t in res.seconds.items()}},
         "notes": list(res.case.notes),
     }
+    if v.reason:
+        out["notes"].insert(0, v.reason)
     out["notes"] += _profile_caveat(res)
     if settings.order == 1:
         out["notes"].append(P1_NOTE)
     if settings.order == 1 and mat.nu >= LOCKING_NU:
         out["notes"].append(f"linear elements with nu = {mat.nu:g}: volumetric locking under-predicts stress; "
                             f"use order 2")
-    if res.imbalance > 1e-3:
-        out["notes"].append(f"free-body loads were out of balance by up to {100 * res.imbalance:.1f} % "
-                            f"(FE vs dynamics mass distribution); removed by inertia relief")
+    if 1e-3 < max(res.imbalance) <= IMBALANCE_TOL:
+        out["notes"].append(f"free-body loads were out of balance by up to {100 * res.imbalance[0]:.1f} % "
+                            f"(force), {100 * res.imbalance[1]:.1f} % (moment) (FE vs dynamics mass "
+                            f"distribution); removed by inertia relief")
     return out

@@ -1,0 +1,120 @@
+"""Verified cache entries: whatever rigfem stores to skip a computation is checked when read.
+
+An entry is a folder holding the files its writer made and ``manifest.json``: the SHA-256 of
+every file and the full description of the inputs that produced it (parameters, and the hash
+of the source files that compute it: :func:`code_hash`, so an edit invalidates entries without
+a hand-bumped version).  A read verifies both; a corrupted, truncated or zeroed entry, or one
+made from other inputs, is removed and logged once (``logging`` channel ``rigfem.cache``) and
+the caller computes it again.  Entries are written to a temporary folder and renamed into
+place, so a reader never sees half an entry.  Caches live under ``$RIGFEM_CACHE`` (default
+``~/.cache/rigfem``), outside the repository.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import logging
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+#: the channel a discarded entry is reported on
+log = logging.getLogger("rigfem.cache")
+MANIFEST = "manifest.json"
+
+
+def cache_dir() -> Path:
+    """Folder of rigfem's caches: $RIGFEM_CACHE or ~/.cache/rigfem (outside the repository)."""
+    return Path(os.environ.get("RIGFEM_CACHE") or Path.home() / ".cache" / "rigfem")
+
+
+@functools.lru_cache(maxsize=None)
+def code_hash(*patterns: str) -> str:
+    """SHA-256 (16 hex digits) of the rigfem source files matching ``patterns`` (globs relative
+    to the package, e.g. ``"mesh/*.py"``): the code that computes an entry is part of its key."""
+    root = Path(__file__).resolve().parents[1]
+    files = sorted({f for p in patterns for f in root.glob(p)})
+    if not files:
+        raise ValueError(f"code_hash: no source file matches {patterns}")
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _canonical(inputs: dict) -> dict:
+    return json.loads(json.dumps(inputs, sort_keys=True, default=str))
+
+
+def entry_key(inputs: dict) -> str:
+    """The key (32 hex digits) of an entry: a hash of its full input description."""
+    return hashlib.sha256(json.dumps(_canonical(inputs), sort_keys=True).encode()).hexdigest()[:32]
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def discard(folder: Path, why: str) -> None:
+    """Remove a bad entry and say so once; the caller computes it again."""
+    log.warning("cache entry %s discarded (%s); computing it again", folder, why)
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def read_entry(folder: Path, inputs: dict) -> Path | None:
+    """``folder`` if it holds a verified entry of ``inputs``; None if it is missing or was bad
+    (then it is removed and logged)."""
+    if not folder.exists():
+        return None
+    try:
+        man = json.loads((folder / MANIFEST).read_text())
+        files = man["files"]
+        if man["inputs"] != _canonical(inputs):
+            return discard(folder, "made from other inputs")
+        present = {p.name for p in folder.iterdir()} - {MANIFEST}
+        if present != set(files):
+            return discard(folder, f"files {sorted(present ^ set(files))} missing or unexpected")
+        for name, digest in files.items():
+            if _sha256(folder / name) != digest:
+                return discard(folder, f"{name} does not match its checksum")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
+        return discard(folder, f"unreadable manifest: {type(e).__name__}")
+    return folder
+
+
+def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bool:
+    """Store an entry: ``write(tmp)`` makes its files in a temporary folder, the manifest is
+    added, and the folder is renamed to ``folder``.  False if it could not be stored (a full
+    disk, or a concurrent writer got there first): a cache is an optimisation only."""
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}-", dir=folder.parent))
+    try:
+        write(tmp)
+        files = {p.name: _sha256(p) for p in sorted(tmp.iterdir())}
+        (tmp / MANIFEST).write_text(json.dumps({"inputs": _canonical(inputs), "files": files}))
+        os.replace(tmp, folder)
+        return True
+    except OSError:
+        shutil.rmtree(tmp, ignore_errors=True)
+        return False
+
+
+def save_arrays(folder: Path, arrays: dict[str, np.ndarray]) -> None:
+    """Write each array as ``<name>.npy`` in ``folder`` (for :func:`write_entry`)."""
+    for name, a in arrays.items():
+        np.save(folder / f"{name}.npy", np.asarray(a), allow_pickle=False)
+
+
+def load_arrays(folder: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Read the arrays :func:`save_arrays` wrote (no pickles)."""
+    return {n: np.load(folder / f"{n}.npy", allow_pickle=False) for n in names}
