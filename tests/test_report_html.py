@@ -76,7 +76,7 @@ def test_user_text_is_escaped(checked):
     evil = dict(report, description='<script>alert("x")</script> & <b>bold</b>',
                 warnings=["<img src=x onerror=alert(1)>"])
     page = render_html(evil, out)
-    assert "<script>" not in page and "<img src=x" not in page
+    assert "<script>alert" not in page and "<img src=x" not in page
     assert "&lt;script&gt;" in page and "&amp;" in page
 
 
@@ -87,3 +87,14 @@ def test_show(checked, capsys, tmp_path):
     assert main(["show", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "RESULT_FOLDER" in err and len(err.strip().splitlines()) == 1
+
+
+def test_scene_text_shows_as_text_in_every_page(tmp_path):
+    """A description with a script shows as text; the sweep's Markdown renders (no raw separators)."""
+    from rigfem.report.pages import markdown_html, render_page
+
+    page = render_page("sweep.html.j2", kind="<script>x</script>",
+                       body=markdown_html("| a | b |\n|---|---|\n| `c` | **d** <script>e</script> |\n"),
+                       maps=[], explorer="explorer.html")
+    assert "<script>x" not in page and "<script>e" not in page and "&lt;script&gt;" in page
+    assert "|---|" not in page and "<code>c</code>" in page and "<strong>d</strong>" in page

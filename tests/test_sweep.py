@@ -191,7 +191,8 @@ def test_report_files(params, bases, tmp_path):
     table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
     files = write_report(table, params, tmp_path / "out")
     assert files == ["sweep_four-bar.csv.gz", "map_four-bar_d_b3.png", "map_four-bar_b4_b3.png", "worst_four-bar.md",
-                     "sweep_four-bar.html"]
+                     "sweep_four-bar.html", "explorer.html"]
+    assert (tmp_path / "out" / "explorer.html").is_file()
     page = (tmp_path / "out" / "sweep_four-bar.html").read_text()
     assert page.count('src="data:image/png;base64,') == 2 and "computed: 3" in page
     text = gzip.decompress((tmp_path / "out" / "sweep_four-bar.csv.gz").read_bytes()).decode().lower()

@@ -30,6 +30,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--chunk-size", type=int, default=64, help="configurations per stored chunk (default 64)")
     p.add_argument("--out", default="results/sweep", help="output folder (default results/sweep)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--report-only", action="store_true",
+                   help="rewrite the maps, worst list, HTML pages and explorer from the folder's table (no sweep)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,6 +45,15 @@ def run(args: argparse.Namespace) -> int:
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
     out = Path(args.out)
+    if args.report_only:
+        import pandas as pd
+
+        csv = out / f"sweep_{p.linkage_type}.csv.gz"
+        if not csv.is_file():
+            raise InputError(f"--out = {str(out)!r} has no {csv.name}: run the sweep first (without --report-only)")
+        files = write_report(pd.read_csv(csv), p, out)
+        print(f"{p.linkage_type}: wrote {', '.join(str(out / f) for f in files)}")
+        return 0
     table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
                       scheduler=args.scheduler, progress=not args.quiet)
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))

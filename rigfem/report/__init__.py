@@ -11,6 +11,8 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "document": ["REPORT_SCHEMA", "finite", "write_json", "md_text", "render_markdown", "MODE_TEXT"],
         "folder": ["MARKER", "check_target", "check_writable", "folder_lock", "atomic_dir"],
         "html": ["render_html", "write_html"],
+        "pages": ["render_page", "markdown_html", "png_uri", "json_script"],
+        "viewer": ["viewer_data"],
         "motion": ["motion_plot", "motion_gif", "structural_error_plot"],
         "pictures": ["field_picture", "reactions_plot", "utilisation_plot", "render_field"],
         "vtu": ["SAFETY_CAP", "write_vtu"],

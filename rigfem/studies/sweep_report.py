@@ -16,6 +16,8 @@ from rigfem.studies.sweep import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
 WORST = 15
+#: the design-space explorer's page, written beside the sweep pages
+EXPLORER = "explorer.html"
 #: the 2013 study's final design (geometry/RIG.md §3), marked on the maps
 FINAL_DESIGN = {"b2": 480.0, "b3": 840.0, "b4": 780.0, "d": 1020.0}
 
@@ -125,7 +127,8 @@ def _fmt(df: pd.DataFrame, p: SweepParams) -> str:
         cells = []
         for c in cols:
             v = r[c]
-            cells.append(f"{v:.1f}" if isinstance(v, float) else str(v))
+            cells.append("yes" if v is True or v is np.True_ else "no" if v is False or v is np.False_
+                         else f"{v:.1f}" if isinstance(v, float) else str(v))
         lines.append("| " + " | ".join(cells) + " |")
     return head + "\n".join(lines) + "\n"
 
@@ -223,39 +226,32 @@ def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float 
     md = f"worst_{p.linkage_type}.md"
     text = worst_markdown(table, p, seconds)
     (out / md).write_text(text)
+    return [csv] + maps + [md] + write_pages(table, p, out, text, maps)
+
+
+def write_pages(table: pd.DataFrame, p: SweepParams, out: Path, markdown: str, maps: list[str]) -> list[str]:
+    """The sweep's HTML page and the design-space explorer, from its table, Markdown and maps."""
+    from rigfem.studies.explorer import write_explorer
+
     page = f"sweep_{p.linkage_type}.html"
-    (out / page).write_text(summary_html(text, maps, out, p), encoding="utf-8")
-    return [csv] + maps + [md, page]
+    (out / page).write_text(summary_html(markdown, maps, out, p), encoding="utf-8")
+    write_explorer(out, {t: tab for t, tab in _tables(out, table, p).items()})
+    return [page, EXPLORER]
+
+
+def _tables(out: Path, table: pd.DataFrame, p: SweepParams) -> dict[str, pd.DataFrame]:
+    """Both linkage types' tables for the explorer: this one, and the other's if the folder has it."""
+    tables = {p.linkage_type: table}
+    for t in LENGTHS:
+        f = out / f"sweep_{t}.csv.gz"
+        if t not in tables and f.is_file():
+            tables[t] = pd.read_csv(f)
+    return tables
 
 
 def summary_html(markdown: str, maps: list[str], out: Path, p: SweepParams) -> str:
-    """One self-contained page: the sweep's counts and worst configurations, and its maps embedded."""
-    import base64
-    import html
+    """One self-contained page: the sweep's Markdown (through markdown-it) and its maps embedded."""
+    from rigfem.report.pages import markdown_html, png_uri, render_page
 
-    rows, table = [], []
-    for line in markdown.splitlines():
-        if line.startswith("|") and not set(line) <= set("|-: "):
-            cells = [html.escape(c.strip()) for c in line.strip("|").split("|")]
-            tag = "th" if not table else "td"
-            table.append("<tr>" + "".join(f"<{tag}>{c}</{tag}>" for c in cells) + "</tr>")
-            continue
-        if table:
-            rows.append("<table>" + "".join(table) + "</table>")
-            table = []
-        if line.startswith("#"):
-            level = min(len(line) - len(line.lstrip("#")), 3)
-            rows.append(f"<h{level}>{html.escape(line.lstrip('#').strip())}</h{level}>")
-        elif line.strip():
-            rows.append(f"<p>{html.escape(line.lstrip('- '))}</p>")
-    if table:
-        rows.append("<table>" + "".join(table) + "</table>")
-    for f in maps:
-        data = base64.b64encode((out / f).read_bytes()).decode("ascii")
-        rows.append(f'<img src="data:image/png;base64,{data}" alt="{html.escape(f)}" data-file="{html.escape(f)}">')
-    css = ("body{font-family:system-ui,sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
-           "table{border-collapse:collapse;font-size:.85em}td,th{border:1px solid #ccc;padding:.2em .5em}"
-           "th{background:#f3f3f3}img{max-width:100%;border:1px solid #ddd;margin:.5em 0}")
-    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>rigfem sweep: '
-            f"{html.escape(p.linkage_type)}</title><style>{css}</style></head><body>" + "\n".join(rows)
-            + "</body></html>")
+    return render_page("sweep.html.j2", kind=p.linkage_type, body=markdown_html(markdown),
+                       maps=[(f, png_uri(out / f)) for f in maps], explorer=EXPLORER)

@@ -1,0 +1,51 @@
+"""HTML pages from the package's jinja2 templates (``rigfem/templates``), Markdown through markdown-it.
+
+One home for the page machinery of the check report, the sweep pages and the explorer:
+autoescaping is on, so every text from a user's file shows as text; only the HTML that
+markdown-it made from the project's own Markdown, and the data URIs, are marked safe.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+from functools import lru_cache
+from pathlib import Path
+
+import jinja2
+from markdown_it import MarkdownIt
+from markupsafe import Markup
+
+__all__ = ["render_page", "markdown_html", "png_uri", "json_script"]
+
+
+@lru_cache(maxsize=1)
+def _env() -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.PackageLoader("rigfem", "templates"),
+                             autoescape=True, undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters["num"] = lambda x, digits=1: "–" if x is None else f"{x:.{digits}f}"
+    return env
+
+
+def render_page(template: str, **context) -> str:
+    """The page ``template`` (a file of rigfem/templates) filled with ``context``, escaped."""
+    return _env().get_template(template).render(**context)
+
+
+def markdown_html(text: str) -> Markup:
+    """HTML of the project's Markdown (CommonMark with tables); raw HTML in it is escaped, not passed."""
+    return Markup(MarkdownIt("commonmark", {"html": False}).enable("table").render(text))
+
+
+def png_uri(path: Path) -> str | None:
+    """A PNG file as a data URI (the page stays one file), or None if it is absent."""
+    if not path.is_file():
+        return None
+    return "data:image/png;base64," + base64.b64encode(path.read_bytes()).decode("ascii")
+
+
+def json_script(data) -> Markup:
+    """``data`` as JSON safe inside a ``<script type="application/json">`` (no ``</`` can close it)."""
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    return Markup(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))

@@ -1,0 +1,56 @@
+"""Data of the report's offline 3-D view: each part's surface and its utilisation per crank angle.
+
+Read from the cycle animation the check wrote (``<part>_cycle.pvd`` and its compact VTU frames),
+so the view shows exactly the files in the folder.  Compact: float32 surface vertices, uint32
+triangles and uint16 utilisation in 0.01 % steps, base64 in the page (``viewer.js`` draws it).
+"""
+
+from __future__ import annotations
+
+import base64
+import re
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+__all__ = ["viewer_data"]
+
+_DATASET = re.compile(r'<DataSet\s+timestep="([^"]+)"\s+file="([^"]+)"')
+#: utilisation is stored in 0.01 % steps up to this cap (above it the colour is the same)
+CAP_PCT = 600.0
+
+
+def _b64(a: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(a).tobytes()).decode("ascii")
+
+
+def _surface(tets: np.ndarray) -> np.ndarray:
+    """The boundary triangles of a tetrahedral mesh (faces that belong to one element only)."""
+    faces = np.concatenate([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]], tets[:, [1, 2, 3]]])
+    _, first, count = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
+    return faces[first[count == 1]]
+
+
+def _part(pvd: Path, limit_mpa: float) -> dict | None:
+    series = [(float(t), pvd.parent / f) for t, f in _DATASET.findall(pvd.read_text())]
+    if not series or not all(f.is_file() for _, f in series):
+        return None
+    first = meshio.read(series[0][1])
+    tri = _surface(first.cells_dict["tetra"][:, :4])
+    used, tri = np.unique(tri, return_inverse=True)
+    util = []
+    for _, f in series:
+        vm = meshio.read(f).point_data["von_mises"][used].astype(float)
+        util.append(np.clip(np.nan_to_num(vm / limit_mpa * 100.0, nan=0.0, posinf=CAP_PCT), 0.0, CAP_PCT))
+    util = np.array(util)
+    return {"name": pvd.stem.removesuffix("_cycle"), "angles": [t for t, _ in series],
+            "vertices": int(used.size), "pos": _b64(first.points[used].astype("<f4")),
+            "tri": _b64(tri.reshape(-1, 3).astype("<u4")), "util": _b64(np.round(util * 100).astype("<u2")),
+            "peak": [float(u.max()) for u in util]}
+
+
+def viewer_data(folder: Path, files: list[str], limit_mpa: float) -> list[dict]:
+    """One entry per part with a cycle animation among ``files`` (none if the folder has none)."""
+    parts = [_part(folder / f, limit_mpa) for f in files if f.endswith("_cycle.pvd") and (folder / f).is_file()]
+    return [p for p in parts if p is not None]

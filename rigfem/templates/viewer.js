@@ -1,0 +1,93 @@
+{% raw %}
+// rigfem's offline 3-D view: the part's surface triangles painted (back to front) on a 2-D canvas,
+// coloured by utilisation per crank angle; drag turns, wheel zooms, the slider steps the cycle.
+(function () {
+  "use strict";
+  const parts = JSON.parse(document.getElementById("v-data").textContent);
+  const cv = document.getElementById("v-canvas"), g = cv.getContext("2d");
+  const sel = document.getElementById("v-part"), slider = document.getElementById("v-frame");
+  const angle = document.getElementById("v-angle"), peak = document.getElementById("v-peak");
+  const bytes = (b64) => Uint8Array.from(atob(b64), (c) => c.charCodeAt(0)).buffer;
+  let P = null, yaw = 0.6, pitch = -0.5, zoom = 1, timer = null;
+  function load(k) {
+    const d = parts[k];
+    const pos = new Float32Array(bytes(d.pos)), tri = new Uint32Array(bytes(d.tri));
+    const util = new Uint16Array(bytes(d.util));
+    const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    for (let i = 0; i < pos.length; i++) { lo[i % 3] = Math.min(lo[i % 3], pos[i]); hi[i % 3] = Math.max(hi[i % 3], pos[i]); }
+    const c = lo.map((v, i) => (v + hi[i]) / 2), r = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 || 1;
+    P = { d, pos, tri, util, c, r, n: d.vertices };
+    slider.max = String(d.angles.length - 1); slider.value = "0";
+    draw();
+  }
+  function colour(u) {  // utilisation (%) -> viridis-like ramp 0..100 %, magenta above the allowable
+    if (u > 100) return "rgb(230,0,200)";
+    const t = Math.max(0, Math.min(1, u / 100));
+    const stops = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+    const x = t * (stops.length - 1), i = Math.min(stops.length - 2, Math.floor(x)), f = x - i;
+    const m = stops[i].map((v, j) => Math.round(v + f * (stops[i + 1][j] - v)));
+    return m;
+  }
+  function draw() {
+    const k = Number(slider.value), { pos, tri, util, c, r, n, d } = P;
+    const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
+    const s = zoom * 0.45 * Math.min(cv.width, cv.height) / r;
+    const X = new Float32Array(n), Y = new Float32Array(n), Z = new Float32Array(n);
+    for (let i = 0; i < n; i++) {
+      const x = pos[3 * i] - c[0], y = pos[3 * i + 1] - c[1], z = pos[3 * i + 2] - c[2];
+      const x1 = cy * x + sy * y, y1 = -sy * x + cy * y;
+      X[i] = cv.width / 2 + s * x1; Y[i] = cv.height / 2 - s * (cp * z - sp * y1); Z[i] = sp * z + cp * y1;
+    }
+    const m = tri.length / 3, order = new Uint32Array(m), depth = new Float32Array(m);
+    for (let t = 0; t < m; t++) { order[t] = t; depth[t] = Z[tri[3 * t]] + Z[tri[3 * t + 1]] + Z[tri[3 * t + 2]]; }
+    order.sort((a, b) => depth[b] - depth[a]);
+    g.fillStyle = "#fff"; g.fillRect(0, 0, cv.width, cv.height);
+    const base = k * n;
+    for (const t of order) {
+      const a = tri[3 * t], b = tri[3 * t + 1], e = tri[3 * t + 2];
+      const u = (util[base + a] + util[base + b] + util[base + e]) / 300;
+      const ux = X[b] - X[a], uy = Y[b] - Y[a], vx = X[e] - X[a], vy = Y[e] - Y[a];
+      const ax = pos[3 * b] - pos[3 * a], ay = pos[3 * b + 1] - pos[3 * a + 1], az = pos[3 * b + 2] - pos[3 * a + 2];
+      const bx = pos[3 * e] - pos[3 * a], by = pos[3 * e + 1] - pos[3 * a + 1], bz = pos[3 * e + 2] - pos[3 * a + 2];
+      const nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx, nl = Math.hypot(nx, ny, nz) || 1;
+      const vz = (sp * nz + cp * (-sy * nx + cy * ny)) / nl;  // normal towards the viewer
+      const light = 0.55 + 0.45 * Math.abs(vz);
+      const col = colour(u);
+      g.fillStyle = typeof col === "string" ? col : `rgb(${col.map((v) => Math.round(v * light)).join(",")})`;
+      g.beginPath(); g.moveTo(X[a], Y[a]); g.lineTo(X[b], Y[b]); g.lineTo(X[e], Y[e]); g.closePath(); g.fill();
+      if (Math.abs(ux * vy - uy * vx) < 0.5) continue;
+      g.strokeStyle = g.fillStyle; g.lineWidth = 0.5; g.stroke();
+    }
+    legend();
+    angle.textContent = `${d.angles[k].toFixed(1)}° (${k + 1} of ${d.angles.length})`;
+    peak.textContent = `peak at this angle: ${d.peak[k].toFixed(1)} % of the allowable`;
+  }
+  function legend() {
+    const x = cv.width - 70, y0 = 40, h = 200;
+    for (let i = 0; i < h; i++) { const m = colour(100 * (1 - i / h)); g.fillStyle = `rgb(${m.join(",")})`; g.fillRect(x, y0 + i, 18, 1); }
+    g.fillStyle = "rgb(230,0,200)"; g.fillRect(x, y0 - 22, 18, 18);
+    g.fillStyle = "#111"; g.font = "14px system-ui, sans-serif";
+    g.fillText("> 100 %", x - 4, y0 - 28); g.fillText("100 %", x + 22, y0 + 5); g.fillText("50 %", x + 22, y0 + h / 2 + 5);
+    g.fillText("0 %", x + 22, y0 + h + 5); g.fillText("utilisation", x - 20, y0 + h + 28);
+  }
+  let drag = null;
+  cv.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; cv.setPointerCapture(e.pointerId); });
+  cv.addEventListener("pointerup", () => { drag = null; });
+  cv.addEventListener("pointermove", (e) => {
+    if (!drag) return;
+    yaw += (e.clientX - drag[0]) * 0.01; pitch += (e.clientY - drag[1]) * 0.01; drag = [e.clientX, e.clientY]; draw();
+  });
+  cv.addEventListener("wheel", (e) => { e.preventDefault(); zoom *= e.deltaY < 0 ? 1.15 : 1 / 1.15; draw(); }, { passive: false });
+  document.getElementById("v-zin").addEventListener("click", () => { zoom *= 1.25; draw(); });
+  document.getElementById("v-zout").addEventListener("click", () => { zoom /= 1.25; draw(); });
+  document.getElementById("v-reset").addEventListener("click", () => { yaw = 0.6; pitch = -0.5; zoom = 1; draw(); });
+  slider.addEventListener("input", draw);
+  sel.addEventListener("change", () => load(Number(sel.value)));
+  document.getElementById("v-play").addEventListener("click", (e) => {
+    if (timer) { clearInterval(timer); timer = null; e.target.textContent = "▶ play"; return; }
+    e.target.textContent = "❚❚ pause";
+    timer = setInterval(() => { slider.value = String((Number(slider.value) + 1) % (P.d.angles.length)); draw(); }, 400);
+  });
+  load(0);
+})();
+{% endraw %}
