@@ -28,7 +28,7 @@ def no_torque(tmp_path_factory):
     from rigfem.io import write_csv
 
     d = tmp_path_factory.mktemp("csv")
-    write_csv(simulate(load_check_scene("final-cm").scene.linkage, samples=360), d / "full.csv")
+    write_csv(simulate(load_check_scene("final-cm").linkage, samples=360), d / "full.csv")
     rows = []
     for line in (d / "full.csv").read_text().splitlines():
         if line.startswith("#"):
