@@ -2,6 +2,7 @@
 program fails the tests that need it, and under CI no test may skip."""
 
 import re
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -52,3 +53,20 @@ def test_ci_runs_the_readme_test_command_then_the_heavy_tests():
     test_command = commands[1]
     ci = [line for line in (ROOT / ".ci" / "run").read_text().splitlines() if line and not line.startswith("#")]
     assert ci[-2:] == [test_command, f"{test_command} -m heavy --durations=10"]
+
+
+@pytest.mark.parametrize("uid, message", [("0", "apt-get could not install calculix-ccx chromium"),
+                                          ("1000", "sudo apt-get install -y calculix-ccx chromium")])
+def test_run_sh_stops_when_the_debian_packages_cannot_be_installed(tmp_path, uid, message):
+    """No package installed (a stand-in dpkg-query), apt-get failing (a stand-in that exits
+    100): as root the failed install, as a user the command to run, and nothing built."""
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    for name, body in (("dpkg-query", "exit 1"), ("apt-get", "exit 100"), ("id", f"echo {uid}")):
+        (fake / name).write_text(f"#!/bin/sh\n{body}\n")
+        (fake / name).chmod(0o755)
+    env = {"PATH": f"{fake}:/usr/bin:/bin", "RIGFEM_VENV": str(tmp_path / "venv"), "HOME": str(tmp_path)}
+    res = subprocess.run(["bash", str(ROOT / "tests" / "run.sh")], env=env, capture_output=True, text=True,
+                         stdin=subprocess.DEVNULL, timeout=60)
+    assert res.returncode == 1 and message in res.stderr, res.stderr
+    assert not (tmp_path / "venv").exists()

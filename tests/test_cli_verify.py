@@ -20,7 +20,8 @@ BAD = [(["--against", "abaqus"], "only other solver is 'calculix'"),
        (["--threads", "0"], "--threads = '0' is outside"),
        (["--peak-tol", "x"], "--peak-tol"),
        (["--fidelity", "ultra"], "fidelity"),
-       (["no-such-scene"], "no-such-scene")]
+       (["no-such-scene"], "no-such-scene"),
+       (["--out", "/proc/sys/v"], "folder /proc/sys is not writable")]  # before any computation
 
 
 @pytest.mark.parametrize("ccx", ["on PATH", "missing"])
@@ -30,7 +31,7 @@ def test_verify_bad_input(args, message, ccx, capsys, tmp_path, monkeypatch):
     error whether ccx is installed or not, and nothing written."""
     if ccx == "missing":
         monkeypatch.setenv("PATH", str(tmp_path))  # an empty folder: no ccx
-    assert main(["verify", *args, "--out", str(tmp_path / "v")]) == 2
+    assert main(["verify", "--out", str(tmp_path / "v"), *args]) == 2
     err = capsys.readouterr().err
     assert message in err and "ccx" not in err.replace("--against calculix", "")
     assert not (tmp_path / "v").exists()
