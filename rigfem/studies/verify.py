@@ -7,13 +7,16 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.fe.tensors import von_mises
 from rigfem.io.calculix import CcxResult, export_model, run_ccx
+
+if TYPE_CHECKING:
+    from rigfem.check import CheckScene
 
 
 @dataclass
@@ -81,7 +84,7 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
 
 
-def verify_scene(cs: Any, threads: int = 1, solver: str = "auto") -> list[dict]:
+def verify_scene(cs: CheckScene, threads: int = 1, solver: str = "auto") -> list[dict]:
     """``rigfem check``'s part cases of a loaded scene (:func:`rigfem.check.load_check_scene`),
     each critical load combination re-solved by ccx.
 
