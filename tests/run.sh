@@ -35,12 +35,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   fi
 fi
 
-if [ -z "${VIRTUAL_ENV-}" ]; then
-  venv=${RIGFEM_VENV:-.venv}
-  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-  # shellcheck disable=SC1091
-  . "$venv/bin/activate"
-fi
+venv=${VIRTUAL_ENV:-${RIGFEM_VENV:-.venv}}
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+# shellcheck disable=SC1091
+. "$venv/bin/activate"
 python -m pip install -q "${editable[@]}" ".[test]"
 
 status=0
