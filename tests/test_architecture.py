@@ -18,7 +18,7 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.material", "rigfem.settings"),
+    ("rigfem.errors", "rigfem.material", "rigfem.settings", "rigfem.geometry"),  # geometry: part files (data)
     ("rigfem.rig",),
     ("rigfem.linkage",),
     ("rigfem.dynamics",),

@@ -4,8 +4,8 @@ nothing written; any scene or CSV either parses or gives exit 2 (hypothesis)."""
 from __future__ import annotations
 
 import copy
-import os
 import tomllib
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -190,16 +190,12 @@ def test_bad_check_option(tmp_path, capsys, args, field):
     assert field in err
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
-def test_unwritable_out_is_refused_before_computing(tmp_path, capsys):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o500)
-    try:
-        err = _one_line_exit_2(capsys, ["check", "final-cm", "--out", str(ro / "o"), *FAST], ro / "o")
-    finally:
-        ro.chmod(0o700)
-    assert "not writable" in err
+def test_unwritable_out_is_refused_before_computing(capsys):
+    """A folder nobody may write in, root included: the kernel checks /proc/sys's permissions
+    itself (mode 0555) without the override root has elsewhere, so this runs as root in CI too."""
+    o = Path("/proc/sys/rigfem-o")
+    err = _one_line_exit_2(capsys, ["check", "final-cm", "--out", str(o), *FAST], o)
+    assert "folder /proc/sys is not writable" in err
 
 
 def test_out_under_a_file_is_refused(tmp_path, capsys):

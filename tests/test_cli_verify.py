@@ -1,15 +1,11 @@
 """``rigfem verify --against calculix``: same model in CalculiX, compared case by case."""
 
-import shutil
-
 import pytest
 
 from rigfem.cli import main
 
-needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="ccx (calculix-ccx) not installed")
 
-
-@needs_ccx
+@pytest.mark.tool("ccx")
 def test_verify_plate_against_calculix(tmp_path, capsys):
     scene = tmp_path / "plate.toml"
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\n'
@@ -20,16 +16,35 @@ def test_verify_plate_against_calculix(tmp_path, capsys):
     assert (tmp_path / "v" / "calculix_verify_plate.md").read_text() == out
 
 
-@pytest.mark.parametrize("args, message", [(["--against", "abaqus"], "only other solver is 'calculix'"),
-                                           (["--threads", "0"], "--threads = '0' is outside")])
-def test_verify_bad_input(args, message, capsys):
-    if shutil.which("ccx") is None and "--threads" in args:
-        pytest.skip("ccx missing: the ccx check comes first")
-    assert main(["verify", *args]) == 2
-    assert message in capsys.readouterr().err
+BAD = [(["--against", "abaqus"], "only other solver is 'calculix'"),
+       (["--threads", "0"], "--threads = '0' is outside"),
+       (["--peak-tol", "x"], "--peak-tol"),
+       (["--fidelity", "ultra"], "fidelity"),
+       (["no-such-scene"], "no-such-scene"),
+       (["--out", "/proc/sys/v"], "folder /proc/sys is not writable")]  # before any computation
 
 
-@needs_ccx
+@pytest.mark.parametrize("ccx", ["on PATH", "missing"])
+@pytest.mark.parametrize("args, message", BAD)
+def test_verify_bad_input(args, message, ccx, capsys, tmp_path, monkeypatch):
+    """Every option and the scene are checked before ccx is looked for: the same one-line
+    error whether ccx is installed or not, and nothing written."""
+    if ccx == "missing":
+        monkeypatch.setenv("PATH", str(tmp_path))  # an empty folder: no ccx
+    assert main(["verify", "--out", str(tmp_path / "v"), *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "ccx" not in err.replace("--against calculix", "")
+    assert not (tmp_path / "v").exists()
+
+
+def test_verify_without_ccx_names_the_package(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert main(["verify", "final-cm", "--out", str(tmp_path / "v")]) == 2
+    assert "apt-get install calculix-ccx" in capsys.readouterr().err
+    assert not (tmp_path / "v").exists()
+
+
+@pytest.mark.tool("ccx")
 def test_export_inp_is_the_same_model(tmp_path):
     """The deck written by ``rigfem check --export-inp`` reproduces rigfem's peak in ccx."""
     from rigfem.check import read_report

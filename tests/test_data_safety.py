@@ -80,7 +80,7 @@ def test_sigterm_leaves_nothing_behind(tmp_path):
     assert list(tmp_path.iterdir()) == []  # no result, no temporary folder, no lock
 
 
-def test_gmsh_does_not_take_over_sigterm():
+def test_gmsh_does_not_take_over_sigterm(tmp_path):
     """gmsh's initialisation installs C signal handlers that kill the process on SIGTERM; the
     session puts Python's back, so a run terminated while meshing still cleans up."""
     code = ("import os, signal, sys, time\n"
@@ -90,5 +90,6 @@ def test_gmsh_does_not_take_over_sigterm():
             "with gmsh_session():\n"
             "    os.kill(os.getpid(), signal.SIGTERM)\n"
             "    time.sleep(5)\n")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60)
+    # run elsewhere than the repository: its rigfem/ folder must not shadow a regular install
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60, cwd=tmp_path)
     assert proc.returncode == 7, proc.stderr

@@ -11,8 +11,6 @@ curved P2 faces carry the exact ellipse area to about 1e-5).
 
 from __future__ import annotations
 
-import shutil
-
 import numpy as np
 import pytest
 
@@ -58,7 +56,7 @@ def test_units_do_not_matter(coarse):
     assert solve_le10(metres, unit_mm=1000.0)["syy_D"] == pytest.approx(coarse["syy_D"], rel=1e-8)
 
 
-@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) not installed")
+@pytest.mark.tool("ccx")
 def test_calculix_on_the_same_mesh(coarse, tmp_path):
     deck = export_model(coarse["model"], supports(), [load()], tmp_path / "le10.inp", heading="NAFEMS LE10")
     res = run_ccx(deck)

@@ -37,8 +37,7 @@ def dask_cluster(tmp_path):
     """``tcp://127.0.0.1:PORT`` of a scheduler with two single-thread workers; always torn down."""
     from dask.distributed import Client
 
-    if DASK is None:
-        pytest.skip("the dask command-line program is not installed")
+    assert DASK is not None, "the dask program (dask[distributed], a declared dependency) is not installed"
     sched_file, procs = tmp_path / "scheduler.json", []
     log = open(tmp_path / "dask.log", "w")
 

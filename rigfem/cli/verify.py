@@ -14,8 +14,9 @@ import shutil
 import time
 from pathlib import Path
 
-from rigfem.check import REFERENCE_SCENE
+from rigfem.check import REFERENCE_SCENE, load_check_scene
 from rigfem.errors import InputError, check_range
+from rigfem.report import check_target
 from rigfem.studies.verify import verify_scene
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
@@ -47,15 +48,19 @@ def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    # every option and the scene are checked before ccx is looked for and before any computation
     if args.against != "calculix":
         raise InputError(f"--against = {args.against!r}: the only other solver is 'calculix'")
-    if shutil.which("ccx") is None:
-        raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
     threads = int(check_range("--threads", args.threads, 1, 64))
     peak_tol = check_range("--peak-tol", args.peak_tol, 0.0, 100.0, "%")
     disp_tol = check_range("--disp-tol", args.disp_tol, 0.0, 100.0, "%")
+    if args.out:
+        check_target(Path(args.out))
+    cs = load_check_scene(args.scene, {"fidelity": args.fidelity, "frames": 0})
+    if shutil.which("ccx") is None:
+        raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
     t0 = time.perf_counter()
-    rows = verify_scene(args.scene, {"fidelity": args.fidelity, "frames": 0}, threads=threads)
+    rows = verify_scene(cs, threads=threads)
     name = Path(str(args.scene)).stem
     command = f"rigfem verify --against calculix {args.scene} --fidelity {args.fidelity} --threads {threads}"
     text = table(rows, f"rigfem vs CalculiX 2.20: scene {name} ({args.fidelity})", command,

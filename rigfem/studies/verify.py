@@ -7,13 +7,16 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.fe.tensors import von_mises
 from rigfem.io.calculix import CcxResult, export_model, run_ccx
+
+if TYPE_CHECKING:
+    from rigfem.check import CheckScene
 
 
 @dataclass
@@ -81,21 +84,21 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
 
 
-def verify_scene(name: str | os.PathLike, overrides: dict | None = None, threads: int = 1,
-                 solver: str = "auto") -> list[dict]:
-    """``rigfem check``'s part cases of a scene, each critical load combination re-solved by ccx.
+def verify_scene(cs: CheckScene, threads: int = 1, solver: str = "auto") -> list[dict]:
+    """``rigfem check``'s part cases of a loaded scene (:func:`rigfem.check.load_check_scene`),
+    each critical load combination re-solved by ccx.
 
-    One entry per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
+    The scene is loaded (and so validated) by the caller, before ccx is looked for.  One entry
+    per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
     :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.
     """
-    from rigfem.check import load_check_scene, solve_scene
+    from rigfem.check import solve_scene
     from rigfem.fe.partcase import supports_of
 
     out = []
-    for r in solve_scene(load_check_scene(name, overrides), solver)[1]:
+    for r in solve_scene(cs, solver)[1]:
         (c,) = cross_check(r.solution.model, supports_of(r.case), solution=r.solution, coef=r.coef[[r.row]],
                            threads=threads)
         out.append({"part": r.case.name, "mode": r.mode, "dof": int(r.solution.model.mesh.ndof),
                     **dataclasses.asdict(c)})
     return out
-
