@@ -246,7 +246,7 @@ def _tables(out: Path, table: pd.DataFrame, p: SweepParams) -> dict[str, pd.Data
         f = out / f"sweep_{t}.csv.gz"
         if t not in tables and f.is_file():
             tables[t] = pd.read_csv(f)
-    return tables
+    return {t: tables[t] for t in LENGTHS if t in tables}  # always the same order: four-bar first
 
 
 def summary_html(markdown: str, maps: list[str], out: Path, p: SweepParams) -> str:
