@@ -106,6 +106,7 @@ def render_html(report: dict, folder: str | Path) -> str:
             f"<td class=num>{p['crank_deg']:.1f}</td><td>{_e(p['surface'])} ({loc})</td>"
             f"<td class=num>{'%.2f' % fat['safety_factor'] if fat else '–'}</td></tr>")
     out.append("</table>")
+    out.append('<p><a href="report.json">report.json</a> · <a href="report.md">report.md</a></p>')
     # the scene and the settings that shaped the result
     lengths = ", ".join(f"{_e(k)} = {v:g}" for k, v in cfg["lengths_mm"].items())
     rows = [("linkage", f"{_e(cfg['type'])}: {lengths} mm"),
@@ -151,6 +152,8 @@ def render_html(report: dict, folder: str | Path) -> str:
         out.append(f"<h3>{_e(name)} ({_e(ps[0]['part'])})</h3>")
         out.append(_img(folder, f"{name}.png", f"von Mises field of {name}"))
         out.append(_img(folder, f"{name}_utilisation.png", f"utilisation of {name} over the crank cycle"))
+        out.append(_img(folder, f"{name}_displacement.png", f"displacement of {name}"))
+        out.append(_img(folder, f"{name}_safety_factor.png", f"factor of safety of {name}"))
         for p in ps:
             if p.get("peak_mpa") is None:
                 continue
@@ -173,13 +176,13 @@ def render_html(report: dict, folder: str | Path) -> str:
     if r.get("differences"):
         out += ["<h2>Original vs cycle mode</h2>", "<ul>"] + [f"<li>{_e(d)}</li>" for d in r["differences"]] + ["</ul>"]
     # files
-    vtk = [f for f in r.get("files", []) if f.endswith((".vtu", ".pvd"))]
+    vtk = r.get("field_files", [])
     out += ["<h2>Files</h2>",
             "<p>Open a <code>.vtu</code> (the critical crank angle) or a <code>.pvd</code> (the animation over the "
             "crank cycle) in ParaView (File → Open); colour by <code>von_mises</code> or "
             "<code>safety_factor</code>, and apply <i>Warp By Vector</i> on <code>displacement</code> to see "
             "the deformed part.</p><ul>"]
-    out += [f'<li><a href="{_e(f)}">{_e(f)}</a></li>' for f in vtk]
+    out += [f"<li><code>{_e(f)}</code></li>" for f in vtk]  # written by the run, not kept in the repository
     out += ["</ul>", f'<p class="note">Also: {_e(", ".join(f for f in r.get("files", []) if f not in vtk))}</p>',
             "</body></html>"]
     return "\n".join(x for x in out if x)
