@@ -40,13 +40,20 @@ from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
 from rigfem.linkage.model import Linkage
 from rigfem.loads.cases import part_cases
-from rigfem.report.document import REPORT_SCHEMA, render_markdown, write_json
+from rigfem.report.document import (
+    REPORT_SCHEMA,
+    allowable_label,
+    material_table,
+    part_label,
+    render_markdown,
+    write_json,
+)
 from rigfem.report.folder import atomic_dir, check_writable, folder_lock
 from rigfem.report.html import write_html
 from rigfem.report.pictures import (
     _plot_peaks,
+    part_pictures,
     reactions_plot,
-    render_field,
     utilisation_plot,
 )
 from rigfem.report.vtu import write_vtu
@@ -216,27 +223,31 @@ def _differences(parts: list[dict]) -> list[str]:
     return out
 
 
-def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int,
-                   export_inp: bool) -> list[str]:
-    files = []
+def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit: float, allowable: str,
+                   frames: int, export_inp: bool) -> tuple[list[str], list[str]]:
+    """Pictures (kept with the report) and field files (VTU/PVD/INP: ParaView/CalculiX, not kept in
+    the repository's result folders) of every part case; the pictures' scales go into ``parts``."""
+    files, fields = [], []
     worst = {}
-    for r in results:  # one picture per part: its mode with the highest peak
+    for r in results:  # one set of pictures per part: its mode with the highest peak
         if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
             worst[r.case.name] = r
-    for r in results:
+    for r, entry in zip(results, parts):
         stem = f"{r.case.name}_{r.mode}"
         c = r.coef[r.row]
         write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
-        files.append(f"{stem}.vtu")
+        fields.append(f"{stem}.vtu")
         if export_inp:  # the identical model at the critical crank angle, for CalculiX
             export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
                          heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
-            files.append(f"{stem}.inp")
+            fields.append(f"{stem}.inp")
         if worst[r.case.name] is r:
-            render_field(r, c, limit, d / f"{r.case.name}.png")
-            files.append(f"{r.case.name}.png")
+            pics = part_pictures(r, c, entry, limit, part_label(entry["name"], entry["part"]), allowable, d)
+            entry["pictures"] = pics
+            files += list(pics["files"].values())
         if r.mode == "cycle":
-            utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png")
+            utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
+                             part_label(entry["name"], entry["part"]), allowable)
             files.append(f"{r.case.name}_utilisation.png")
         if r.mode == "cycle" and frames:
             rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
@@ -249,8 +260,8 @@ def _write_outputs(d: Path, results: list[CaseResult], limit: float, frames: int
             (d / f"{stem}.pvd").write_text(
                 '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
                 f"{pvd}\n  </Collection>\n</VTKFile>\n")
-            files.append(f"{stem}.pvd")
-    return files
+            fields.append(f"{stem}.pvd")
+    return files, fields
 
 
 def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
@@ -311,22 +322,26 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         "verdict": "fail" if cs.rule_violations else overall(parts), "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],
-                          "samples": int(h.crank_deg.size)},
+                          "samples": int(h.crank_deg.size), "branch": cs.linkage.meta.get("branch", "open")},
         **{k: reactions[k] for k in ("rules", "transmission_angle_deg", "peaks", "singular", "warnings")},
         "torque_Nm": reactions.get("torque_Nm") or reactions.get("driver_force_N"),
         "settings": {"modes": list(s.modes), "fidelity": s.fidelity, "order": s.order, "size_mm": s.size_mm,
                      "local_size_mm": s.local_size_mm, "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},
+        "material": material_table(s.material),
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
+    allowable = allowable_label(s.limit_factor, limit)
     with atomic_dir(out, force) as d:
         reactions_plot(h, d / "reactions.png")
-        files = ["report.json", "report.md", "reactions.png"]
+        files, fields = ["report.json", "report.md", "reactions.png"], []
         if results:
-            _plot_peaks(results, limit, d / "peak_von_mises.png")
-            files += ["peak_von_mises.png"] + _write_outputs(d, results, limit, cs.frames, export_inp)
+            _plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
+            pics, fields = _write_outputs(d, results, parts, limit, allowable, cs.frames, export_inp)
+            files += ["peak_von_mises.png"] + pics
         report["files"] = files + ["report.html"]
+        report["field_files"] = fields
         write_json(report, d / "report.json")
         (d / "report.md").write_text(render_markdown(report))
         write_html(report, d)

@@ -54,6 +54,27 @@ MATERIALS: dict[str, Material] = {
 }
 
 
+#: where each library material's values come from (report.json's material table); σy is listed
+#: as absent where the source gives none: the criterion (σu/2) does not use it
+SOURCES: dict[str, dict[str, str]] = {
+    "rig_steel": dict.fromkeys(("E", "nu", "sigma_u", "density"), "2013 study (geometry/RIG.md §5)")
+    | {"sigma_y": "not given by the 2013 study; not used by the criterion"},
+    "abs": dict.fromkeys(("E", "nu", "sigma_u"), "2013 study (geometry/RIG.md §5)")
+    | {"density": "assumed: typical ABS (geometry/RIG.md §5)",
+       "sigma_y": "not given by the 2013 study; not used by the criterion"},
+    "al_6082_t6": dict.fromkeys(("E", "nu", "sigma_u", "density"), "EN 755-2 (t ≤ 5 mm) and typical values")
+    | {"sigma_y": "not recorded in rigfem; not used by the criterion"},
+}
+
+
+def material_sources(m: Material) -> dict[str, str]:
+    """Source of each value of ``m``: the library's, or the scene's own [material] table."""
+    if MATERIALS.get(m.name) == m:
+        return SOURCES[m.name]
+    return dict.fromkeys(("E", "nu", "sigma_u", "density", "sigma_y"), "the scene's [check].material table") | {
+        "sigma_y": "not given; not used by the criterion"}
+
+
 def get_material(name: str) -> Material:
     """Material from the library by name."""
     try:

@@ -46,3 +46,77 @@ def test_markdown_and_json(tmp_path):
     assert "Overall verdict: PASS" in md
     write_json(r, tmp_path / "r.json")
     assert json.loads((tmp_path / "r.json").read_text())["parts"][0]["peak_mpa"] == 123.4
+
+
+@pytest.fixture(scope="module")
+def two_plates(tmp_path_factory):
+    """A draft check of two parts whose peaks differ (plate_A, post_B), original mode only."""
+    from rigfem.check import run_check
+
+    out = tmp_path_factory.mktemp("tables") / "final-cm"
+    report = run_check("final-cm", out=out, quiet=True, overrides={
+        "fidelity": "draft", "parts": ["plate_A", "post_B"], "modes": ["original"], "frames": 0})
+    return report, out
+
+
+def test_report_json_has_material_mesh_and_balance_tables(two_plates):
+    report, out = two_plates
+    assert report["schema"] == 3 and report["configuration"]["branch"] == "open"
+    mat = {m["property"]: m for m in report["material"]}
+    assert set(mat) == {"E", "nu", "sigma_u", "sigma_y", "density"}
+    assert mat["E"]["value"] == 210000.0 and mat["density"]["value"] == pytest.approx(7850.0)
+    assert all(m["source"] and m["unit"] for m in mat.values())
+    assert "geometry/RIG.md §5" in mat["sigma_u"]["source"]
+    for p in report["parts"]:
+        m = p["mesh"]
+        assert m["element"].startswith("tetrahedron, 10-node") and m["fe_nodes"] > m["nodes"] > 0
+        assert 0 < m["size_at_peak_mm"] < 20 and 0 < m["quality_min"] <= 1
+        b = p["balance"]
+        applied = np.linalg.norm(b["applied_N"])
+        assert applied > 100  # the pin loads of the original mode
+        assert np.allclose(b["applied_N"], -np.asarray(b["supports_N"]), atol=1e-3 * applied)
+        assert np.allclose(b["applied_Nmm"], -np.asarray(b["supports_Nmm"]), atol=1e-3 * applied * 100)
+        assert b["residual_N"] < 1e-3 * applied and b["supports"]
+    md = (out / "report.md").read_text()
+    for head in ("## Material: rig\\_steel", "## Mesh per part", "## Free-body balance per part"):
+        assert head in md
+
+
+def test_every_file_named_in_the_report_exists(two_plates):
+    report, out = two_plates
+    assert report["files"] and report["field_files"]
+    assert not [f for f in report["files"] if f.endswith((".vtu", ".pvd", ".inp"))]  # not kept: never linked
+    for f in report["files"] + report["field_files"]:
+        assert (out / f).is_file(), f
+    for p in report["parts"]:
+        for f in p["pictures"]["files"].values():
+            assert f in report["files"]
+    md = (out / "report.md").read_text()
+    import re
+
+    for link in re.findall(r"\]\(([^)]+)\)", md):
+        assert (out / link).is_file(), link
+
+
+def test_every_part_picture_uses_one_colour_scale(two_plates):
+    from rigfem.report.pictures import UTILISATION_SCALE_PCT
+
+    report, _ = two_plates
+    pics = [p["pictures"] for p in report["parts"]]
+    peaks = [p["peak_mpa"] for p in report["parts"]]
+    assert len(pics) == 2 and peaks[1] > 2 * peaks[0]  # very different peaks ...
+    assert pics[0]["utilisation_scale_mpa"] == pics[1]["utilisation_scale_mpa"] == [0.0, report["limit_mpa"]]
+    assert pics[0]["utilisation_scale_pct"] == pics[1]["utilisation_scale_pct"] == list(UTILISATION_SCALE_PCT)
+    assert {"von_mises", "displacement", "safety_factor"} == set(pics[0]["files"])
+
+
+def test_linkage_gif_is_at_least_800_px_wide(tmp_path):
+    from PIL import Image
+
+    from rigfem.linkage.kinematics import fourbar_motion
+    from rigfem.report.motion import motion_gif
+
+    m = fourbar_motion(480.0, 840.0, 780.0, 1020.0, np.linspace(0, 360, 4, endpoint=False))
+    path = motion_gif(m, tmp_path / "turn.gif", "rig four-bar")
+    with Image.open(path) as img:
+        assert img.size[0] >= 800 and img.n_frames == 4

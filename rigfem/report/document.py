@@ -48,6 +48,64 @@ def md_text(text: object) -> str:
     return _MD_SPECIAL.sub(r"\\\1", s)
 
 
+#: what each of a part's pictures shows (rigfem.report.pictures.part_pictures)
+_PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displacement", "safety_factor": "factor of safety"}
+
+
+def part_label(name: str, part: str) -> str:
+    """The one name a reader sees for a part: its role and its catalogue name, ``crank_rail (rail_size25)``."""
+    return f"{name} ({part})"
+
+
+def allowable_label(limit_factor: float, limit_mpa: float) -> str:
+    """The allowable stress written one way everywhere: ``allowable σu/2 = 375 MPa``."""
+    sym = "σu/2" if limit_factor == 0.5 else f"{limit_factor:g}·σu"
+    return f"allowable {sym} = {limit_mpa:.0f} MPa"
+
+
+def material_table(m) -> list[dict]:
+    """The material table of a report (rigfem.material.Material): each value with its unit and source."""
+    from rigfem.material import material_sources
+
+    src = material_sources(m)
+    return [{"property": "E", "value": m.E, "unit": "MPa", "source": src["E"]},
+            {"property": "nu", "value": m.nu, "unit": "-", "source": src["nu"]},
+            {"property": "sigma_u", "value": m.sigma_u, "unit": "MPa", "source": src["sigma_u"]},
+            {"property": "sigma_y", "value": None, "unit": "MPa", "source": src["sigma_y"]},
+            {"property": "density", "value": m.density * 1e12, "unit": "kg/m³", "source": src["density"]}]
+
+
+def _vec(v, nd: int = 1) -> str:
+    return "(" + ", ".join(f"{round(x, nd) + 0.0:.{nd}f}" for x in v) + ")"
+
+
+def study_tables(r: dict) -> list[str]:
+    """Markdown of the material, mesh and free-body balance tables."""
+    lines = ["", f"## Material: {md_text(r['settings']['material'])}", "", "| property | value | unit | source |",
+             "|---|---|---|---|"]
+    for m in r.get("material", []):
+        value = "–" if m["value"] is None else f"{m['value']:g}"
+        lines.append(f"| {m['property']} | {value} | {m['unit']} | {md_text(m['source'])} |")
+    parts = [p for p in r["parts"] if p.get("mesh")]
+    lines += ["", "## Mesh per part", "", "| part | mode | element | nodes | elements | size at the peak (mm) | "
+              "quality min (SICN, –) |", "|---|---|---|---|---|---|---|"]
+    for p in parts:
+        m = p["mesh"]
+        lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {m.get('element', '')} | {m.get('fe_nodes', m['nodes'])} | "
+                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} |")
+    lines += ["", "## Free-body balance per part (critical crank angle; moments about the part frame's origin; "
+              "applied = pin loads and body forces, with the inertia relief of a free body)",
+              "", "| part | mode | Σ applied F (N) | Σ applied M (N·mm) | Σ support reactions F (N) | "
+              "Σ support reactions M (N·mm) | out of balance, force (N) |", "|---|---|---|---|---|---|---|"]
+    for p in parts:
+        b = p.get("balance")
+        if b:
+            lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {_vec(b['applied_N'])} | "
+                         f"{_vec(b['applied_Nmm'], 0)} | {_vec(b['supports_N'])} | {_vec(b['supports_Nmm'], 0)} | "
+                         f"{b['residual_N']:.2g} |")
+    return lines
+
+
 def _fmt(x, nd: int = 1) -> str:
     return "–" if x is None else f"{x:.{nd}f}"
 
@@ -71,12 +129,13 @@ def render_markdown(r: dict) -> str:
         lines += [f"- {md_text(v)}" for v in r["assumed"]] + [""]
     lines += [
              md_text(r.get("description", "")).strip(), "",
-             f"**Overall verdict: {r['verdict'].upper()}** — criterion σvm,peak < "
-             f"{r['settings']['limit_factor']:g}·σu = {r['limit_mpa']:.0f} MPa "
+             f"**Overall verdict: {r['verdict'].upper()}** — criterion: peak von Mises < the "
+             f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])} "
              f"({md_text(r['settings']['material'])}).", ""]
     lines += ["## Configuration", "",
               f"- linkage: {cfg['type']}, lengths (mm): "
-              + ", ".join(f"{k} = {v:g}" for k, v in cfg["lengths_mm"].items()),
+              + ", ".join(f"{k} = {v:g}" for k, v in cfg["lengths_mm"].items())
+              + (f", branch {cfg['branch']}" if cfg.get("branch") else ""),
               f"- crank speed {cfg['speed_hz']:g} Hz, mass model `{cfg['model']}`, "
               f"{cfg['samples']} samples per turn (peaks refined)"]
     if r.get("transmission_angle_deg"):
@@ -85,10 +144,10 @@ def render_markdown(r: dict) -> str:
     if r.get("singular"):
         lines.append(f"- **toggle (singular) crank-angle ranges: {r['singular']}** — reactions there "
                      f"are not reported")
-    lines += ["", "| rule | value | limit | ok |", "|---|---|---|---|"]
+    lines += ["", "| rule | value | limit | unit | ok |", "|---|---|---|---|---|"]
     for rule in r.get("rules", []):
-        lines.append(f"| {rule['name']} | {rule['value']:.6g} | {rule['limit']:.6g} | "
-                     f"{'yes' if rule['ok'] else '**no**'} |")
+        lines.append(f"| {rule['name']} | {rule['value']:.6g} | {rule.get('relation', '')} {rule['limit']:.6g} | "
+                     f"{rule.get('unit', '')} | {'yes' if rule['ok'] else '**no**'} |")
     lines += ["", "## Peak reactions", "", "| joint | peak (N) | crank angle (°) |", "|---|---|---|"]
     for name, p in r["peaks"].items():
         lines.append(f"| {name} | {_fmt(p['force_N'])} | {_fmt(p['crank_deg'], 2)} |")
@@ -97,21 +156,29 @@ def render_markdown(r: dict) -> str:
     for mode in r["settings"]["modes"]:
         rows = [p for p in r["parts"] if p["mode"] == mode]
         lines += ["", f"## Parts, {mode} mode", "", MODE_TEXT[mode], "",
-                  "| part | peak σvm (MPa) | at crank (°) | where | error est. | utilisation | "
-                  "verdict | Goodman n |", "|---|---|---|---|---|---|---|---|"]
+                  "| part | peak σvm (MPa) | at crank (°) | where (mm) | error est. | utilisation | "
+                  "verdict | Goodman n (–) |", "|---|---|---|---|---|---|---|---|"]
         for p in rows:
             fat = p.get("fatigue")
             if p.get("peak_mpa") is None:
-                lines.append(f"| {p['name']} ({p['part']}) | – | – | – | – | – | **{p['verdict']}** | – |")
+                lines.append(f"| {part_label(p['name'], p['part'])} | – | – | – | – | – | **{p['verdict']}** | – |")
                 continue
             lines.append(
-                f"| {p['name']} ({p['part']}) | {p['peak_mpa']:.1f} | {_fmt(p.get('crank_deg'), 1)} | "
+                f"| {part_label(p['name'], p['part'])} | {p['peak_mpa']:.1f} | {_fmt(p.get('crank_deg'), 1)} | "
                 f"{p['surface']} ({', '.join(f'{c:.1f}' for c in p['location_mm'])}) | "
                 f"±{p['error_pct']:.1f} % | {p['utilisation_pct']:.1f} % | **{p['verdict']}** | "
                 f"{_fmt(fat['safety_factor'], 2) if fat else '–'} |")
         for p in rows:
             for note in p.get("notes", []):
                 lines.append(f"- {p['name']}: {note}")
+    pics = [p for p in r["parts"] if p.get("pictures")]
+    if pics:
+        lines += ["", "## Pictures", "", "Stress pictures share one colour scale: utilisation 0–100 % of the "
+                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it.", ""]
+        for p in pics:
+            label = part_label(p["name"], p["part"])
+            lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]
+    lines += study_tables(r)
     if r.get("differences"):
         lines += ["", "## Original vs cycle mode", ""] + [f"- {d}" for d in r["differences"]]
     lines += ["", "## Model", "",
@@ -125,7 +192,11 @@ def render_markdown(r: dict) -> str:
               f"{_tolerance(r)}): " + "; ".join(f"{p['name']} {p['mode']} {p['solve']['imbalance']['force_pct']:.2f} %, "
                                                 f"{p['solve']['imbalance']['moment_pct']:.2f} %"
                                                 for p in r["parts"] if p.get("solve")),
-              f"- files: {', '.join(r.get('files', []))}", ""]
+              f"- files: {', '.join(r.get('files', []))}"]
+    if r.get("field_files"):
+        lines.append(f"- written by the run for ParaView/CalculiX, not kept in the repository's result folders "
+                     f"(`rigfem check --force` writes them again): {', '.join(r['field_files'])}")
+    lines.append("")
     return "\n".join(lines)
 
 

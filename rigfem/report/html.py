@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rigfem.report.document import MODE_TEXT
-from rigfem.report.pages import json_script, png_uri, render_page
+from rigfem.report.document import MODE_TEXT, allowable_label, study_tables
+from rigfem.report.pages import json_script, markdown_html, png_uri, render_page
 from rigfem.report.viewer import viewer_data
 
 __all__ = ["render_html", "write_html"]
@@ -21,10 +21,10 @@ def render_html(report: dict, folder: str | Path) -> str:
     """The HTML page of a check report whose pictures and animation frames lie in ``folder``."""
     folder = Path(folder)
     r = report
-    files = list(r.get("files", []))
+    files = list(r.get("files", [])) + list(r.get("field_files", []))
     names = list(dict.fromkeys(p["name"] for p in r["parts"]))
     pictures = {f: png_uri(folder / f) for f in ["reactions.png", "peak_von_mises.png"]
-                + [f"{n}{s}.png" for n in names for s in ("", "_utilisation")]}
+                + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor")]}
     # link only files that are in the folder (a committed report may come without its VTU files)
     present = [f for f in files if (folder / f).is_file() and f != "report.html"]
     vtk = [f for f in present if f.endswith((".vtu", ".pvd")) and not f[:-4].rsplit("_", 1)[-1].isdigit()]
@@ -34,7 +34,9 @@ def render_html(report: dict, folder: str | Path) -> str:
         pictures=pictures, mode_text=MODE_TEXT, vtk=vtk, others=[f for f in present if f not in vtk
                                                                 and not f.endswith(".vtu")],
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
-        viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer))
+        viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
+        allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
+        tables=markdown_html("\n".join(study_tables(r))))
 
 
 def write_html(report: dict, folder: str | Path) -> Path:

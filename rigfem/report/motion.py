@@ -15,6 +15,10 @@ from rigfem.rig.rules import MU_LIMITS_DEG
 matplotlib.use("Agg")
 
 
+#: dots per inch of the linkage GIF (10 in wide: 900 px)
+GIF_DPI = 90
+
+
 def _unwrapped(deg: np.ndarray) -> np.ndarray:
     return np.degrees(np.unwrap(np.radians(deg)))
 
@@ -63,18 +67,19 @@ def motion_gif(m: Motion, path: str | Path, title: str, dead_deg: list[float] | 
                trace: str | None = None, fps: int = 15) -> Path:
     """GIF of the linkage over the sampled crank angles: bars, the path of point ``trace``
     (the coupler point, else the slider or B) drawn whole, the transmission angle as text,
-    crank positions of dead points/toggles (``dead_deg``) marked on the crank circle."""
+    crank positions of dead points/toggles (``dead_deg``) marked on the crank circle; every link
+    and pin labelled with its name.  The GIF is 900 px wide (:data:`GIF_DPI` × 10 in)."""
     pts = {k: v["position_mm"] for k, v in m.points.items()}
     allp = np.concatenate(list(pts.values()))
     lo, hi = allp.min(0), allp.max(0)
     pad = 0.08 * max(hi - lo)
-    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    fig, ax = plt.subplots(figsize=(10, 8))
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    ax.set_title(title, fontsize=9)
+    ax.set_xlabel("x (mm)", fontsize=12)
+    ax.set_ylabel("y (mm)", fontsize=12)
+    ax.set_title(title, fontsize=12)
     ax.grid(alpha=0.3)
     trace = trace or ("P" if "P" in pts else "B")
     if trace in pts:
@@ -84,22 +89,29 @@ def motion_gif(m: Motion, path: str | Path, title: str, dead_deg: list[float] | 
         for k, a in enumerate(dead_deg):
             ax.plot(r * np.cos(np.radians(a)), r * np.sin(np.radians(a)), "rx", ms=8,
                     label="dead point / toggle (crank)" if k == 0 else None)
-    lines = {n: ax.plot([], [], "-o", lw=2, ms=3)[0] for n in m.bars}
-    text = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
-    ax.legend(loc="lower right", fontsize=7)
+    lines = {n: ax.plot([], [], "-o", lw=3, ms=6)[0] for n in m.bars}
+    bar_names = {n: ax.text(0, 0, n, fontsize=12, fontweight="bold", color=lines[n].get_color(), ha="center",
+                            va="bottom") for n in m.bars}
+    pins = sorted({p for names in m.bars.values() for p in names})
+    pin_names = {p: ax.text(0, 0, f" {p}", fontsize=12, va="top") for p in pins}
+    text = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=12)
+    ax.legend(loc="lower right", fontsize=10)
 
     def draw(i):
         for n, names in m.bars.items():
             xy = np.array([pts[p][i] for p in names])
             lines[n].set_data(xy[:, 0], xy[:, 1])
+            bar_names[n].set_position(xy.mean(0))
+        for p, t in pin_names.items():
+            t.set_position(pts[p][i])
         t = f"crank {m.crank_deg[i]:.0f}°"
         if m.transmission_deg is not None:
             t += f"   transmission angle {m.transmission_deg[i]:.1f}°"
         text.set_text(t)
-        return [*lines.values(), text]
+        return [*lines.values(), *bar_names.values(), *pin_names.values(), text]
 
     anim = FuncAnimation(fig, draw, frames=m.crank_deg.size, blit=True)
-    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=70)
+    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=GIF_DPI)
     plt.close(fig)
     return Path(path)
 

@@ -18,6 +18,10 @@ P1_NOTE = ("linear tetrahedra (order 1) under-predict bending stress: on the sta
            "ZZ estimate (results/convergence/band_coverage.md); use order 2 for a verdict")
 
 
+#: element type and order, as the mesh table names it
+ELEMENT = {1: "tetrahedron, 4-node linear (C3D4)", 2: "tetrahedron, 10-node quadratic (C3D10)"}
+
+
 def _profile_caveat(res: CaseResult) -> list[str]:
     """A rail whose section is heavier than the catalogue's is stiffer and stronger than the real one."""
     part = load_part(res.case.part, res.case.params or None)
@@ -42,6 +46,29 @@ def _fatigue(res: CaseResult, settings) -> dict | None:
     return fat
 
 
+def _size_at(fm, node: int) -> float:
+    """Mean edge length (mm) of the elements around ``node``: the mesh size where the peak is."""
+    t = fm.elements[(fm.elements == node).any(1), :4]
+    x = fm.nodes[t]
+    edges = [x[:, i] - x[:, j] for i, j in ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))]
+    return float(np.mean(np.linalg.norm(np.stack(edges), axis=-1)))
+
+
+def balance(sol, c: np.ndarray) -> dict:
+    """Free-body balance of the combination ``c``: Σ applied loads (pins and body forces) and Σ support
+    reactions, forces (N) and moments about the part frame's origin (N·mm); their sum is ≈ 0."""
+    alld = np.arange(len(sol.F))
+    app = sol.resultants(alld, sol.F @ c[:, None])[0]
+    sup = {n: sol.resultants(d, sol.reactions @ c[:, None])[0] for n, d in sol.support_dofs.items()}
+    tot_s = np.sum(list(sup.values()), axis=0) if sup else np.zeros(6)
+    v3 = lambda v: [float(t) for t in v]  # noqa: E731
+    return {"applied_N": v3(app[:3]), "applied_Nmm": v3(app[3:]), "supports_N": v3(tot_s[:3]),
+            "supports_Nmm": v3(tot_s[3:]),
+            "supports": {n: {"force_N": v3(v[:3]), "moment_Nmm": v3(v[3:])} for n, v in sup.items()},
+            "residual_N": float(np.linalg.norm(app[:3] + tot_s[:3])),
+            "residual_Nmm": float(np.linalg.norm(app[3:] + tot_s[3:]))}
+
+
 def verdict_of(res: CaseResult, settings) -> dict:
     """Report entry of a case result (plain data, MPa, mm, deg)."""
     mat = settings.material
@@ -61,7 +88,10 @@ def verdict_of(res: CaseResult, settings) -> dict:
         "verdict": v.verdict, "reason": v.reason,
         "max_displacement_mm": float(np.linalg.norm(sol.displacement(c), axis=1).max()),
         "fatigue": _fatigue(res, settings),
-        "mesh": {"nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
+        "mesh": {"element": ELEMENT[sol.model.mesh.order],
+                 "nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
+                 "fe_nodes": int(len(sol.model.mesh.nodes)),
+                 "size_at_peak_mm": _size_at(sol.model.mesh, pk.node),
                  "dofs": int(sol.model.mesh.ndof), "order": settings.order,
                  "quality_min": float(res.mesh.quality.get("min", 0.0)),
                  "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
@@ -73,6 +103,7 @@ def verdict_of(res: CaseResult, settings) -> dict:
                   "imbalance": {"force_pct": 100 * res.imbalance[0], "moment_pct": 100 * res.imbalance[1],
                                 "tolerance_pct": 100 * IMBALANCE_TOL},
                   "seconds": {k: round(t, 3) for k, t in res.seconds.items()}},
+        "balance": balance(sol, c),
         "notes": list(res.case.notes),
     }
     if v.reason:
