@@ -99,7 +99,8 @@ def main() -> None:
         print(f"{label}: {model.mesh.ndof} DOF")
         for method in ("pardiso", "superlu", "amg"):
             reps = 1 if method != "pardiso" else a.reps
-            problem, t_f, samples[f"{label}/{method} factorise"] = timed(lambda: StaticProblem(model, [Fixed("root")], method), reps)
+            problem, t_f, samples[f"{label}/{method} factorise"] = timed(
+                lambda: StaticProblem(model, [Fixed("root")], method), reps)
             ls_ = problem.linear_solver
             Fs = F[problem.free] if method != "amg" else np.where(np.isin(np.arange(len(F)), problem.fixed)[:, None],
                                                                    0.0, F)
@@ -122,7 +123,8 @@ def main() -> None:
             p = StaticProblem(model, [Fixed("root")], "pardiso")
             U = np.zeros((model.mesh.ndof, 6))
             U[p.free] = p.linear_solver.solve(F[p.free, 1:7])
-            _, t_sr, samples["stress recovery, 6 cases"] = timed(lambda: nodal_stress(model.mesh, mat.E, mat.nu, U), a.reps)
+            _, t_sr, samples["stress recovery, 6 cases"] = timed(
+                lambda: nodal_stress(model.mesh, mat.E, mat.nu, U), a.reps)
             res["stress_recovery_6_cases_s"] = t_sr
             print(f"nodal stress recovery, 6 cases {t_sr:.3f} s")
 

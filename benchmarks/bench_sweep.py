@@ -34,29 +34,33 @@ def _sweep(workers: int, env: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--workers", type=int, nargs="+", default=[2, 1],
+                    help="worker counts, in order: each gets a cold run then a warm run")
     ap.add_argument("--repeats", type=int, default=1)
     a = ap.parse_args(argv)
     samples: dict[str, list] = {}
-    for w in a.workers:
-        for _ in range(a.repeats):
+    for _ in range(a.repeats):
+        for w in a.workers:
             with tempfile.TemporaryDirectory() as tmp:
                 env = cold_env(tmp, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-                samples.setdefault(f"cold, {w} workers", []).append(_sweep(w, env))
-                samples.setdefault(f"warm, {w} workers", []).append(_sweep(w, env))
-                print(f"{w} workers: cold {samples[f'cold, {w} workers'][-1]['wall_s']:.0f} s, "
-                      f"warm {samples[f'warm, {w} workers'][-1]['wall_s']:.0f} s", flush=True)
-    s = summarise(samples)
-    med = {k: v["wall_s"]["median"] for k, v in s.items()}
+                for state in ("cold", "warm"):
+                    r = _sweep(w, env)
+                    samples.setdefault(f"{state}, {w} workers", []).append(r)
+                    print(f"{state}, {w} workers: {r['wall_s']:.0f} s", flush=True)
+                    _write(samples, a)  # after every run: an interrupted benchmark keeps what it measured
+
+
+def _write(samples: dict[str, list], a: argparse.Namespace) -> None:
+    """The record with the figures the runs so far give (efficiency needs 1 and 2 workers)."""
+    med = {k: v["wall_s"]["median"] for k, v in summarise(samples).items()}
     derived = {}
-    if {1, 2} <= set(a.workers):
-        for c in ("cold", "warm"):
+    for c in ("cold", "warm"):
+        if f"{c}, 1 workers" in med and f"{c}, 2 workers" in med:
             derived[f"{c} efficiency 1 -> 2 workers"] = med[f"{c}, 1 workers"] / (2 * med[f"{c}, 2 workers"])
-        # what a cold cache adds once: meshes, unit solutions, compiled kernels (one worker, same sweep)
-        derived["cold - warm, 1 worker (s)"] = med["cold, 1 workers"] - med["warm, 1 workers"]
-    path = write_record("sweep", samples, derived, {"workers": a.workers, "repeats": a.repeats,
-                                                    "threads per process": 1})
-    print(f"wrote {path}")
+    for w in (1, 2):  # what a cold cache adds once: meshes, unit solutions, compiled kernels
+        if f"cold, {w} workers" in med and f"warm, {w} workers" in med:
+            derived[f"cold - warm, {w} workers (s)"] = med[f"cold, {w} workers"] - med[f"warm, {w} workers"]
+    write_record("sweep", samples, derived, {"workers": a.workers, "repeats": a.repeats, "threads per process": 1})
 
 
 if __name__ == "__main__":
