@@ -31,113 +31,164 @@ def load(out: Path = OUT) -> dict[str, dict]:
             if p.stem in RENDER or p.stem == VERIFY}
 
 
+#: record name -> the command that writes it (quoted in README while a record is missing)
+COMMANDS = {
+    "check": "python benchmarks/bench_check.py --repeats 3 --fidelity standard draft",
+    "calculix_vs_rigfem": "python benchmarks/bench_calculix.py --repeats 3 --threads 1 --cases 4",
+    "fe_assembly": "python benchmarks/bench_fe.py",
+    "cycle_vs_calculix": "python benchmarks/bench_cycle_calculix.py --fidelity draft --angles 12 --repeats 3",
+    "stages": "python benchmarks/profile_stages.py --fidelity standard --chunk 64",
+    "kinematics": "python benchmarks/bench_kinematics.py", "dynamics": "python benchmarks/bench_dynamics.py",
+    "le10": "python benchmarks/bench_le10.py --sizes 400 283 200 141 100",
+    "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
+    "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py"}
+
+
 def problems(recs: dict[str, dict]) -> list[str]:
-    """Records missing, lacking a required key or raw samples, or whose summaries differ from their samples."""
-    out = [f"results/benchmarks/{n}.json: missing (run its benchmark)" for n in RENDER if n not in recs]
+    """Records lacking a required key or raw samples, or whose summaries differ from their samples."""
+    out = []
     for n, r in recs.items():
         if n == VERIFY:
             continue
         out += [f"results/benchmarks/{n}.json: no {k!r}" for k in REQUIRED if k not in r]
-        if not r.get("samples") or not all(r["samples"].values()):
+        smp = r.get("samples")
+        if not isinstance(smp, dict) or not smp or not all(isinstance(v, list) and v for v in smp.values()):
             out.append(f"results/benchmarks/{n}.json: no raw samples")
         elif r.get("summary") != json.loads(json.dumps(summarise(r["samples"]))):
             out.append(f"results/benchmarks/{n}.json: summary differs from its raw samples")
-        if not all(k in r.get("machine", {}) for k in ("cores", "cpu", "memory_gib")):
+        if not isinstance(r.get("machine"), dict) or not {"cores", "cpu", "memory_gib"} <= set(r["machine"]):
             out.append(f"results/benchmarks/{n}.json: machine lacks cores, cpu or memory")
     return out
 
 
-def _cmd(rec: dict) -> str:
-    return f"`{rec['command']}`"
+def _missing(name: str) -> str:
+    return f"not measured yet in the dated record format: run `{COMMANDS[name]}`"
+
+
+def _check(c: dict) -> str:
+    rss = [c["summary"][s]["peak_tree_rss_mib"] for s in c["summary"]]
+    walls = "; ".join(f"{s} **{med(c, s):.1f} s**" for s in c["summary"])
+    return (f"{walls} (cold: empty rigfem and numba caches; warm: both filled); peak RSS of the check's process tree "
+            f"{min(s['min'] for s in rss):.0f}–{max(s['max'] for s in rss):.0f} MiB; median of "
+            f"{c['params']['repeats']} separate process(es), {c['date'][:10]} — results/benchmarks/check.md")
+
+
+def _calculix(x: dict) -> str:
+    d = x["derived"]
+    return (f"{x['params']['mesh']['dof']:,} DOF: FE wall time ratio rigfem/ccx "
+            f"**{d['FE wall ratio rigfem / ccx']:.2f}**; {x['params']['unit cases']} load cases "
+            f"**{d['unit cases wall ratio rigfem / ccx']:.2f}** (one "
+            f"factorisation); peak σvm agrees to {d['peak von Mises rel diff']:.0e}; median of "
+            f"{x['params']['repeats']}, {x['date'][:10]} — results/benchmarks/calculix_vs_rigfem.md")
+
+
+def _cycle(cy: dict) -> str:
+    n = cy["params"]["angles"][0]
+    return (f"{n} crank angles, {cy['params'][f'{n} angles']['dof']:,} DOF: rigfem {med(cy, f'rigfem, {n} angles'):.1f}"
+            f" s vs CalculiX {med(cy, f'ccx, {n} angles'):.1f} s: ratio "
+            f"**{cy['derived'][f'rigfem / ccx, {n} angles']:.2f}** (both measured, median of "
+            f"{cy['params']['repeats']}); peaks agree to "
+            f"{cy['summary'][f'ccx, {n} angles']['max_peak_rel_diff']['max']:.0e} — "
+            "results/benchmarks/cycle_vs_calculix.md")
+
+
+def _le10(le: dict) -> str:
+    lv = le["samples"]["levels"]
+    ratios = [med(le, f"{r['size_mm']:g} mm rigfem") / med(le, f"{r['size_mm']:g} mm ccx") for r in lv]
+    outl = "; ".join(f"{r['size_mm']:g} mm {r['error_pct']:+.2f} % (a coarse mesh, {r['layers']} layers; "
+                     f"CalculiX on it {r['error_ccx_pct']:+.2f} %)" for r in le10_outliers(le)) or "none"
+    errs = ", ".join(f"{r['error_pct']:+.2f}" for r in lv)
+    return (f"{len(lv)} meshes, {lv[0]['dof'] / 1e3:.1f}k–{lv[-1]['dof'] / 1e3:.0f}k DOF: σyy(D) {errs} % of "
+            f"{LE10_TARGET} MPa; outside 2 %: {outl}; the codes agree to "
+            f"{max(abs(r['syy_D_ccx'] / r['syy_D'] - 1) for r in lv):.0e}; FE wall time ratio rigfem/ccx "
+            f"{min(ratios):.2f}–{max(ratios):.2f} — results/benchmarks/le10.md, le10.png")
+
+
+def _sweep(sw: dict) -> str:
+    one = next(iter(sw["samples"].values()))[0]
+    eff = "".join(f"; efficiency 1 → 2 workers, {k.split()[0]}: {100 * v:.0f} %" for k, v in sw["derived"].items()
+                  if "efficiency" in k)
+    return (f"{one['configurations']:,} configurations, {one['computed']:,} computed: "
+            + "; ".join(f"{k} **{hms(med(sw, k))}**" for k in sw["summary"]) + eff
+            + f" (the runs measured, {sw['date'][:10]}) — results/benchmarks/sweep.md, results/sweep/")
+
+
+#: README's Figures table: (record, figure, result from the record)
+ROWS = [
+    ("check", "`rigfem check final-cm`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
+     "HTML)", _check),
+    ("calculix_vs_rigfem", "rigfem vs CalculiX 2.20, 700 mm rail, curved P2, 1 thread each", _calculix),
+    (VERIFY, "every part case of final-cm re-solved in CalculiX",
+     lambda v: f"all {len(v['cases'])} cases within {100 * max(abs(r['peak_rel_diff']) for r in v['cases']):.4f} % "
+               f"— results/benchmarks/{VERIFY}.md"),
+    ("fe_assembly", "FE assembly and solvers",
+     lambda f: f"assembly {f['derived']['assembly_speedup']:.1f}× scikit-fem's generic form, {f['date'][:10]} — "
+               "results/benchmarks/fe_assembly.md"),
+    ("cycle_vs_calculix", "cycle mode vs CalculiX doing the same work: crank rail, the same mesh and the same N "
+     "crank angles (N load steps in CalculiX), von Mises peak per angle", _cycle),
+    ("stages", "where the time goes per stage (check cold/warm, a sweep chunk)",
+     lambda st: f"pictures {st['samples']['check cold'][0].get('pictures', 0.0):.1f} s of the cold check's "
+                f"{st['samples']['check cold'][0]['total (profiled)']:.0f} s — results/benchmarks/stages.md"),
+    ("kinematics", "closed-form kinematics, four-bar, full turn at 5000 angles",
+     lambda k: f"**{k['derived']['total ms']:.1f} ms** (median of {k['params']['runs']}) — "
+               "results/benchmarks/kinematics.md"),
+    ("dynamics", "linkage dynamics, rig four-bar, one full turn at 5000 angles",
+     lambda d: f"closed form **{med(d, 'closed form, 5000 angles (simulate)', 'wall_ms'):.1f} ms** vs the general "
+               f"solver {med(d, 'general solver, 5000 angles', 'wall_ms'):.1f} ms (same run) — "
+               "results/benchmarks/dynamics.md, results/dynamics/"),
+    (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm` (see "
+     "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
+    (None, "rail profile sensitivity", "`python benchmarks/rail_profile_study.py --fidelity draft standard`",
+     "results/rail_profile/study.md"),
+    ("le10", "NAFEMS LE10, rigfem vs CalculiX on the same P2 meshes: σyy(D), time and peak RSS vs DOF", _le10),
+    ("sweep_grid_cost", "cost of a 30 mm rig grid on N workers",
+     lambda g: "see [Running the sweep on a cluster](#running-the-sweep-on-a-cluster) — "
+               "results/benchmarks/sweep_grid_cost.md"),
+    ("sweep", "the whole four-bar sweep, `rigfem sweep --four-bar`, end to end (start-up included)", _sweep),
+    ("malloc_trim", "Dask's MALLOC_TRIM_THRESHOLD_ on a sweep chunk",
+     lambda m: f"{100 * m['derived']['wall with / without - 1']:+.0f} % wall time with it — "
+               "results/benchmarks/malloc_trim.md"),
+]
 
 
 def figure_rows(recs: dict[str, dict]) -> list[str]:
     """README's Figures table: figure, the command that measured it, the result from its record."""
-    c, x, cy, k, dy, le, sw = (recs[n] for n in ("check", "calculix_vs_rigfem", "cycle_vs_calculix", "kinematics",
-                                                 "dynamics", "le10", "sweep"))
-    v, st, fe = recs[VERIFY], recs["stages"], recs["fe_assembly"]
-    rss = [c["summary"][s]["peak_tree_rss_mib"] for s in c["summary"]]
-    worst = max(abs(r["peak_rel_diff"]) for r in v["cases"])
-    n = cy["params"]["angles"][0]
-    lv = le["samples"]["levels"]
-    ratios = [med(le, f"{r['size_mm']:g} mm rigfem") / med(le, f"{r['size_mm']:g} mm ccx") for r in lv]
-    outl = "; ".join(f"{r['size_mm']:g} mm {r['error_pct']:+.2f} % (a coarse mesh, {r['layers']} layers; "
-                     f"CalculiX on it {r['error_ccx_pct']:+.2f} %)"
-                     for r in le10_outliers(le)) or "none"
-    errs = ", ".join(f"{r['error_pct']:+.2f}" for r in lv)
-    pics = st["samples"]["check cold"][0].get("pictures", 0.0)
-    one = sw["samples"]["cold, 2 workers"][0]
-    rows = [
-        ("`rigfem check final-cm`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, HTML)",
-         _cmd(c), f"warm caches standard **{med(c, 'standard warm'):.1f} s**, draft **{med(c, 'draft warm'):.1f} s**; "
-         f"cold (empty rigfem and numba caches) standard {med(c, 'standard cold'):.1f} s, draft "
-         f"{med(c, 'draft cold'):.1f} s; peak RSS of the check's process tree {min(s['min'] for s in rss):.0f}–"
-         f"{max(s['max'] for s in rss):.0f} MiB; median of {c['params']['repeats']} separate processes, "
-         f"{c['date'][:10]} — results/benchmarks/check.md"),
-        (f"rigfem vs CalculiX 2.20, 700 mm rail, curved P2, {x['params']['mesh']['dof'] / 1e3:.0f}k DOF, 1 thread "
-         "each", _cmd(x), f"FE wall time ratio rigfem/ccx **{x['derived']['FE wall ratio rigfem / ccx']:.2f}**; "
-         f"{x['params']['unit cases']} load cases **{x['derived']['unit cases wall ratio rigfem / ccx']:.2f}** (one "
-         f"factorisation); peak σvm agrees to {x['derived']['peak von Mises rel diff']:.0e}, {x['date'][:10]} — "
-         "results/benchmarks/calculix_vs_rigfem.md"),
-        ("every part case of final-cm re-solved in CalculiX", f"`{v['command']}`",
-         f"all {len(v['cases'])} cases within {100 * worst:.4f} % — results/benchmarks/{VERIFY}.md"),
-        ("FE assembly and solvers", _cmd(fe), f"assembly {fe['derived']['assembly_speedup']:.1f}× scikit-fem's "
-         f"generic form, {fe['date'][:10]} — results/benchmarks/fe_assembly.md"),
-        (f"cycle mode vs CalculiX doing the same work: crank rail, same mesh "
-         f"({cy['params'][f'{n} angles']['dof'] / 1e3:.0f}k DOF), the same {n} crank angles (N load steps in "
-         "CalculiX), von Mises peak per angle", _cmd(cy),
-         f"rigfem {med(cy, f'rigfem, {n} angles'):.1f} s vs CalculiX {med(cy, f'ccx, {n} angles'):.1f} s: ratio "
-         f"**{cy['derived'][f'rigfem / ccx, {n} angles']:.2f}** (measured, median of {cy['params']['repeats']}); "
-         f"peaks agree to {cy['summary'][f'ccx, {n} angles']['max_peak_rel_diff']['max']:.0e} — "
-         "results/benchmarks/cycle_vs_calculix.md"),
-        ("where the time goes per stage (check cold/warm, a sweep chunk)", _cmd(st),
-         f"pictures {pics:.1f} s of the cold check's {st['samples']['check cold'][0]['total (profiled)']:.0f} s "
-         "— results/benchmarks/stages.md"),
-        ("closed-form kinematics, four-bar, full turn at 5000 angles", _cmd(k),
-         f"**{k['derived']['total ms']:.1f} ms** (median of {k['params']['runs']}) — results/benchmarks/kinematics.md"),
-        ("linkage dynamics, rig four-bar, one full turn at 5000 angles", _cmd(dy),
-         f"closed form **{med(dy, 'closed form, 5000 angles (simulate)', 'wall_ms'):.1f} ms** vs the general solver "
-         f"{med(dy, 'general solver, 5000 angles', 'wall_ms'):.1f} ms (same run) — results/benchmarks/dynamics.md, "
-         "results/dynamics/"),
-        ("speed/accuracy of the fidelity presets", "`rigfem convergence final-cm` (see "
-         "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
-        ("rail profile sensitivity", "`python benchmarks/rail_profile_study.py --fidelity draft standard`",
-         "results/rail_profile/study.md"),
-        ("NAFEMS LE10, rigfem vs CalculiX on the same P2 meshes: σyy(D), time and peak RSS vs DOF", _cmd(le),
-         f"{len(lv)} meshes, {lv[0]['dof'] / 1e3:.1f}k–{lv[-1]['dof'] / 1e3:.0f}k DOF: σyy(D) "
-         f"{errs} % of {LE10_TARGET} MPa; outside 2 %: {outl}; the codes agree "
-         f"to {max(abs(r['syy_D_ccx'] / r['syy_D'] - 1) for r in lv):.0e}; FE wall time ratio rigfem/ccx "
-         f"{min(ratios):.2f}–{max(ratios):.2f} — results/benchmarks/le10.md, le10.png"),
-        ("cost of a 30 mm rig grid on N workers", _cmd(recs["sweep_grid_cost"]),
-         "see [Running the sweep on a cluster](#running-the-sweep-on-a-cluster) — "
-         "results/benchmarks/sweep_grid_cost.md"),
-        ("the whole four-bar sweep, end to end (start-up included)", _cmd(sw),
-         f"{one['configurations']:,} configurations, {one['computed']:,} computed: "
-         + "; ".join(f"{k} **{hms(med(sw, k))}**" for k in sw["summary"])
-         + "".join(f"; efficiency 1 → 2 workers {k.split()[0]} {100 * v:.0f} %" for k, v in sw["derived"].items()
-                   if "efficiency" in k)
-         + " (runs not listed were not measured: see sweep.md) — results/benchmarks/sweep.md, "
-         "results/sweep/"),
-    ]
-    return ["| figure | command | result |", "|---|---|---|"] + [f"| {a} | {b} | {r} |" for a, b, r in rows]
+    out = ["| figure | command | result |", "|---|---|---|"]
+    for name, figure, *how in ROWS:
+        if name is None:
+            out.append(f"| {figure} | {how[0]} | {how[1]} |")
+        elif name in recs:
+            out.append(f"| {figure} | `{recs[name]['command']}` | {how[0](recs[name])} |")
+        else:
+            out.append(f"| {figure} | `{COMMANDS[name]}` | {_missing(name)} |")
+    return out
 
 
 def spans(recs: dict[str, dict]) -> dict[str, str]:
-    """The single figures quoted in README's prose."""
-    sw, mt = recs["sweep"], recs["malloc_trim"]
-    return {"sweep-2-warm": hms(med(sw, "warm, 2 workers")),
-            "sweep-cold-extra": f"{recs['sweep']['derived']['cold - warm, 2 workers (s)']:.0f} s",
-            "malloc-trim": f"{100 * mt['derived']['wall with / without - 1']:+.0f} %",
-            "malloc-trim-faults": f"{med(mt, 'MALLOC_TRIM_THRESHOLD_=65536', 'minor_faults') / 1e6:.1f} million",
-            "kinematics-ms": f"{recs['kinematics']['derived']['total ms']:.1f} ms"}
+    """The single figures quoted in README's prose (a missing record says how to make it)."""
+    sw, mt, k = recs.get("sweep", {}), recs.get("malloc_trim"), recs.get("kinematics")
+    out = {"sweep-2-warm": f"({_missing('sweep')})", "sweep-cold-extra": f"({_missing('sweep')})",
+           "malloc-trim": f"({_missing('malloc_trim')})", "malloc-trim-faults": "page faults",
+           "kinematics-ms": f"({_missing('kinematics')})"}
+    if "warm, 2 workers" in sw.get("summary", {}):
+        out["sweep-2-warm"] = hms(med(sw, "warm, 2 workers"))
+    if "cold - warm, 2 workers (s)" in sw.get("derived", {}):
+        out["sweep-cold-extra"] = f"{sw['derived']['cold - warm, 2 workers (s)']:.0f} s"
+    if mt:
+        out["malloc-trim"] = f"{100 * mt['derived']['wall with / without - 1']:+.0f} %"
+        faults = med(mt, "MALLOC_TRIM_THRESHOLD_=65536", "minor_faults")
+        out["malloc-trim-faults"] = f"{faults / 1e6:.1f} million faults"
+    if k:
+        out["kinematics-ms"] = f"{k['derived']['total ms']:.1f} ms"
+    return out
 
 
 def blocks(recs: dict[str, dict]) -> dict[str, str]:
     """README's generated blocks of lines."""
-    g = recs["sweep_grid_cost"]
-    return {"figures": "\n".join(figure_rows(recs)) + "\n",
-            "grid-cost": f"Command: {_cmd(g)} (results/benchmarks/sweep_grid_cost.md, {g['date'][:10]}):\n\n"
-                         + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n"}
+    g = recs.get("sweep_grid_cost")
+    grid = (f"Command: `{g['command']}` (results/benchmarks/sweep_grid_cost.md, {g['date'][:10]}):\n\n"
+            + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
+    return {"figures": "\n".join(figure_rows(recs)) + "\n", "grid-cost": grid}
 
 
 def render_readme(text: str, recs: dict[str, dict]) -> str:
@@ -161,7 +212,7 @@ def readme_paths(text: str) -> list[str]:
 
 def outputs(recs: dict[str, dict]) -> dict[Path, str]:
     """Every file this script writes, with its text."""
-    out = {OUT / f"{n}.md": render(recs[n]) for n, render in RENDER.items()}
+    out = {OUT / f"{n}.md": render(recs[n]) for n, render in RENDER.items() if n in recs}
     out[README] = render_readme(README.read_text(), recs)
     return out
 
