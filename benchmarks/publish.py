@@ -167,17 +167,15 @@ def figure_rows(recs: dict[str, dict]) -> list[str]:
 def spans(recs: dict[str, dict]) -> dict[str, str]:
     """The single figures quoted in README's prose (a missing record says how to make it)."""
     sw, mt, k = recs.get("sweep", {}), recs.get("malloc_trim"), recs.get("kinematics")
-    out = {"sweep-2-warm": f"({_missing('sweep')})", "sweep-cold-extra": f"({_missing('sweep')})",
-           "malloc-trim": f"({_missing('malloc_trim')})", "malloc-trim-faults": "page faults",
+    out = {"sweep-2": _missing("sweep"), "malloc-trim": _missing("malloc_trim"),
            "kinematics-ms": f"({_missing('kinematics')})"}
-    if "warm, 2 workers" in sw.get("summary", {}):
-        out["sweep-2-warm"] = hms(med(sw, "warm, 2 workers"))
-    if "cold - warm, 2 workers (s)" in sw.get("derived", {}):
-        out["sweep-cold-extra"] = f"{sw['derived']['cold - warm, 2 workers (s)']:.0f} s"
+    if {"cold, 2 workers", "warm, 2 workers"} <= set(sw.get("summary", {})):
+        out["sweep-2"] = (f"{hms(med(sw, 'warm, 2 workers'))} with warm caches, {hms(med(sw, 'cold, 2 workers'))} "
+                          f"cold (results/benchmarks/sweep.md)")
     if mt:
-        out["malloc-trim"] = f"{100 * mt['derived']['wall with / without - 1']:+.0f} %"
         faults = med(mt, "MALLOC_TRIM_THRESHOLD_=65536", "minor_faults")
-        out["malloc-trim-faults"] = f"{faults / 1e6:.1f} million faults"
+        out["malloc-trim"] = (f"{100 * mt['derived']['wall with / without - 1']:+.0f} %, {faults / 1e6:.1f} million "
+                              f"minor faults per chunk: `{mt['command']}`, results/benchmarks/malloc_trim.md")
     if k:
         out["kinematics-ms"] = f"{k['derived']['total ms']:.1f} ms"
     return out
