@@ -68,9 +68,11 @@ def _missing(name: str) -> str:
 def _check(c: dict) -> str:
     rss = [c["summary"][s]["peak_tree_rss_mib"] for s in c["summary"]]
     walls = "; ".join(f"{s} **{med(c, s):.1f} s**" for s in c["summary"])
+    load = [x["load_before"][0] for runs in c["samples"].values() for x in runs]
     return (f"{walls} (cold: empty rigfem and numba caches; warm: both filled); peak RSS of the check's process tree "
             f"{min(s['min'] for s in rss):.0f}–{max(s['max'] for s in rss):.0f} MiB; median of "
-            f"{c['params']['repeats']} separate process(es), {c['date'][:10]} — results/benchmarks/check.md")
+            f"{c['params']['repeats']} separate process(es), load average {min(load):.1f}–{max(load):.1f} at their "
+            f"starts on {c['machine']['cores']} shared cores, {c['date'][:10]} — results/benchmarks/check.md")
 
 
 def _calculix(x: dict) -> str:
