@@ -91,10 +91,11 @@ def main() -> None:
     samples = {"unit solutions (this run, cache as found)": [{"wall_s": t_bases}],
                "serial draft sweep of the subset": [{"wall_s": t_run, "configurations": len(cfgs)}]}
     t_cfg = t_run / len(cfgs)
-    eff = sweep["derived"]["warm efficiency 1 -> 2 workers"]
+    eff = sweep["derived"].get("warm efficiency 1 -> 2 workers")  # None: no 1-worker run, N = 1 only
+    workers = [n for n in a.workers if n == 1 or eff is not None]
     t_cold = sweep["derived"]["cold - warm, 2 workers (s)"]  # meshes, unit solutions, kernels: once per sweep
     proj = {f"{pitch:g}": {str(n): t_cold + c["fe_checked"] * t_cfg / (n * (1.0 if n == 1 else eff))
-                           for n in a.workers} for pitch, c in counts.items()}
+                           for n in workers} for pitch, c in counts.items()}
     derived = {"counts": {f"{k:g}": v for k, v in counts.items()}, "per_config_s": t_cfg,
                "efficiency (sweep record, warm 1 -> 2 workers)": eff,
                "cold build (sweep record, cold - warm, 2 workers) s": t_cold,

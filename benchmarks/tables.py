@@ -102,14 +102,16 @@ def grid_rows(rec: dict) -> list[str]:
 def grid_note(rec: dict) -> str:
     """How the projection is made, with the figures it uses and where they come from."""
     d, s = rec["derived"], rec["samples"]["serial draft sweep of the subset"][0]
+    eff = d["efficiency (sweep record, warm 1 -> 2 workers)"]
     return (f"Projection T(N) = T_cold + n_FE · t / (N · e): t = {d['per_config_s'] * 1e3:.0f} ms, the "
             f"per-configuration time of a serial draft sweep of {s['configurations']} configurations spread over "
             f"the grid (measured here); T_cold = {d['cold build (sweep record, cold - warm, 2 workers) s']:.0f} s, "
             f"what a cold cache adds to the whole 60 mm sweep with two workers (meshes, unit solutions, compiled "
-            f"kernels; a 30 mm rail has twice the holes, so a lower bound for it) and e = "
-            f"{100 * d['efficiency (sweep record, warm 1 -> 2 workers)']:.0f} %, the warm 1 → 2 local-worker "
-            f"efficiency with start-up, held for every N > 1: both from results/benchmarks/sweep.json "
-            f"({d['sweep record']['date']}).  The rows without FE (rules and dynamics only) are left out.")
+            f"kernels; a 30 mm rail has twice the holes, so a lower bound for it) and " + (
+                f"e = {100 * eff:.0f} %, the warm 1 → 2 local-worker efficiency with start-up, held for every N > 1"
+                if eff is not None else "no N > 1: the sweep record has no 1-worker run, so no measured efficiency")
+            + f": both from results/benchmarks/sweep.json ({d['sweep record']['date']}).  The rows without FE "
+            "(rules and dynamics only) are left out.")
 
 
 def cycle_vs_calculix(rec: dict) -> str:
