@@ -34,7 +34,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--part", default="crank_rail")
     a = ap.parse_args(argv)
-    os.environ["RIGFEM_CACHE"] = tempfile.mkdtemp(prefix="bench-cycle-cache-")  # no cached solutions
+    with tempfile.TemporaryDirectory(prefix="bench-cycle-cache-") as cache:
+        os.environ["RIGFEM_CACHE"] = cache  # no cached solutions; removed afterwards
+        return _run(a)
+
+
+def _run(a: argparse.Namespace) -> int:
+    """Both codes on the same mesh and angles; the record."""
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     from rigfem.check import load_check_scene
