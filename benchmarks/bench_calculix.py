@@ -4,7 +4,7 @@ The 2013 study's rail case: the rail held by the two screws of its pivot couplin
 (ShaftInHole on hole_00 and hole_01), the far-joint load split over the last two holes
 (BearingLoad on hole_10 and hole_11).  Each repeat times rigfem (mesh, assembly, solve,
 stress) and then ccx on the deck rigfem exports for the same model; medians are written to
-results/benchmarks/calculix_vs_rigfem.{json,md}.
+results/benchmarks/calculix_vs_rigfem.json (``python benchmarks/publish.py`` writes the .md).
 
     python benchmarks/bench_calculix.py --repeats 3 --threads 1
 """
@@ -21,16 +21,14 @@ if __name__ == "__main__":  # thread counts must be set before numpy/MKL load
     _t = str(_pre.parse_known_args()[0].threads)
     os.environ.update(OMP_NUM_THREADS=_t, MKL_NUM_THREADS=_t, OPENBLAS_NUM_THREADS=_t, NUMBA_NUM_THREADS=_t)
 
-import json
-import platform
 import resource
 import shutil
-import subprocess
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from record import summarise, write_record
 
 from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve, von_mises
 from rigfem.io import export_model, run_ccx
@@ -38,7 +36,6 @@ from rigfem.material import get_material
 from rigfem.mesh import MeshSettings, mesh_part
 from rigfem.rig import load_part
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 HOLES = ("hole_00", "hole_01", "hole_10", "hole_11")
 SUPPORTS = [ShaftInHole("hole_00"), ShaftInHole("hole_01")]
 CASES = [[BearingLoad("hole_10", (300.0, 200.0, 0.0)), BearingLoad("hole_11", (300.0, 200.0, 0.0))]]
@@ -76,7 +73,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cases", type=int, default=4, help="unit load cases of the multi-case comparison")
     args = ap.parse_args(argv)
     settings = MeshSettings(size_mm=args.size, refine=HOLES, local_size_mm=args.refine_size)
-    load0 = os.getloadavg()
     rig, ccx, agree, multi = [], [], [], []
     with tempfile.TemporaryDirectory(prefix="bench-ccx-") as tmp:
         for r in range(args.repeats):
@@ -108,34 +104,27 @@ def main(argv: list[str] | None = None) -> int:
             print(f"repeat {r + 1}: rigfem {times['total']:.2f} s (FE {times['fe_total']:.2f} s), "
                   f"ccx {res.wall_time:.2f} s; {args.cases} cases: rigfem FE {t_rig:.2f} s, ccx {resk.wall_time:.2f} s",
                   file=sys.stderr)
-    med = {k: float(np.median([t[k] for t in rig])) for k in rig[0]}
-    cmed = {k: float(np.median([t[k] for t in ccx])) for k in ccx[0]}
-    mmed = {k: float(np.median([t[k] for t in multi])) for k in multi[0]}
-    a = agree[-1]
-    info = {
+    s = summarise({"rigfem": rig, "ccx": ccx, "unit cases": multi})
+    r, c, m = ({k: v["median"] for k, v in s[x].items()} for x in ("rigfem", "ccx", "unit cases"))
+    params = {
         "case": "rail_size25, length 700 mm, P2 (C3D10); ShaftInHole hole_00+hole_01; "
                 "BearingLoad (300, 200, 0) N on hole_10 and hole_11",
         "mesh": {"size_mm": args.size, "refine_size_mm": args.refine_size, "refine": list(HOLES),
                  "nodes": int(len(model.mesh.nodes)), "tets": int(len(model.mesh.elements)),
                  "dof": int(model.mesh.ndof)},
-        "threads": args.threads, "repeats": args.repeats,
+        "threads": args.threads, "repeats": args.repeats, "unit cases": args.cases,
+        "unit load": "1 N bearing loads on hole_10/hole_11, directions 360°/k apart",
         "rigfem_solver": sol.method, "rigfem_backward_error": float(sol.backward_errors.max()),
         "ccx": "CalculiX 2.20 (" + (shutil.which("ccx") or "?") + "), SPOOLES direct solver, "
-               f"OMP_NUM_THREADS=CCX_NPROC_*={args.threads}",
-        "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "python": platform.python_version(),
-                    "loadavg_start": load0, "loadavg_end": os.getloadavg()},
-        "median_s": {"rigfem": med, "ccx": cmed},
-        "runs": {"rigfem": rig, "ccx": ccx},
-        "unit_cases": {"cases": args.cases, "median_s": mmed, "runs": multi,
-                       "load": "1 N bearing loads on hole_10/hole_11, directions 360°/k apart"},
-        "agreement": {**a, "peak_von_mises_rel_diff": a["peak_von_mises_ccx"] / a["peak_von_mises_rigfem"] - 1,
-                      "tip_disp_rel_diff": a["tip_disp_ccx"] / a["tip_disp_rigfem"] - 1},
-        "command": "python benchmarks/bench_calculix.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-    }
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "calculix_vs_rigfem.json").write_text(json.dumps(info, indent=2) + "\n")
-    (OUT / "calculix_vs_rigfem.md").write_text(_markdown(info))
-    print(_markdown(info))
+               f"OMP_NUM_THREADS=CCX_NPROC_*={args.threads}"}
+    derived = {"FE wall ratio rigfem / ccx": r["fe_total"] / c["wall"],
+               "wall ratio incl. meshing": r["total"] / c["wall"], "CPU ratio": r["cpu_fe_total"] / c["cpu"],
+               "unit cases wall ratio rigfem / ccx": m["rigfem_fe"] / m["ccx"],
+               "peak von Mises rel diff": max(abs(x["peak_von_mises_ccx"] / x["peak_von_mises_rigfem"] - 1)
+                                              for x in agree),
+               "tip displacement rel diff": max(abs(x["tip_disp_ccx"] / x["tip_disp_rigfem"] - 1) for x in agree)}
+    samples = {"rigfem": rig, "ccx": ccx, "agreement": agree, "unit cases": multi}
+    print(f"wrote {write_record('calculix_vs_rigfem', samples, derived, params)}")
     return 0
 
 
@@ -143,56 +132,6 @@ def _child_cpu() -> float:
     """CPU seconds (user + system) of finished child processes (ccx)."""
     r = resource.getrusage(resource.RUSAGE_CHILDREN)
     return r.ru_utime + r.ru_stime
-
-
-def _cpu() -> str:
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        return next(line.split(":", 1)[1].strip() for line in out.splitlines() if line.startswith("Model name"))
-    except (OSError, StopIteration):
-        return platform.processor()
-
-
-def _markdown(info: dict) -> str:
-    m, r, c = info["mesh"], info["median_s"]["rigfem"], info["median_s"]["ccx"]
-    u, um = info["unit_cases"], info["unit_cases"]["median_s"]
-    a = info["agreement"]
-    rows = [("mesh (gmsh)", r["mesh"], None), ("assembly (P2 mesh + stiffness)", r["assembly"], None),
-            ("supports + loads", r["supports_loads"], None), ("factorise", r["factorise"], None),
-            ("solve", r["solve"], None), ("stress recovery", r["stress"], None),
-            ("**FE total** (same mesh given)", r["fe_total"], c["wall"]),
-            ("total incl. meshing", r["total"], None),
-            ("CPU time, FE total (user + system)", r["cpu_fe_total"], c["cpu"])]
-    lines = [
-        "# rigfem vs CalculiX 2.20: 700 mm crank rail, P2", "",
-        f"Command: `{info['command']}`  ",
-        f"Case: {info['case']}  ",
-        f"Mesh: {m['nodes']} nodes, {m['tets']} C3D10, **{m['dof']} DOF** (size {m['size_mm']} mm, "
-        f"{m['refine_size_mm']} mm on {', '.join(m['refine'])})  ",
-        f"Threads: {info['threads']} for both (rigfem solver: {info['rigfem_solver']}, backward error "
-        f"{info['rigfem_backward_error']:.2g}; ccx: {info['ccx']})  ",
-        f"Machine: {info['machine']['cpu']}, {info['machine']['cores']} cores shared with other jobs, load average "
-        f"{info['machine']['loadavg_start'][0]:.2f} at start, {info['machine']['loadavg_end'][0]:.2f} at end  ",
-        f"Median of {info['repeats']} repeats, each repeat runs rigfem then ccx on the same exported deck.", "",
-        "| step | rigfem [s] | CalculiX [s] |", "|---|---:|---:|",
-    ]
-    lines += [f"| {name} | {v:.2f} | {'' if w is None else f'{w:.2f}'} |" for name, v, w in rows]
-    lines += [
-        "", f"CalculiX wall time is the whole ccx process (read deck, assemble, SPOOLES factorise/solve, stresses, "
-            f"write .frd); ccx's own \"Total CalculiX Time\": {c['ccx_reported']:.2f} s. Deck export: "
-            f"{c['export']:.2f} s (not counted).", "",
-        f"Agreement: peak von Mises {a['peak_von_mises_rigfem']:.4g} MPa (rigfem) vs {a['peak_von_mises_ccx']:.4g} MPa "
-        f"(ccx), {100 * a['peak_von_mises_rel_diff']:+.4f} %; tip displacement {a['tip_disp_rigfem']:.5g} mm vs "
-        f"{a['tip_disp_ccx']:.5g} mm, {100 * a['tip_disp_rel_diff']:+.4f} %.", "",
-        f"FE wall time ratio rigfem / CalculiX: **{r['fe_total'] / c['wall']:.2f}**; including meshing "
-        f"{r['total'] / c['wall']:.2f}; CPU time ratio {r['cpu_fe_total'] / c['cpu']:.2f} (less sensitive to the "
-        f"other jobs on the machine).", "",
-        f"**{u['cases']} unit load cases** on the same mesh ({u['load']}): rigfem (assembly + one factorisation, "
-        f"{u['cases']} solves, stresses) {um['rigfem_fe']:.2f} s, CalculiX ({u['cases']} *STEPs, one factorisation "
-        f"each) {um['ccx']:.2f} s, ratio **{um['rigfem_fe'] / um['ccx']:.2f}**; largest peak von Mises difference "
-        f"over the cases {100 * um['max_peak_rel_diff']:.4f} %.", "",
-    ]
-    return "\n".join(lines)
 
 
 if __name__ == "__main__":

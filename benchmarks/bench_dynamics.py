@@ -2,7 +2,7 @@
 
 Run:  python benchmarks/bench_dynamics.py [--repeats N]
 
-Writes results/benchmarks/dynamics.{md,json} (timings: median of repeats),
+Writes results/benchmarks/dynamics.json (raw timings; ``python benchmarks/publish.py`` the .md),
 results/dynamics/sampling.md (sample count vs peak error) and
 results/dynamics/rigid_vs_original.{md,json} (the two mass models on the calibration case).
 """
@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import resource
+import statistics
 import time
 from pathlib import Path
 
-import numpy as np
+from record import summarise, write_record
 
 from rigfem.dynamics import original_program, peaks, simulate, solve
 from rigfem.linkage import crank_angles, four_bar
@@ -29,17 +28,16 @@ ITEMS = ("O2", "A", "B", "O4", "torque")
 CAL = {"O2": 641.9099, "A": 578.8140, "B": 379.4016, "O4": 366.4701, "torque": 199.7707}
 
 
-def _median_time(fn, repeats: int) -> tuple[float, float, float]:
-    """(median wall, min wall, median CPU) seconds; CPU time is the fairer figure when the
+def _samples(fn, repeats: int) -> list[dict]:
+    """Wall and CPU ms of ``repeats`` runs after a warm-up; CPU time is the fairer figure when the
     machine is shared (wall time then includes waiting for a core)."""
     fn()  # warm-up (imports, caches)
-    ts, cs = [], []
+    out = []
     for _ in range(repeats):
         c, t = time.process_time(), time.perf_counter()
         fn()
-        ts.append(time.perf_counter() - t)
-        cs.append(time.process_time() - c)
-    return float(np.median(ts)), float(np.min(ts)), float(np.median(cs))
+        out.append({"wall_ms": (time.perf_counter() - t) * 1e3, "cpu_ms": (time.process_time() - c) * 1e3})
+    return out
 
 
 def _val(p: dict) -> float:
@@ -59,9 +57,7 @@ def timings(repeats: int) -> dict:
         ("original (2013) model, 3600 angles", lambda: simulate(lk, 3600, model="original")),
         ("closed form, 360 angles + refined peaks", lambda: peaks(simulate(lk, 360))),
     ):
-        med, best, cpu = _median_time(fn, repeats)
-        out[label] = {"median_ms": med * 1e3, "min_ms": best * 1e3, "cpu_median_ms": cpu * 1e3,
-                      "repeats": repeats}
+        out[label] = _samples(fn, repeats)
     return out
 
 
@@ -76,7 +72,7 @@ def sampling_table() -> list[dict]:
         row["raw_rel_err"] = max(abs(_val(raw[k]) / _val(ref[k]) - 1) for k in ITEMS)
         row["refined_rel_err"] = max(abs(_val(fine[k]) / _val(ref[k]) - 1) for k in ITEMS)
         row["refined_angle_err_deg"] = max(abs(fine[k]["crank_deg"] - ref[k]["crank_deg"]) for k in ITEMS)
-        row["simulate_peaks_ms"] = 1e3 * _median_time(lambda: peaks(simulate(lk, n)), 5)[0]
+        row["simulate_peaks_ms"] = statistics.median(r["wall_ms"] for r in _samples(lambda: peaks(simulate(lk, n)), 5))
         rows.append(row)
     return rows
 
@@ -107,32 +103,13 @@ def main() -> None:
 
 
 def write_timings(repeats: int) -> None:
-    """results/benchmarks/dynamics.{json,md}: wall and CPU medians of the cycle solves."""
-    env = {"python": platform.python_version(), "machine": platform.machine(), "cpus": os.cpu_count(),
-           "numpy": np.__version__, "load_avg": os.getloadavg()[0]}
-    t = timings(repeats)
-    env["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    bdir = ROOT / "results" / "benchmarks"
-    bdir.mkdir(parents=True, exist_ok=True)
-    (bdir / "dynamics.json").write_text(json.dumps({"timings": t, "env": env}, indent=1))
-    md = ["# Linkage dynamics timing (rig four-bar b2=540 b3=840 b4=780 d=1020 mm)", "",
-          "Command: `python benchmarks/bench_dynamics.py`; median of repeats after one warm-up, all "
-          "cases in one run. Goal (issue 16): one configuration's full turn at 5000 angles under 10 ms. "
-          "The closed form (rigfem.dynamics.closed) is what `simulate` uses for a toggle-free rig four-bar "
-          "or slider-crank; the general solver (continuation, Newton, 9×9 Jacobians) stays for toggles and "
-          "the other linkages and is the reference the closed form is tested against "
-          "(tests/test_dynamics_closed.py: equal to round-off).", "",
-          "| case | wall median (ms) | wall min (ms) | CPU median (ms) | repeats |", "|---|---:|---:|---:|---:|"]
-    md += [f"| {k} | {v['median_ms']:.1f} | {v['min_ms']:.1f} | {v['cpu_median_ms']:.1f} | {v['repeats']} |"
-           for k, v in t.items()]
-    cf, gen = t["closed form, 5000 angles (simulate)"], t["general solver, 5000 angles"]
-    md += ["", f"Closed form vs general solver at 5000 angles: {gen['median_ms'] / cf['median_ms']:.1f}× faster "
-           f"(wall medians). Peak RSS of the benchmark process: {env['peak_rss_mb']:.0f} MB.",
-           "", f"Environment: Python {env['python']}, numpy {env['numpy']}, {env['cpus']} CPUs, "
-           f"load average {env['load_avg']:.2f} at start (machine shared by several jobs: wall times "
-           "include waiting for a core; the CPU column is the solver's own cost)."]
-    (bdir / "dynamics.md").write_text("\n".join(md) + "\n")
-    print("\n".join(md))
+    """results/benchmarks/dynamics.json: wall and CPU times of the cycle solves, raw."""
+    samples = timings(repeats)
+    samples["benchmark process"] = [{"peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}]
+    med = {k: v["wall_ms"]["median"] for k, v in summarise(samples).items() if "wall_ms" in v}
+    derived = {"general / closed form, 5000 angles": med["general solver, 5000 angles"]
+               / med["closed form, 5000 angles (simulate)"]}
+    print(f"wrote {write_record('dynamics', samples, derived, {'repeats': repeats, 'four-bar mm': REF})}")
 
 
 def accuracy_tables() -> None:

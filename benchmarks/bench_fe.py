@@ -3,20 +3,18 @@ solvers (pypardiso vs SuperLU vs CG+AMG) on a ~100k-DOF P2 rail-like bar.
 
     python benchmarks/bench_fe.py [--reps 3] [--nx 140]
 
-Writes results/benchmarks/fe_assembly.md and .json (medians over ``--reps`` runs).
+Writes results/benchmarks/fe_assembly.json (raw runs, medians over ``--reps``; ``python benchmarks/publish.py``
+writes the .md).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
 import statistics
 import time
-from pathlib import Path
 
 import numpy as np
+from record import write_record
 from skfem import Basis, ElementTetP2, ElementVector, MeshTet, asm
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
@@ -34,8 +32,6 @@ from rigfem.fe import (
 )
 from rigfem.material import get_material
 from rigfem.mesh import PartMesh
-
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 
 
 def rail_bar(nx: int) -> PartMesh:
@@ -74,22 +70,21 @@ def main() -> None:
     part = rail_bar(a.nx)
     mat = get_material("rig_steel")
     fm = fe_mesh(part, 2)
-    res = {"case": f"P2 box 700x23x24 mm, {len(fm.elements)} tets, {fm.ndof} DOF", "reps": a.reps,
-           "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores (shared)",
-           "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime())}
+    res = {"case": f"P2 box 700x23x24 mm, {len(fm.elements)} tets, {fm.ndof} DOF", "reps": a.reps}
+    samples: dict[str, list] = {}
     print(res["case"])
 
     t0 = time.perf_counter()
     stiffness(fe_mesh(rail_bar(4), 2), mat.E, mat.nu)  # numba compile / cache load
     res["numba_first_call_s"] = time.perf_counter() - t0
-    K, t_k, _ = timed(lambda: stiffness(fm, mat.E, mat.nu), a.reps)
+    K, t_k, samples["assembly rigfem"] = timed(lambda: stiffness(fm, mat.E, mat.nu), a.reps)
     res["assembly_rigfem_s"] = t_k
     print(f"assembly rigfem kernel     {t_k:8.3f} s (median of {a.reps}); numba first call "
           f"{res['numba_first_call_s']:.2f} s")
     mesh = MeshTet(fm.nodes[:fm.n_vertices].T, fm.elements[:, :4].T)
-    basis, t_b, _ = timed(lambda: Basis(mesh, ElementVector(ElementTetP2())), a.reps)
+    basis, t_b, samples["assembly skfem Basis"] = timed(lambda: Basis(mesh, ElementVector(ElementTetP2())), a.reps)
     form = linear_elasticity(*lame_parameters(mat.E, mat.nu))
-    Ks, t_s, _ = timed(lambda: asm(form, basis), a.reps)
+    Ks, t_s, samples["assembly skfem asm"] = timed(lambda: asm(form, basis), a.reps)
     res.update(assembly_skfem_basis_s=t_b, assembly_skfem_asm_s=t_s)
     res["assembly_speedup"] = (t_b + t_s) / t_k
     assert abs(Ks).sum() == abs(K).sum() or abs(abs(Ks).sum() / abs(K).sum() - 1) < 1e-12
@@ -104,14 +99,15 @@ def main() -> None:
         print(f"{label}: {model.mesh.ndof} DOF")
         for method in ("pardiso", "superlu", "amg"):
             reps = 1 if method != "pardiso" else a.reps
-            problem, t_f, _ = timed(lambda: StaticProblem(model, [Fixed("root")], method), reps)
+            problem, t_f, samples[f"{label}/{method} factorise"] = timed(
+                lambda: StaticProblem(model, [Fixed("root")], method), reps)
             ls_ = problem.linear_solver
             Fs = F[problem.free] if method != "amg" else np.where(np.isin(np.arange(len(F)), problem.fixed)[:, None],
                                                                    0.0, F)
             ls_.maxiter = a.amg_maxiter
             try:
-                _, t_1, _ = timed(lambda: ls_.solve(Fs[:, 0]), reps)
-                _, t_n, _ = timed(lambda: ls_.solve(Fs[:, 1:7]), reps)
+                _, t_1, samples[f"{label}/{method} first solve"] = timed(lambda: ls_.solve(Fs[:, 0]), reps)
+                _, t_n, samples[f"{label}/{method} 6 cases"] = timed(lambda: ls_.solve(Fs[:, 1:7]), reps)
             except SolverError as e:
                 res["solvers"][f"{label}/{method}"] = dict(factorise_s=t_f, failed=str(e), dof=model.mesh.ndof)
                 print(f"{label:4s} {method:8s} setup {t_f:7.2f} s  FAILED: {e}")
@@ -127,37 +123,14 @@ def main() -> None:
             p = StaticProblem(model, [Fixed("root")], "pardiso")
             U = np.zeros((model.mesh.ndof, 6))
             U[p.free] = p.linear_solver.solve(F[p.free, 1:7])
-            _, t_sr, _ = timed(lambda: nodal_stress(model.mesh, mat.E, mat.nu, U), a.reps)
+            _, t_sr, samples["stress recovery, 6 cases"] = timed(
+                lambda: nodal_stress(model.mesh, mat.E, mat.nu, U), a.reps)
             res["stress_recovery_6_cases_s"] = t_sr
             print(f"nodal stress recovery, 6 cases {t_sr:.3f} s")
 
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "fe_assembly.json").write_text(json.dumps(res, indent=2))
-    s = res["solvers"]
-    lines = [f"# FE core benchmark ({res['date_utc']} UTC)", "",
-             f"{res['case']}; {res['machine']}; medians of {a.reps} runs; command: "
-             f"`python benchmarks/bench_fe.py --reps {a.reps} --nx {a.nx} --ncube {a.ncube}`", "",
-             "Rail = the P2 bar above fixed at x = 0; cube = 100 mm P2 cube fixed on one face. Pardiso: median of "
-             f"{a.reps}; SuperLU and AMG: one run. AMG: CG to 1e-10, at most {a.amg_maxiter} iterations.", "",
-             "| assembly of K | time [s] |", "|---|---|",
-             f"| rigfem numba kernel | {t_k:.3f} |",
-             f"| scikit-fem generic `asm(linear_elasticity)` | {t_s:.3f} (+ Basis {t_b:.3f}) |",
-             f"| speed-up | {res['assembly_speedup']:.1f}x |", "",
-             "| part / solver | DOF | factorise/setup [s] | first solve [s] | 6 further cases [s] | "
-             "6 cases / first | rel. residual | backward error |",
-             "|---|---|---|---|---|---|---|---|"]
-    for m, r in s.items():
-        if "failed" in r:
-            lines.append(f"| {m} | {r['dof']} | {r['factorise_s']:.2f} | failed: {r['failed'][:60]}… | | | | |")
-            continue
-        it = f" ({r['cg_iterations_6']} CG its)" if r["cg_iterations_6"] else ""
-        lines.append(f"| {m} | {r['dof']} | {r['factorise_s']:.2f} | {r['first_solve_s']:.3f} | "
-                     f"{r['block6_solve_s']:.3f}{it} | {100 * r['block6_over_first']:.0f} % | {r['residual']:.1e} | "
-                     f"{r['backward_error']:.1e} |")
-    lines += ["", f"Nodal stress recovery for 6 cases: {t_sr:.3f} s. numba first call (compile or cache load): "
-              f"{res['numba_first_call_s']:.2f} s."]
-    (OUT / "fe_assembly.md").write_text("\n".join(lines) + "\n")
-    print(f"wrote {OUT / 'fe_assembly.md'}")
+    samples["numba first call"] = [res["numba_first_call_s"]]
+    params = {"reps": a.reps, "nx": a.nx, "ncube": a.ncube, "amg_maxiter": a.amg_maxiter}
+    print(f"wrote {write_record('fe_assembly', samples, res, params)}")
 
 
 if __name__ == "__main__":

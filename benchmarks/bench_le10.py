@@ -18,7 +18,7 @@ the identical model (same nodes, C3D10 elements, supports, consistent nodal load
 times.  Times are medians of the repeats; levels above ``--single-above`` DOF run once (the
 table says how many runs each figure is).  Peak RSS: VmHWM of the subprocess (rigfem) and of its
 ccx children (polled every 20 ms).  Both codes run on ``--threads`` threads (1 by default).  Writes
-results/benchmarks/le10.{md,json,png}.
+results/benchmarks/le10.{json,png} (``python benchmarks/publish.py`` writes le10.md).
 """
 
 from __future__ import annotations
@@ -34,7 +34,6 @@ if __name__ == "__main__":  # thread counts must be set before numpy/MKL load
     os.environ.update(OMP_NUM_THREADS=_t, MKL_NUM_THREADS=_t, OPENBLAS_NUM_THREADS=_t, NUMBA_NUM_THREADS=_t)
 
 import json
-import platform
 import statistics
 import subprocess
 import tempfile
@@ -42,7 +41,8 @@ import threading
 import time
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+from record import OUT, write_record
+
 SIZES = (400.0, 283.0, 200.0, 141.0, 100.0, 71.0, 60.0)  #: mm, ratio √2, then the largest that fits
 
 
@@ -147,35 +147,6 @@ def run(sizes, repeats: int, single_above: int, threads: int) -> list[dict]:
     return rows
 
 
-def markdown(rows: list[dict], info: dict) -> str:
-    from rigfem.studies.le10 import TARGET_SYY
-
-    lines = ["# NAFEMS LE10, thick plate under pressure: rigfem vs CalculiX", "",
-             f"σyy at D (2000, 0, 300) mm, target {TARGET_SYY} MPa (NAFEMS TNSB Rev. 3, 1990).  Quarter plate, "
-             "curved P2 tetrahedra (C3D10 in ccx) on the identical mesh, supports and nodal loads "
-             "(`rigfem.studies.le10`).", "",
-             f"Command: `{info['command']}`  ",
-             f"Machine: {info['machine']}, {info['threads']} thread(s) per code, load average before "
-             f"{info['load_before']:.2f}, after {info['load_after']:.2f}.", "",
-             "| h (mm) | layers | tets | DOF | rigfem σyy(D) (MPa) | error | ccx σyy(D) (MPa) | error | "
-             "rigfem time (s) | ccx time (s) | time ratio rigfem/ccx | runs | rigfem peak RSS (MiB) | "
-             "ccx peak RSS (MiB) | mesh time (s) |",
-             "|" + "---|" * 15]
-    for r in rows:
-        lines.append(f"| {r['size_mm']:g} | {r['layers']} | {r['tets']} | {r['dof']} | {r['syy_D']:.4f} | "
-                     f"{r['error_pct']:+.2f} % | {r['syy_D_ccx']:.4f} | {r['error_ccx_pct']:+.2f} % | "
-                     f"{r['rigfem_s']:.2f} | {r['ccx_s']:.2f} | {r['rigfem_s'] / r['ccx_s']:.2f} | {r['runs']} | "
-                     f"{r['rigfem_rss_mib']:.0f} | {r['ccx_rss_mib']:.0f} | {r['mesh_s']:.2f} |")
-    lines += ["", "Times are wall-clock medians of the runs column (a level above "
-              f"{info['single_above']} DOF runs once).  rigfem: model (P2 nodes), stiffness assembly, "
-              "factorisation, solve, nodal stress recovery, in-process; ccx: the whole `ccx` process (reads "
-              "the deck, assembles, solves, writes the .frd).  Meshing (gmsh) is shared and listed apart.  "
-              "Peak RSS: VmHWM (/proc) of the solving subprocess (rigfem; it includes the Python, numpy and "
-              f"scipy/MKL baseline of about {rows[0]['rigfem_rss_base_mib']:.0f} MiB, read before the first "
-              "solve) and of its ccx children, polled every 20 ms.", ""]
-    return "\n".join(lines)
-
-
 def plot(rows: list[dict], path: Path) -> None:
     import matplotlib
 
@@ -223,17 +194,17 @@ def main(argv: list[str] | None = None) -> int:
     if a.solve:
         Path(a.json).write_text(json.dumps(solve_level(a.solve, a.repeats, a.single_above, a.threads)))
         return 0
-    load0 = os.getloadavg()[0]
     rows = run(a.sizes, a.repeats, a.single_above, a.threads)
-    info = {"command": "python benchmarks/bench_le10.py " + " ".join(sys.argv[1:] if argv is None else argv),
-            "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
-            "threads": a.threads, "load_before": load0, "load_after": os.getloadavg()[0],
-            "single_above": a.single_above, "repeats": a.repeats}
-    a.out.mkdir(parents=True, exist_ok=True)
-    (a.out / "le10.json").write_text(json.dumps({"info": info, "levels": rows}, indent=1))
-    (a.out / "le10.md").write_text(markdown(rows, info))
+    samples = {"levels": [{k: v for k, v in r.items() if not k.endswith("_all_s") and k != "rigfem_stages_s"}
+                          for r in rows]}
+    for r in rows:
+        samples[f"{r['size_mm']:g} mm rigfem"] = [{"wall_s": t} for t in r["rigfem_all_s"]]
+        samples[f"{r['size_mm']:g} mm ccx"] = [{"wall_s": t} for t in r["ccx_all_s"]]
+    params = {"threads": a.threads, "single_above": a.single_above, "repeats": a.repeats, "sizes_mm": a.sizes}
+    write_record("le10", samples, {"rigfem stages (s), median": {f"{r['size_mm']:g}": r["rigfem_stages_s"]
+                                                                 for r in rows}}, params, out=a.out)
     plot(rows, a.out / "le10.png")
-    print(markdown(rows, info))
+    print(f"wrote {a.out / 'le10.json'}, le10.png")
     return 0
 
 

@@ -8,7 +8,7 @@ times one sweep chunk (every ``--every``-th configuration whose crank turns, dra
 solutions from the disk cache) in fresh single-threaded processes with and without the
 variable: wall, user and system time and minor page faults of the chunk alone (median of
 ``--repeats`` processes each).  ``rigfem.studies.sweep`` starts its local workers without it.
-Writes results/benchmarks/malloc_trim.{md,json}.
+Writes results/benchmarks/malloc_trim.json (``python benchmarks/publish.py`` writes the .md).
 """
 
 from __future__ import annotations
@@ -16,12 +16,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import statistics
 import subprocess
 import sys
-from pathlib import Path
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+from record import summarise, write_record
 
 CHILD = """
 import json, resource, sys, time
@@ -55,23 +53,10 @@ def main() -> None:
             out = subprocess.run([sys.executable, "-c", CHILD, str(a.every)], env=env, check=True,
                                  capture_output=True, text=True).stdout
             runs[label].append(json.loads(out.strip().splitlines()[-1]))
-    med = {label: {k: statistics.median(r[k] for r in rs) for k in rs[0]} for label, rs in runs.items()}
-    (off, on) = med.values()
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "malloc_trim.json").write_text(json.dumps({"runs": runs, "median": med, "load_avg": os.getloadavg()[0]},
-                                                     indent=1))
-    md = ["# Dask's MALLOC_TRIM_THRESHOLD_ and the sweep's superposition", "",
-          f"Command: `python benchmarks/bench_malloc_trim.py --repeats {a.repeats} --every {a.every}`; one sweep "
-          f"chunk of {int(off['configurations'])} configurations, draft, single-threaded fresh processes, "
-          f"median of {a.repeats} each.", "",
-          "| environment | wall s | user s | system s | minor page faults |", "|---|---:|---:|---:|---:|"]
-    md += [f"| {label} | {m['wall_s']:.1f} | {m['user_s']:.1f} | {m['sys_s']:.1f} | {m['minor_faults']:,.0f} |"
-           for label, m in med.items()]
-    md += ["", f"With the variable the chunk takes {100 * (on['wall_s'] / off['wall_s'] - 1):+.0f} % wall time; "
-           "local sweep workers are started without it (`rigfem.studies.sweep._run_dask`).",
-           f"Load average {os.getloadavg()[0]:.1f} at the end (shared 2-core machine)."]
-    (OUT / "malloc_trim.md").write_text("\n".join(md) + "\n")
-    print("\n".join(md))
+    med = {label: v["wall_s"]["median"] for label, v in summarise(runs).items()}
+    derived = {"wall with / without - 1": med["MALLOC_TRIM_THRESHOLD_=65536"] / med["without"] - 1}
+    params = {"repeats": a.repeats, "every": a.every, "threads": 1}
+    print(f"wrote {write_record('malloc_trim', runs, derived, params)}")
 
 
 if __name__ == "__main__":

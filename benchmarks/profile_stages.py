@@ -1,7 +1,8 @@
 """Where the time goes: a check (cold and warm cache) and a sweep chunk, per stage.
 
 Run: ``python benchmarks/profile_stages.py [--fidelity standard] [--chunk 64]``
--> results/benchmarks/stages.md.  Each stage is the cumulative time (cProfile, one process
+-> results/benchmarks/stages.json (``python benchmarks/publish.py`` writes stages.md).  The cold
+check starts with empty rigfem and numba caches.  Each stage is the cumulative time (cProfile, one process
 per measurement) of the functions that do it; stages can nest in the profile but are listed
 so they do not overlap.  Profiling adds some overhead; the totals are the profiled wall times.
 """
@@ -16,7 +17,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+from record import cold_env, write_record
 
 #: stage -> (module file suffix, function name) whose cumulative time it is
 STAGES = {
@@ -33,8 +34,10 @@ STAGES = {
     "cache I/O (meshes, unit solutions)": [("mesh/partmesh.py", "load_npz"), ("mesh/partmesh.py", "save_npz"),
                                           ("fe/cache.py", "load_solution"), ("fe/cache.py", "save_solution")],
     "superposition, peaks, error estimate": [("fe/solution.py", "peak_sweep"), ("fe/solution.py", "peak")],
-    "pictures": [("report/pictures.py", "field_picture"), ("report/pictures.py", "reactions_plot"),
-                 ("report/pictures.py", "_plot_peaks")],
+    # the picture functions rigfem.check calls (field_picture runs inside render_field's fallback only)
+    "pictures": [("report/pictures.py", "render_field"), ("report/pictures.py", "utilisation_plot"),
+                 ("report/pictures.py", "reactions_plot"), ("report/pictures.py", "_plot_peaks")],
+    "HTML report": [("report/html.py", "write_html")],
     "VTU/PVD writing": [("report/vtu.py", "write_vtu")],
     "sweep: unit-field peaks": [("studies/sweep_bases.py", "case_peak")],
     "sweep: load cases": [("loads/cases.py", "part_cases")],
@@ -55,10 +58,8 @@ def _stages(prof: str) -> tuple[float, dict[str, float]]:
     return total, out
 
 
-def _profile(argv: list[str], cache: str, prof: str) -> None:
-    env = {**os.environ, "RIGFEM_CACHE": cache}
-    subprocess.run([sys.executable, "-m", "cProfile", "-o", prof, *argv], env=env, check=True,
-                   capture_output=True)
+def _profile(argv: list[str], env: dict, prof: str) -> None:
+    subprocess.run([sys.executable, "-m", "cProfile", "-o", prof, *argv], env=env, check=True, capture_output=True)
 
 
 SWEEP_CHUNK = """
@@ -77,33 +78,27 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--fidelity", default="standard")
     ap.add_argument("--chunk", type=int, default=64, help="configurations in the profiled sweep chunk")
     a = ap.parse_args(argv)
-    cols = {}
+    samples = {}
     with tempfile.TemporaryDirectory() as tmp:
         check = ["-m", "rigfem", "check", "final-cm", "--fidelity", a.fidelity]
+        env = cold_env(tmp)
         for name in ("cold", "warm"):
             prof = f"{tmp}/{name}.prof"
-            _profile([*check, "--out", f"{tmp}/out-{name}"], tmp + "/cache", prof)
-            cols[f"check {name}"] = _stages(prof)
+            _profile([*check, "--out", f"{tmp}/out-{name}"], env, prof)
+            samples[f"check {name}"] = [_sample(prof)]
         prof = f"{tmp}/sweep.prof"
         script = Path(tmp) / "chunk.py"
         script.write_text(SWEEP_CHUNK)
         subprocess.run([sys.executable, str(script), "draft", str(a.chunk), prof],  # the user's (warm) cache
                        env=os.environ, check=True, capture_output=True)
-        cols[f"sweep chunk ({a.chunk} configurations whose crank turns, draft, unit solutions built)"] = _stages(prof)
-    names = list(cols)
-    lines = [f"# Where the time goes (`python benchmarks/profile_stages.py --fidelity {a.fidelity} --chunk {a.chunk}`)",
-             "", f"`rigfem check final-cm --fidelity {a.fidelity}`: cold = empty cache, warm = meshes and unit "
-             "solutions cached; cumulative seconds per stage under cProfile (one process each, "
-             f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end).", "",
-             "| stage | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names)]
-    for stage in STAGES:
-        vals = [cols[n][1].get(stage) for n in names]
-        if any(vals):
-            lines.append(f"| {stage} | " + " | ".join(f"{v:.2f}" if v else "–" for v in vals) + " |")
-    lines.append("| **total (profiled)** | " + " | ".join(f"**{cols[n][0]:.1f}**" for n in names) + " |")
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "stages.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+        samples[f"sweep chunk ({a.chunk} configurations whose crank turns, draft, unit solutions built)"] = \
+            [_sample(prof)]
+    print(f"wrote {write_record('stages', samples, {}, {'fidelity': a.fidelity, 'chunk': a.chunk})}")
+
+
+def _sample(prof: str) -> dict:
+    total, stages = _stages(prof)
+    return {"total (profiled)": total, **stages}
 
 
 if __name__ == "__main__":

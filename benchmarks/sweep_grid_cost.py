@@ -1,7 +1,7 @@
 """Cost of a finer rig grid: four-bar configurations at a hole pitch of 60 mm (the rig) and 30 mm,
 and the wall time of their sweep projected on N Dask workers from a short measured draft sweep.
 
-    python benchmarks/sweep_grid_cost.py [--every 400] [--workers 1 2 16 64]
+    python benchmarks/sweep_grid_cost.py [--every 40] [--workers 1 2 16 64]
 
 Counting uses the rules of ``rigfem.studies.enumerate_configs`` with the rail's pitch overridden
 (each length a whole number of pitches from one pitch up, its coupling's two screws on the
@@ -11,35 +11,31 @@ crank turns fully without a dead point: d + b2 < b3 + b4 and |d − b2| > |b3 �
 closes at every crank angle; equality is a dead point, a "toggle" row).  The rig's 60 mm
 default is not changed.
 
-Measured here: the unit-solution build (once per sweep: a 30 mm rail layout has more holes, so
-this is a lower bound for it) and the per-configuration time of a serial draft sweep over an
-evenly spread subset of the checked configurations.  Projection: T(N) = T_bases +
-n_FE · t_cfg / (N · efficiency(N)) (+ the configurations without FE, rules and dynamics only);
-efficiency is an assumption (the measured 1 → 2 local-worker figure in
-results/benchmarks/sweep.md, kept for all N: a cluster's workers do not share 2 cores); the
-unit-solution time is the larger of this run's (the on-disk cache may make it warm) and the
-cold build recorded in results/benchmarks/sweep.json.
-Writes results/benchmarks/sweep_grid_cost.{md,json}.
+Measured here: the per-configuration time of a serial draft sweep over an evenly spread subset
+of the checked configurations.  Read from results/benchmarks/sweep.json (the end-to-end sweep
+record): the once-per-sweep cold cost (cold minus warm wall time of the whole 60 mm sweep with
+two workers: meshes, unit solutions, compiled kernels; a 30 mm rail layout has more holes, so
+this is a lower bound for it) and the parallel efficiency (warm sweep, 1 -> 2 workers, start-up
+included, kept for all N: a cluster's workers do not share 2 cores).  Projection: T(N) =
+T_cold + n_FE · t_cfg / (N · efficiency(N)); the configurations without FE (rules and dynamics
+only) are left out.  Writes results/benchmarks/sweep_grid_cost.json (``benchmarks/publish.py``
+writes the .md).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
+from record import read_record, write_record
 
 from rigfem.rig import MIN_GROUND_MM
 from rigfem.rig.layout import RailLayout
 from rigfem.rig.parts import load_part, rail_hole_x
 from rigfem.settings import PLATE, RAIL
 from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_sweep
-
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 
 
 def grid_lengths(rail_mm: float, pitch: float) -> list[float]:
@@ -77,23 +73,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--every", type=int, default=400, help="time every n-th FE-checked 60 mm configuration")
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2, 16, 64])
-    ap.add_argument("--efficiency", type=float, default=None,
-                    help="parallel efficiency assumed for N > 1 (default: results/benchmarks/sweep.json's 1 -> 2)")
-    ap.add_argument("--bases-seconds", type=float, default=None,
-                    help="cold unit-solution build time to assume (s; default: the larger of this run's and "
-                         "results/benchmarks/sweep.json's, which a warm disk cache makes short)")
     a = ap.parse_args()
     p = SweepParams()
     counts = {pitch: count(pitch, p) for pitch in (60.0, 30.0)}
     assert counts[60.0]["mountable"] == len(enumerate_configs(p)), "grid count differs from enumerate_configs"
-    eff = a.efficiency
-    if eff is None:
-        bench = json.loads((OUT / "sweep.json").read_text())
-        eff = float(bench["scaling_efficiency_2"])
-    cold = float(json.loads((OUT / "sweep.json").read_text())["unit_solutions_s"])
+    sweep = read_record("sweep")
     cfgs = [c for c in enumerate_configs(p)
             if c["d"] + c["b2"] < c["b3"] + c["b4"] and abs(c["d"] - c["b2"]) > abs(c["b3"] - c["b4"])][::a.every]
-    load = os.getloadavg()[0]
     t0 = time.perf_counter()
     bases = build_bases(p)
     t_bases = time.perf_counter() - t0
@@ -101,54 +87,17 @@ def main() -> None:
         t0 = time.perf_counter()
         table = run_sweep(p, tmp, configs=cfgs, chunk_size=8, bases=bases, distributed=False, progress=False)
         t_run = time.perf_counter() - t0
-    t_cfg = t_run / len(cfgs)
-    # the unit-solution cache may be warm here: assume a cold build
-    t_bases_used = a.bases_seconds if a.bases_seconds is not None else max(t_bases, cold)
     assert (table["status"] == "ok").all()
-    t_ref = float(json.loads((OUT / "sweep.json").read_text())["per_configuration_s"]["1"])
-    proj = {}
-    for label, t in (("measured", t_cfg), ("sweep.json", t_ref)):
-        for pitch, c in counts.items():
-            proj[f"{pitch:g} mm, {label}"] = {n: t_bases_used + c["fe_checked"] * t / (n * (1.0 if n == 1 else eff))
-                                           for n in a.workers}
-    res = {"counts": {str(k): v for k, v in counts.items()}, "bases_s": t_bases, "bases_cold_s": t_bases_used,
-           "per_config_s": t_cfg, "timed_configs": len(cfgs), "per_config_sweep_json_s": t_ref, "efficiency": eff,
-           "load_before": load, "load_after": os.getloadavg()[0],
-           "projected_s": {k: {str(n): v for n, v in d.items()} for k, d in proj.items()}}
-    md = ["# Sweep cost of a finer rig grid (four-bar, draft)", "",
-          "Command: `python benchmarks/sweep_grid_cost.py" + (f" --every {a.every}" if a.every != 400 else "")
-          + (f" --bases-seconds {a.bases_seconds:g}" if a.bases_seconds is not None else "") + "`",
-          f"(load average {load:.2f} before, {res['load_after']:.2f} after; shared 2-core machine).", "",
-          "| hole pitch | lengths b2 × b3 × b4 × d | mountable configurations | with FE check (full turn) |",
-          "|---|---|---|---|"]
-    for c in counts.values():
-        md.append(f"| {c['pitch_mm']:g} mm | {' × '.join(map(str, c['lengths']))} | {c['mountable']:,} | "
-                  f"{c['fe_checked']:,} |")
-    md += ["", f"Measured: unit solutions {t_bases:.1f} s here (the on-disk cache may be warm; the projection "
-           f"uses {t_bases_used:.0f} s for a cold build), "
-           f"{t_cfg * 1e3:.0f} ms per FE-checked "
-           f"configuration (serial draft sweep of {len(cfgs)} configurations spread over the grid; "
-           f"results/benchmarks/sweep.json recorded {t_ref * 1e3:.0f} ms per configuration on its subset with one "
-           f"Dask worker, start-up included).  Assumed parallel efficiency {eff:.0%} for every N > 1 (the "
-           f"steady-state 1 → 2 worker figure of results/benchmarks/sweep.md).", "",
-           "| hole pitch, per-configuration time | " + " | ".join(f"N = {n}" for n in a.workers) + " |",
-           "|---|" + "---|" * len(a.workers)]
-    for key, d in proj.items():
-        t = t_cfg if key.endswith("measured") else t_ref
-        md.append(f"| {key.split(',')[0]}, {t * 1e3:.0f} ms ({key.split(', ')[1]}) | "
-                  + " | ".join(_hms(v) for v in d.values()) + " |")
-    md += ["", "Projection T(N) = unit solutions + n_FE × t_cfg / (N × efficiency); the configurations "
-           "without FE (rules and dynamics only) are left out; the unit solutions of a 30 mm rail layout "
-           "(more holes, more unit loads) are taken as the 60 mm ones, a lower bound.", ""]
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "sweep_grid_cost.json").write_text(json.dumps(res, indent=1))
-    (OUT / "sweep_grid_cost.md").write_text("\n".join(md))
-    print("\n".join(md))
-
-
-def _hms(s: float) -> str:
-    return f"{s / 3600:.1f} h" if s >= 3600 else f"{s / 60:.1f} min" if s >= 60 else f"{s:.0f} s"
-
-
-if __name__ == "__main__":
-    main()
+    samples = {"unit solutions (this run, cache as found)": [{"wall_s": t_bases}],
+               "serial draft sweep of the subset": [{"wall_s": t_run, "configurations": len(cfgs)}]}
+    t_cfg = t_run / len(cfgs)
+    eff = sweep["derived"].get("warm efficiency 1 -> 2 workers")  # None: no 1-worker run, N = 1 only
+    workers = [n for n in a.workers if n == 1 or eff is not None]
+    t_cold = sweep["derived"]["cold - warm, 2 workers (s)"]  # meshes, unit solutions, kernels: once per sweep
+    proj = {f"{pitch:g}": {str(n): t_cold + c["fe_checked"] * t_cfg / (n * (1.0 if n == 1 else eff))
+                           for n in workers} for pitch, c in counts.items()}
+    derived = {"counts": {f"{k:g}": v for k, v in counts.items()}, "per_config_s": t_cfg,
+               "efficiency (sweep record, warm 1 -> 2 workers)": eff,
+               "cold build (sweep record, cold - warm, 2 workers) s": t_cold,
+               "sweep record": {"date": sweep["date"], "commit": sweep["commit"]["sha"]}, "projected_s": proj}
+    print(f"wrote {write_record('sweep_grid_cost', samples, derived, {'every': a.every, 'workers': a.workers})}")

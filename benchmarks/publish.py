@@ -1,0 +1,254 @@
+"""Regenerate every results/benchmarks/*.md table and README's figures from the benchmark records.
+
+    python benchmarks/publish.py           # write the tables and README's generated blocks
+    python benchmarks/publish.py --check   # exit 1 when a table, README or a record disagrees
+
+README's figures live between ``<!-- NAME:begin -->`` and ``<!-- NAME:end -->`` markers (blocks
+of lines) or inside ``<!-- fig:KEY -->…<!-- /fig -->`` spans (one figure in a sentence); both are
+rewritten from results/benchmarks/*.json (benchmarks/record.py), never typed by hand.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from record import OUT, REQUIRED, ROOT, summarise
+from tables import LE10_TARGET, RENDER, grid_note, grid_rows, hms, le10_outliers, med
+
+README = ROOT / "README.md"
+VERIFY = "calculix_verify_final-cm"  #: written by `rigfem verify --against calculix`, not a benchmark
+COVERAGE = ROOT / "results" / "convergence" / "band_coverage.json"  #: written by benchmarks/band_coverage.py
+BLOCK = re.compile(r"(<!-- (?P<name>[\w-]+):begin -->\n)(?P<body>.*?)(<!-- (?P=name):end -->)", re.S)
+SPAN = re.compile(r"(<!-- fig:(?P<key>[\w-]+) -->)(?P<body>.*?)(<!-- /fig -->)", re.S)
+
+
+def load(out: Path = OUT) -> dict[str, dict]:
+    """Every record the tables and README are made from, by name."""
+    recs = {p.stem: json.loads(p.read_text()) for p in sorted(out.glob("*.json"))
+            if p.stem in RENDER or p.stem == VERIFY}
+    if COVERAGE.is_file():  # the error band's coverage study keeps its own record (every raw case, date, commit)
+        recs["band_coverage"] = json.loads(COVERAGE.read_text())
+    return recs
+
+
+#: record name -> the command that writes it (quoted in README while a record is missing)
+COMMANDS = {
+    "check": "python benchmarks/bench_check.py --repeats 3 --fidelity standard draft",
+    "calculix_vs_rigfem": "python benchmarks/bench_calculix.py --repeats 3 --threads 1 --cases 4",
+    "fe_assembly": "python benchmarks/bench_fe.py",
+    "cycle_vs_calculix": "python benchmarks/bench_cycle_calculix.py --fidelity draft --angles 12 --repeats 3",
+    "stages": "python benchmarks/profile_stages.py --fidelity standard --chunk 64",
+    "kinematics": "python benchmarks/bench_kinematics.py", "dynamics": "python benchmarks/bench_dynamics.py",
+    "le10": "python benchmarks/bench_le10.py --sizes 400 283 200 141 100",
+    "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
+    "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
+    "band_coverage": "python benchmarks/band_coverage.py"}
+
+
+def problems(recs: dict[str, dict]) -> list[str]:
+    """Records lacking a required key or raw samples, or whose summaries differ from their samples."""
+    out = []
+    for n, r in recs.items():
+        if n in (VERIFY, "band_coverage"):
+            continue
+        out += [f"results/benchmarks/{n}.json: no {k!r}" for k in REQUIRED if k not in r]
+        smp = r.get("samples")
+        if not isinstance(smp, dict) or not smp or not all(isinstance(v, list) and v for v in smp.values()):
+            out.append(f"results/benchmarks/{n}.json: no raw samples")
+        elif r.get("summary") != json.loads(json.dumps(summarise(r["samples"]))):
+            out.append(f"results/benchmarks/{n}.json: summary differs from its raw samples")
+        if not isinstance(r.get("machine"), dict) or not {"cores", "cpu", "memory_gib"} <= set(r["machine"]):
+            out.append(f"results/benchmarks/{n}.json: machine lacks cores, cpu or memory")
+    return out
+
+
+def _missing(name: str) -> str:
+    return f"not measured yet in the dated record format: run `{COMMANDS[name]}`"
+
+
+def _check(c: dict) -> str:
+    rss = [c["summary"][s]["peak_tree_rss_mib"] for s in c["summary"]]
+    walls = "; ".join(f"{s} **{med(c, s):.1f} s**" for s in c["summary"])
+    load = [x["load_before"][0] for runs in c["samples"].values() for x in runs]
+    return (f"{walls} (cold: empty rigfem and numba caches; warm: both filled); peak RSS of the check's process tree "
+            f"{min(s['min'] for s in rss):.0f}–{max(s['max'] for s in rss):.0f} MiB; median of "
+            f"{c['params']['repeats']} separate process(es), load average {min(load):.1f}–{max(load):.1f} at their "
+            f"starts on {c['machine']['cores']} shared cores, {c['date'][:10]} — results/benchmarks/check.md")
+
+
+def _calculix(x: dict) -> str:
+    d = x["derived"]
+    return (f"{x['params']['mesh']['dof']:,} DOF: FE wall time ratio rigfem/ccx "
+            f"**{d['FE wall ratio rigfem / ccx']:.2f}**; {x['params']['unit cases']} load cases "
+            f"**{d['unit cases wall ratio rigfem / ccx']:.2f}** (one "
+            f"factorisation); peak σvm agrees to {d['peak von Mises rel diff']:.0e}; median of "
+            f"{x['params']['repeats']}, {x['date'][:10]} — results/benchmarks/calculix_vs_rigfem.md")
+
+
+def _cycle(cy: dict) -> str:
+    n = cy["params"]["angles"][0]
+    return (f"{n} crank angles, {cy['params'][f'{n} angles']['dof']:,} DOF: rigfem {med(cy, f'rigfem, {n} angles'):.1f}"
+            f" s vs CalculiX {med(cy, f'ccx, {n} angles'):.1f} s: ratio "
+            f"**{cy['derived'][f'rigfem / ccx, {n} angles']:.2f}** (both measured, median of "
+            f"{cy['params']['repeats']}); peaks agree to "
+            f"{cy['summary'][f'ccx, {n} angles']['max_peak_rel_diff']['max']:.0e} — "
+            "results/benchmarks/cycle_vs_calculix.md")
+
+
+def _le10(le: dict) -> str:
+    lv = le["samples"]["levels"]
+    ratios = [med(le, f"{r['size_mm']:g} mm rigfem") / med(le, f"{r['size_mm']:g} mm ccx") for r in lv]
+    outl = "; ".join(f"{r['size_mm']:g} mm {r['error_pct']:+.2f} % (a coarse mesh, {r['layers']} layers; "
+                     f"CalculiX on it {r['error_ccx_pct']:+.2f} %)" for r in le10_outliers(le)) or "none"
+    errs = ", ".join(f"{r['error_pct']:+.2f}" for r in lv)
+    return (f"{len(lv)} meshes, {lv[0]['dof'] / 1e3:.1f}k–{lv[-1]['dof'] / 1e3:.0f}k DOF: σyy(D) {errs} % of "
+            f"{LE10_TARGET} MPa; outside 2 %: {outl}; the codes agree to "
+            f"{max(abs(r['syy_D_ccx'] / r['syy_D'] - 1) for r in lv):.0e}; FE wall time ratio rigfem/ccx "
+            f"{min(ratios):.2f}–{max(ratios):.2f} — results/benchmarks/le10.md, le10.png")
+
+
+def _sweep(sw: dict) -> str:
+    one = next(iter(sw["samples"].values()))[0]
+    eff = "".join(f"; efficiency 1 → 2 workers, {k.split()[0]}: {100 * v:.0f} %" for k, v in sw["derived"].items()
+                  if "efficiency" in k)
+    return (f"{one['configurations']:,} configurations, {one['computed']:,} computed: "
+            + "; ".join(f"{k} **{hms(med(sw, k))}**" for k in sw["summary"]) + eff
+            + f" (the runs measured, {sw['date'][:10]}) — results/benchmarks/sweep.md, results/sweep/")
+
+
+#: README's Figures table: (record, figure, result from the record)
+ROWS = [
+    ("check", "`rigfem check final-cm`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
+     "HTML)", _check),
+    ("calculix_vs_rigfem", "rigfem vs CalculiX 2.20, 700 mm rail, curved P2, 1 thread each", _calculix),
+    (VERIFY, "every part case of final-cm re-solved in CalculiX",
+     lambda v: f"all {len(v['cases'])} cases within {100 * max(abs(r['peak_rel_diff']) for r in v['cases']):.4f} % "
+               f"— results/benchmarks/{VERIFY}.md"),
+    ("fe_assembly", "FE assembly and solvers",
+     lambda f: f"assembly {f['derived']['assembly_speedup']:.1f}× scikit-fem's generic form, {f['date'][:10]} — "
+               "results/benchmarks/fe_assembly.md"),
+    ("cycle_vs_calculix", "cycle mode vs CalculiX doing the same work: crank rail, the same mesh and the same N "
+     "crank angles (N load steps in CalculiX), von Mises peak per angle", _cycle),
+    ("stages", "where the time goes per stage (check cold/warm, a sweep chunk)",
+     lambda st: f"pictures {st['samples']['check cold'][0].get('pictures', 0.0):.1f} s of the cold check's "
+                f"{st['samples']['check cold'][0]['total (profiled)']:.0f} s — results/benchmarks/stages.md"),
+    ("kinematics", "closed-form kinematics, four-bar, full turn at 5000 angles",
+     lambda k: f"**{k['derived']['total ms']:.1f} ms** (median of {k['params']['runs']}) — "
+               "results/benchmarks/kinematics.md"),
+    ("dynamics", "linkage dynamics, rig four-bar, one full turn at 5000 angles",
+     lambda d: f"closed form **{med(d, 'closed form, 5000 angles (simulate)', 'wall_ms'):.1f} ms** vs the general "
+               f"solver {med(d, 'general solver, 5000 angles', 'wall_ms'):.1f} ms (same run) — "
+               "results/benchmarks/dynamics.md, results/dynamics/"),
+    (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm` (see "
+     "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
+    ("band_coverage", "coverage of the peaks' error band (an estimate) per preset, and its calibration",
+     lambda b: "raw ZZ estimate: " + ", ".join(f"{k} {v['coverage_raw_pct']:.0f} %" for k, v in b["coverage"].items())
+               + "; calibrated (factor per element order: " + ", ".join(f"P{o} × {f:g}" for o, f in
+                                                                     b["calibration"].items())
+               + "): " + ", ".join(f"{k} {v['coverage_pct']:.0f} %" for k, v in b["coverage"].items())
+               + f" ({b['date_utc'][:10]}) — results/convergence/band_coverage.md"),
+    (None, "rail profile sensitivity", "`python benchmarks/rail_profile_study.py --fidelity draft standard`",
+     "results/rail_profile/study.md"),
+    ("le10", "NAFEMS LE10, rigfem vs CalculiX on the same P2 meshes: σyy(D), time and peak RSS vs DOF", _le10),
+    ("sweep_grid_cost", "cost of a 30 mm rig grid on N workers",
+     lambda g: "see [Running the sweep on a cluster](#running-the-sweep-on-a-cluster) — "
+               "results/benchmarks/sweep_grid_cost.md"),
+    ("sweep", "the whole four-bar sweep, `rigfem sweep --four-bar`, end to end (start-up included)", _sweep),
+    ("malloc_trim", "Dask's MALLOC_TRIM_THRESHOLD_ on a sweep chunk",
+     lambda m: f"{100 * m['derived']['wall with / without - 1']:+.0f} % wall time with it — "
+               "results/benchmarks/malloc_trim.md"),
+]
+
+
+def figure_rows(recs: dict[str, dict]) -> list[str]:
+    """README's Figures table: figure, the command that measured it, the result from its record."""
+    out = ["| figure | command | result |", "|---|---|---|"]
+    for name, figure, *how in ROWS:
+        if name is None:
+            out.append(f"| {figure} | {how[0]} | {how[1]} |")
+        elif name in recs:
+            out.append(f"| {figure} | `{recs[name]['command']}` | {how[0](recs[name])} |")
+        else:
+            out.append(f"| {figure} | `{COMMANDS[name]}` | {_missing(name)} |")
+    return out
+
+
+def spans(recs: dict[str, dict]) -> dict[str, str]:
+    """The single figures quoted in README's prose (a missing record says how to make it)."""
+    sw, mt, k = recs.get("sweep", {}), recs.get("malloc_trim"), recs.get("kinematics")
+    out = {"sweep-2": _missing("sweep"), "malloc-trim": _missing("malloc_trim"),
+           "kinematics-ms": f"({_missing('kinematics')})"}
+    if {"cold, 2 workers", "warm, 2 workers"} <= set(sw.get("summary", {})):
+        out["sweep-2"] = (f"{hms(med(sw, 'warm, 2 workers'))} with warm caches, {hms(med(sw, 'cold, 2 workers'))} "
+                          f"cold (results/benchmarks/sweep.md)")
+    if mt:
+        faults = med(mt, "MALLOC_TRIM_THRESHOLD_=65536", "minor_faults")
+        out["malloc-trim"] = (f"{100 * mt['derived']['wall with / without - 1']:+.0f} %, {faults / 1e6:.1f} million "
+                              f"minor faults per chunk: `{mt['command']}`, results/benchmarks/malloc_trim.md")
+    if k:
+        out["kinematics-ms"] = f"{k['derived']['total ms']:.1f} ms"
+    return out
+
+
+def blocks(recs: dict[str, dict]) -> dict[str, str]:
+    """README's generated blocks of lines."""
+    g = recs.get("sweep_grid_cost")
+    grid = (f"Command: `{g['command']}` (results/benchmarks/sweep_grid_cost.md, {g['date'][:10]}):\n\n"
+            + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
+    return {"figures": "\n".join(figure_rows(recs)) + "\n", "grid-cost": grid}
+
+
+def render_readme(text: str, recs: dict[str, dict]) -> str:
+    """README with every generated block and span rewritten from the records."""
+    b, s = blocks(recs), spans(recs)
+    missing = [n for n in b if f"<!-- {n}:begin -->" not in text]
+    if missing:
+        raise SystemExit(f"README.md: no <!-- {missing[0]}:begin --> block")
+    text = BLOCK.sub(lambda m: m[1] + b[m["name"]] + m[4] if m["name"] in b else m[0], text)
+    return SPAN.sub(lambda m: m[1] + s[m["key"]] + m[4] if m["key"] in s else m[0], text)
+
+
+def readme_paths(text: str) -> list[str]:
+    """Result files named by README's Figures block that do not exist."""
+    m = next((m for m in BLOCK.finditer(text) if m["name"] == "figures"), None)
+    body = m["body"] if m else ""
+    named = set(re.findall(r"results/[\w./-]+\w", body))
+    named |= {"results/benchmarks/" + f for f in re.findall(r", (le10\.png)", body)}
+    return sorted(p for p in named if not (ROOT / p).exists())
+
+
+def outputs(recs: dict[str, dict]) -> dict[Path, str]:
+    """Every file this script writes, with its text."""
+    out = {OUT / f"{n}.md": render(recs[n]) for n, render in RENDER.items() if n in recs}
+    out[README] = render_readme(README.read_text(), recs)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true", help="change nothing; exit 1 when a file is out of date")
+    a = ap.parse_args(argv)
+    recs = load()
+    bad = problems(recs)
+    if bad:
+        print("\n".join(bad), file=sys.stderr)
+        return 1
+    files = outputs(recs)
+    stale = [p for p, t in files.items() if not p.is_file() or p.read_text() != t]
+    bad = [f"README.md names {p}, which does not exist" for p in readme_paths(files[README])]
+    if a.check:
+        bad += [f"{p.relative_to(ROOT)} differs from its records: run python benchmarks/publish.py" for p in stale]
+    else:
+        for p in stale:
+            p.write_text(files[p])
+            print(f"wrote {p.relative_to(ROOT)}")
+    print("\n".join(bad), file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

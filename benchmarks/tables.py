@@ -1,0 +1,292 @@
+"""The results/benchmarks/*.md tables, rendered from the benchmark records (benchmarks/record.py) only."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+#: the reference stress of NAFEMS LE10 at point D, MPa (rigfem.studies.le10.TARGET_SYY; not imported:
+#: rendering must not load the FE stack); tests/test_figures.py checks the two agree
+LE10_TARGET = -5.38
+
+
+def med(rec: dict, series: str, field: str = "wall_s") -> float:
+    """Median of ``field`` over the samples of ``series`` (from the record's summary)."""
+    return rec["summary"][series][field]["median"]
+
+
+def rng(rec: dict, series: str, field: str = "wall_s", fmt: str = ".1f") -> str:
+    """``median (min–max)`` of a series, or the median alone for one sample."""
+    s = rec["summary"][series][field]
+    return f"{s['median']:{fmt}}" + (f" ({s['min']:{fmt}}–{s['max']:{fmt}})" if s["n"] > 1 else "")
+
+
+def hms(s: float) -> str:
+    """Seconds as s, min or h."""
+    return f"{s / 3600:.1f} h" if s >= 3600 else f"{s / 60:.1f} min" if s >= 60 else f"{s:.0f} s"
+
+
+def head(rec: dict, title: str) -> list[str]:
+    """Title, command, date, commit, machine and load average of a record."""
+    m, c = rec["machine"], rec["commit"]
+    return [f"# {title}", "", f"Command: `{rec['command']}`  ",
+            f"Recorded {rec['date']} at commit {c['sha'][:10]}{' (work tree modified)' if c['dirty'] else ''} on "
+            f"{m['cores']} × {m['cpu']}, {m['memory_gib']:.1f} GiB, Python {m['python']}; load average "
+            f"{rec['load'][0]:.2f} at the end (the machine is shared: wall times include waiting for a core).  "
+            f"Raw samples: results/benchmarks/{rec['name']}.json.", ""]
+
+
+def check(rec: dict) -> str:
+    p = rec["params"]
+    lines = head(rec, f"`rigfem check {p['scene']}`: wall time and peak memory, cold and warm caches")
+    lines += [f"Each run a separate process; median (min–max) of {p['repeats']} runs.  Cold: empty rigfem cache "
+              "and empty numba cache (mesh, compile, assemble, factorise, solve).  Warm: meshes, unit solutions "
+              "and compiled kernels from the caches.  Peak memory: the peak RSS of the check's own process tree "
+              "(sum over its processes, polled every 50 ms).", "",
+              "| fidelity | cache | wall s | peak tree RSS MiB | load average at the starts |",
+              "|---|---|---:|---:|---|"]
+    for fid in p["fidelity"]:
+        for c in ("cold", "warm"):
+            s = f"{fid} {c}"
+            loads = ", ".join(f"{x['load_before'][0]:.1f}" for x in rec["samples"][s])
+            lines.append(f"| {fid} | {c} | {rng(rec, s)} | {rng(rec, s, 'peak_tree_rss_mib', '.0f')} | {loads} |")
+    lines += [""] + [f"{k}: {v:.2f}" + "  " for k, v in rec["derived"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def sweep(rec: dict) -> str:
+    lines = head(rec, "The whole four-bar sweep, end to end (`rigfem sweep --four-bar`)")
+    one = next(iter(rec["samples"].values()))[0]
+    lines += [f"{one['configurations']:,} configurations, {one['computed']:,} computed; each run a separate "
+              "`rigfem sweep --four-bar --workers W --quiet` process into a fresh folder: start-up, enumeration, "
+              "unit solutions, the local Dask cluster and the report included; one thread per process.  Cold: "
+              "empty rigfem and numba caches; warm: the caches the cold run filled.  Peak memory: the sweep's "
+              "process tree (workers included; pages they share are counted once per process).", "",
+              "| run | wall | wall s | peak tree RSS MiB | failing configurations |", "|---|---:|---:|---:|---:|"]
+    for s, rows in rec["samples"].items():
+        lines.append(f"| {s} | {hms(med(rec, s))} | {rng(rec, s, fmt='.0f')} | "
+                     f"{rng(rec, s, 'peak_tree_rss_mib', '.0f')} | {rows[0]['fail']} |")
+    lines += [""] + [f"{k}: {100 * v:.0f} % (t1 / (2 t2), start-up included)  " if "efficiency" in k
+                     else f"What a cold cache adds once, {k}: {v:.0f} s  " for k, v in rec["derived"].items()]
+    missing = [f"{c}, {w} workers" for w in (2, 1) for c in ("cold", "warm")
+               if f"{c}, {w} workers" not in rec["samples"]]
+    if missing:
+        lines += ["", f"Not measured in this record (the benchmark was stopped before them): {', '.join(missing)}."]
+    return "\n".join(lines) + "\n"
+
+
+def sweep_grid_cost(rec: dict) -> str:
+    d = rec["derived"]
+    lines = head(rec, "Sweep cost of a finer rig grid (four-bar, draft)")
+    lines += ["| hole pitch | lengths b2 × b3 × b4 × d | mountable configurations | with FE check (full turn) |",
+              "|---|---|---|---|"]
+    for c in d["counts"].values():
+        lines.append(f"| {c['pitch_mm']:g} mm | {' × '.join(map(str, c['lengths']))} | {c['mountable']:,} | "
+                     f"{c['fe_checked']:,} |")
+    lines += ["", *grid_rows(rec), "", grid_note(rec)]
+    return "\n".join(lines) + "\n"
+
+
+def grid_rows(rec: dict) -> list[str]:
+    """The projection table (also README's, under "Running the sweep on a cluster")."""
+    d = rec["derived"]
+    ns = list(next(iter(d["projected_s"].values())))
+    out = ["| hole pitch | mountable four-bars | with an FE check (crank turns fully) | per configuration | "
+           + " | ".join(f"N = {n}" for n in ns) + " |", "|---|---|---|---|" + "---|" * len(ns)]
+    for pitch, c in d["counts"].items():
+        out.append(f"| {pitch} mm{' (the rig)' if pitch == '60' else ''} | {c['mountable']:,} | {c['fe_checked']:,} | "
+                   f"{d['per_config_s'] * 1e3:.0f} ms, measured | "
+                   + " | ".join(hms(v) for v in d["projected_s"][pitch].values()) + " |")
+    return out
+
+
+def grid_note(rec: dict) -> str:
+    """How the projection is made, with the figures it uses and where they come from."""
+    d, s = rec["derived"], rec["samples"]["serial draft sweep of the subset"][0]
+    eff = d["efficiency (sweep record, warm 1 -> 2 workers)"]
+    return (f"Projection T(N) = T_cold + n_FE · t / (N · e): t = {d['per_config_s'] * 1e3:.0f} ms, the "
+            f"per-configuration time of a serial draft sweep of {s['configurations']} configurations spread over "
+            f"the grid (measured here); T_cold = {d['cold build (sweep record, cold - warm, 2 workers) s']:.0f} s, "
+            f"what a cold cache adds to the whole 60 mm sweep with two workers (meshes, unit solutions, compiled "
+            f"kernels; a 30 mm rail has twice the holes, so a lower bound for it) and " + (
+                f"e = {100 * eff:.0f} %, the warm 1 → 2 local-worker efficiency with start-up, held for every N > 1"
+                if eff is not None else "no N > 1: the sweep record has no 1-worker run, so no measured efficiency")
+            + f": both from results/benchmarks/sweep.json ({d['sweep record']['date']}).  The rows without FE "
+            "(rules and dynamics only) are left out.")
+
+
+def cycle_vs_calculix(rec: dict) -> str:
+    p = rec["params"]
+    lines = head(rec, f"Cycle mode vs CalculiX on the same work: {p['part']} of final-cm, {p['fidelity']}")
+    lines += [f"Same mesh, same N crank angles (the dynamics sampled at N angles), same output: the von Mises peak "
+              "at each angle.  rigfem: assembly, one factorisation, the unit solves, stresses, superposition over "
+              "the N angles, in process; CalculiX: the whole `ccx` process with the N angles as N *STEPs (one "
+              f"factorisation each).  {p['threads']} thread each; median (min–max) of {p['repeats']} runs.  "
+              "Nothing is extrapolated.", "",
+              "| angles N | DOF | unit loads | rigfem s | CalculiX s | rigfem / CalculiX | largest peak difference |",
+              "|---:|---:|---:|---:|---:|---:|---:|"]
+    for n in p["angles"]:
+        m = p[f"{n} angles"]
+        diff = rec["summary"][f"ccx, {n} angles"]["max_peak_rel_diff"]["max"]
+        lines.append(f"| {m['rows']} | {m['dof']:,} | {m['unit_loads']} | {rng(rec, f'rigfem, {n} angles')} | "
+                     f"{rng(rec, f'ccx, {n} angles')} | **{rec['derived'][f'rigfem / ccx, {n} angles']:.3f}** | "
+                     f"{diff:.1e} |")
+    return "\n".join(lines) + "\n"
+
+
+def calculix_vs_rigfem(rec: dict) -> str:
+    p, d, m = rec["params"], rec["derived"], rec["params"]["mesh"]
+    r = {k: med(rec, "rigfem", k) for k in rec["summary"]["rigfem"]}
+    c = {k: med(rec, "ccx", k) for k in rec["summary"]["ccx"]}
+    u = {k: med(rec, "unit cases", k) for k in rec["summary"]["unit cases"]}
+    lines = head(rec, "rigfem vs CalculiX 2.20: 700 mm crank rail, curved P2")
+    lines += [f"Case: {p['case']}  ", f"Mesh: {m['nodes']} nodes, {m['tets']} C3D10, **{m['dof']} DOF** "
+              f"(size {m['size_mm']} mm, {m['refine_size_mm']} mm on {', '.join(m['refine'])})  ",
+              f"Threads: {p['threads']} for both (rigfem solver: {p['rigfem_solver']}, backward error "
+              f"{p['rigfem_backward_error']:.2g}; ccx: {p['ccx']}); median of {p['repeats']} repeats, each runs "
+              "rigfem then ccx on the same exported deck.", "", "| step | rigfem s | CalculiX s |", "|---|---:|---:|"]
+    rows = [("mesh (gmsh)", r["mesh"], None), ("assembly (P2 mesh + stiffness)", r["assembly"], None),
+            ("supports + loads", r["supports_loads"], None), ("factorise", r["factorise"], None),
+            ("solve", r["solve"], None), ("stress recovery", r["stress"], None),
+            ("**FE total** (same mesh given)", r["fe_total"], c["wall"]), ("total incl. meshing", r["total"], None),
+            ("CPU time, FE total (user + system)", r["cpu_fe_total"], c["cpu"])]
+    lines += [f"| {name} | {v:.2f} | {'' if w is None else f'{w:.2f}'} |" for name, v, w in rows]
+    lines += ["", f"CalculiX wall time is the whole ccx process; ccx's own \"Total CalculiX Time\": "
+              f"{c['ccx_reported']:.2f} s; deck export {c['export']:.2f} s (not counted).", "",
+              f"FE wall time ratio rigfem / CalculiX: **{d['FE wall ratio rigfem / ccx']:.2f}**; including meshing "
+              f"{d['wall ratio incl. meshing']:.2f}; CPU time ratio {d['CPU ratio']:.2f}.", "",
+              f"**{p['unit cases']} unit load cases** on the same mesh ({p['unit load']}): rigfem (assembly + one "
+              f"factorisation, {p['unit cases']} solves, stresses) {u['rigfem_fe']:.2f} s, CalculiX "
+              f"({p['unit cases']} *STEPs) {u['ccx']:.2f} s, ratio **{d['unit cases wall ratio rigfem / ccx']:.2f}**;"
+              f" largest peak difference {100 * rec['summary']['unit cases']['max_peak_rel_diff']['max']:.4f} %.", "",
+              f"Agreement: peak von Mises {100 * d['peak von Mises rel diff']:.4f} %, tip displacement "
+              f"{100 * d['tip displacement rel diff']:.4f} % (largest over the repeats)."]
+    return "\n".join(lines) + "\n"
+
+
+def le10_outliers(rec: dict) -> list[dict]:
+    """The levels whose σyy(D) is more than 2 % off the reference."""
+    return [r for r in rec["samples"]["levels"] if abs(r["error_pct"]) > 2.0]
+
+
+def le10(rec: dict) -> str:
+    lines = head(rec, "NAFEMS LE10, thick plate under pressure: rigfem vs CalculiX")
+    lines += [f"σyy at D (2000, 0, 300) mm, target {LE10_TARGET} MPa (NAFEMS TNSB Rev. 3, 1990).  Quarter plate, "
+              "curved P2 tetrahedra (C3D10 in ccx) on the identical mesh, supports and nodal loads "
+              f"(`rigfem.studies.le10`); {rec['params']['threads']} thread per code.  Every mesh this command ran "
+              "is listed.", "",
+              "| h (mm) | layers | tets | DOF | rigfem σyy(D) (MPa) | error | ccx σyy(D) (MPa) | error | "
+              "rigfem time (s) | ccx time (s) | time ratio rigfem/ccx | runs | rigfem peak RSS (MiB) | "
+              "ccx peak RSS (MiB) | mesh time (s) |", "|" + "---|" * 15]
+    for r in rec["samples"]["levels"]:
+        h = f"{r['size_mm']:g}"
+        t_r, t_c = med(rec, f"{h} mm rigfem"), med(rec, f"{h} mm ccx")
+        lines.append(f"| {h} | {r['layers']} | {r['tets']} | {r['dof']} | {r['syy_D']:.4f} | {r['error_pct']:+.2f} % | "
+                     f"{r['syy_D_ccx']:.4f} | {r['error_ccx_pct']:+.2f} % | {t_r:.2f} | {t_c:.2f} | {t_r / t_c:.2f} | "
+                     f"{r['runs']} | {r['rigfem_rss_mib']:.0f} | {r['ccx_rss_mib']:.0f} | {r['mesh_s']:.2f} |")
+    lines += ["", "Points outside ±2 %:" if le10_outliers(rec) else "Every point is within ±2 %."]
+    lines += [f"- h = {r['size_mm']:g} mm ({r['dof']:,} DOF): {r['error_pct']:+.2f} %: {le10_reason(r)}"
+              for r in le10_outliers(rec)]
+    lines += ["", "Times are wall-clock medians of the runs column.  rigfem: model, assembly, factorisation, solve, "
+              "stress recovery, in-process; ccx: the whole `ccx` process.  Peak RSS: VmHWM of the solving "
+              "subprocess (rigfem, with the interpreter and numpy/scipy/MKL baseline of about "
+              f"{rec['samples']['levels'][0]['rigfem_rss_base_mib']:.0f} MiB) and of its ccx children."]
+    return "\n".join(lines) + "\n"
+
+
+def le10_reason(r: dict) -> str:
+    """Why a level misses 2 %: a coarse mesh, when CalculiX on the same mesh misses it alike."""
+    same = abs(r["error_ccx_pct"] - r["error_pct"]) < 0.01
+    return (f"a coarse mesh, {r['layers']} element layers through the 600 mm thickness and {r['size_mm']:g} mm "
+            f"elements at the stress raiser D; CalculiX on the same mesh reads {r['error_ccx_pct']:+.2f} %"
+            + (", so it is discretisation error, not a solver fault" if same else ": the codes differ here") + ".")
+
+
+def stages(rec: dict) -> str:
+    p = rec["params"]
+    cols = list(rec["samples"])
+    stage_names = [k for k in rec["samples"][cols[0]][0] if k != "total (profiled)"]
+    stage_names += [k for c in cols for k in rec["samples"][c][0] if k not in stage_names and k != "total (profiled)"]
+    lines = head(rec, "Where the time goes, per stage")
+    lines += [f"`rigfem check final-cm --fidelity {p['fidelity']}`: cold = empty rigfem and numba caches, warm = "
+              "the caches filled; cumulative seconds per stage under cProfile (one process each).  The pictures "
+              "are the functions the check calls.", "",
+              "| stage | " + " | ".join(cols) + " |", "|---|" + "---:|" * len(cols)]
+    for st in stage_names:
+        vals = [rec["samples"][c][0].get(st) for c in cols]
+        lines.append(f"| {st} | " + " | ".join(f"{v:.2f}" if v else "–" for v in vals) + " |")
+    lines.append("| **total (profiled)** | " + " | ".join(f"**{rec['samples'][c][0]['total (profiled)']:.1f}**"
+                                                       for c in cols) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def kinematics(rec: dict) -> str:
+    p = rec["params"]
+    lines = head(rec, "Closed-form kinematics benchmark")
+    lines += [f"Four-bar {'/'.join(f'{v:g}' for v in p['four-bar mm'])} mm, {p['angles']} crank angles over a full "
+              f"turn; median of {p['runs']} runs in process after one warm-up.", "", "| step | median (ms) |",
+              "|---|---|"]
+    lines += [f"| {k} | {med(rec, k, 'ms'):.3f} |" for k in rec["samples"]]
+    lines += [f"| **total** | **{rec['derived']['total ms']:.3f}** (target < {p['target_ms']:g}) |"]
+    return "\n".join(lines) + "\n"
+
+
+def dynamics(rec: dict) -> str:
+    lines = head(rec, "Linkage dynamics timing (rig four-bar b2=540 b3=840 b4=780 d=1020 mm)")
+    lines += ["Median of repeats after one warm-up, all cases in one run.  The closed form is what `simulate` "
+              "uses for a toggle-free rig four-bar or slider-crank; the general solver is the reference it is "
+              "tested against (tests/test_dynamics_closed.py).", "",
+              "| case | wall median (ms) | wall min (ms) | CPU median (ms) | repeats |", "|---|---:|---:|---:|---:|"]
+    for k, v in rec["summary"].items():
+        if "wall_ms" in v:
+            lines.append(f"| {k} | {v['wall_ms']['median']:.1f} | {v['wall_ms']['min']:.1f} | "
+                         f"{v['cpu_ms']['median']:.1f} | {v['wall_ms']['n']} |")
+    lines += ["", f"Closed form vs general solver at 5000 angles: "
+              f"{rec['derived']['general / closed form, 5000 angles']:.1f}× faster (wall medians).  Peak RSS of "
+              f"the benchmark process: {med(rec, 'benchmark process', 'peak_rss_mib'):.0f} MiB."]
+    return "\n".join(lines) + "\n"
+
+
+def fe_assembly(rec: dict) -> str:
+    d, p = rec["derived"], rec["params"]
+    lines = head(rec, "FE core benchmark")
+    lines += [f"{d['case']}; medians of {p['reps']} runs (SuperLU and AMG: one run; AMG: CG to 1e-10, at most "
+              f"{p['amg_maxiter']} iterations).  Rail = the P2 bar fixed at x = 0; cube = 100 mm P2 cube fixed "
+              "on one face.", "", "| assembly of K | time [s] |", "|---|---|",
+              f"| rigfem numba kernel | {d['assembly_rigfem_s']:.3f} |",
+              f"| scikit-fem generic `asm(linear_elasticity)` | {d['assembly_skfem_asm_s']:.3f} (+ Basis "
+              f"{d['assembly_skfem_basis_s']:.3f}) |", f"| speed-up | {d['assembly_speedup']:.1f}x |", "",
+              "| part / solver | DOF | factorise/setup [s] | first solve [s] | 6 further cases [s] | 6 cases / first | "
+              "rel. residual | backward error |", "|---|---|---|---|---|---|---|---|"]
+    for m, r in d["solvers"].items():
+        if "failed" in r:
+            lines.append(f"| {m} | {r['dof']} | {r['factorise_s']:.2f} | failed: {r['failed'][:60]}… | | | | |")
+            continue
+        it = f" ({r['cg_iterations_6']} CG its)" if r["cg_iterations_6"] else ""
+        lines.append(f"| {m} | {r['dof']} | {r['factorise_s']:.2f} | {r['first_solve_s']:.3f} | "
+                     f"{r['block6_solve_s']:.3f}{it} | {100 * r['block6_over_first']:.0f} % | {r['residual']:.1e} | "
+                     f"{r['backward_error']:.1e} |")
+    lines += ["", f"Nodal stress recovery for 6 cases: {d['stress_recovery_6_cases_s']:.3f} s.  numba first call "
+              f"(compile or cache load): {d['numba_first_call_s']:.2f} s."]
+    return "\n".join(lines) + "\n"
+
+
+def malloc_trim(rec: dict) -> str:
+    p = rec["params"]
+    lines = head(rec, "Dask's MALLOC_TRIM_THRESHOLD_ and the sweep's superposition")
+    first = next(iter(rec["samples"].values()))[0]
+    lines += [f"One sweep chunk of {first['configurations']} configurations, draft, single-threaded fresh "
+              f"processes, median of {p['repeats']} each.", "",
+              "| environment | wall s | user s | system s | minor page faults |", "|---|---:|---:|---:|---:|"]
+    for k in rec["samples"]:
+        lines.append(f"| {k} | {med(rec, k):.1f} | {med(rec, k, 'user_s'):.1f} | {med(rec, k, 'sys_s'):.1f} | "
+                     f"{med(rec, k, 'minor_faults'):,.0f} |")
+    lines += ["", f"With the variable the chunk takes {100 * rec['derived']['wall with / without - 1']:+.0f} % wall "
+              "time; local sweep workers are started without it (`rigfem.studies.sweep`)."]
+    return "\n".join(lines) + "\n"
+
+
+#: record name -> its table renderer (results/benchmarks/<name>.md)
+RENDER: dict[str, Callable[[dict], str]] = {
+    "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
+    "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
+    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim}

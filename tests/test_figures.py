@@ -1,0 +1,102 @@
+"""README's figures and the results/benchmarks tables agree with the dated benchmark records."""
+
+from __future__ import annotations
+
+import copy
+import datetime
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import publish  # noqa: E402
+import record  # noqa: E402
+import tables  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def recs() -> dict:
+    return publish.load()
+
+
+def test_readme_and_tables_agree_with_the_records():
+    assert publish.main(["--check"]) == 0
+
+
+def test_every_record_is_complete(recs):
+    assert publish.problems(recs) == []
+    assert "kinematics" in recs and "le10" in recs
+    for name in set(tables.RENDER) & set(recs):
+        r = recs[name]
+        datetime.datetime.fromisoformat(r["date"])
+        assert len(r["commit"]["sha"]) == 40 and r["command"].startswith("python benchmarks/")
+
+
+@pytest.mark.parametrize("key", ["date", "commit", "machine", "command", "samples"])
+def test_a_record_lacking_a_key_is_refused(recs, key):
+    bad = copy.deepcopy(recs)
+    del bad["le10"][key]
+    assert any(f"le10.json: no {key!r}" in p for p in publish.problems(bad))
+
+
+def test_a_summary_edited_by_hand_is_refused(recs):
+    bad = copy.deepcopy(recs)
+    bad["le10"]["summary"]["100 mm rigfem"]["wall_s"]["median"] *= 0.5
+    assert any("summary differs from its raw samples" in p for p in publish.problems(bad))
+    bad["le10"]["samples"]["100 mm rigfem"] = []
+    assert any("no raw samples" in p for p in publish.problems(bad))
+
+
+def test_a_readme_figure_that_differs_from_its_record_is_caught(recs):
+    text = (ROOT / "README.md").read_text()
+    assert publish.render_readme(text, recs) == text
+    moved = copy.deepcopy(recs)
+    for s in moved["kinematics"]["samples"].values():
+        for x in s:
+            x["ms"] *= 2.0
+    moved["kinematics"]["summary"] = record.summarise(moved["kinematics"]["samples"])
+    moved["kinematics"]["derived"]["total ms"] *= 2.0
+    assert publish.render_readme(text, moved) != text
+    typed = text.replace(f"**{recs['kinematics']['derived']['total ms']:.1f} ms**", "**99.0 ms**", 1)
+    assert typed != text and publish.render_readme(typed, recs) == text
+
+
+def test_a_figure_row_naming_a_missing_result_file_is_caught():
+    text = (ROOT / "README.md").read_text()
+    assert publish.readme_paths(text) == []
+    bad = text.replace("<!-- figures:end -->", "| x | y | results/benchmarks/nowhere.md |\n<!-- figures:end -->")
+    assert publish.readme_paths(bad) == ["results/benchmarks/nowhere.md"]
+
+
+def test_every_benchmark_writes_through_the_record_module():
+    for f in sorted((ROOT / "benchmarks").glob("*.py")):
+        src = f.read_text()
+        if "results/benchmarks" in src and f.name not in ("record.py", "publish.py", "tables.py"):
+            assert "write_record(" in src, f"{f.name} writes results/benchmarks without benchmarks/record.py"
+            assert '"results" / "benchmarks"' not in src, f"{f.name} writes its own files in results/benchmarks"
+
+
+def test_le10_target_is_the_studys():
+    from rigfem.studies.le10 import TARGET_SYY
+
+    assert tables.LE10_TARGET == TARGET_SYY
+
+
+def test_peak_memory_is_the_whole_process_tree(tmp_path):
+    child = "import time; b = bytearray(300 * 2**20); time.sleep(1.5)"
+    parent = f"import subprocess, sys; subprocess.run([sys.executable, '-c', {child!r}])"
+    r = record.timed_process([sys.executable, "-c", parent])
+    assert r["exit"] == 0 and r["peak_tree_rss_mib"] > 300 and r["wall_s"] > 1.5
+
+
+def test_write_record_computes_the_summaries(tmp_path):
+    path = record.write_record("demo", {"a": [{"wall_s": 3.0}, {"wall_s": 1.0}, {"wall_s": 2.0}]}, {"x": 1},
+                               command="python benchmarks/demo.py", out=tmp_path)
+    r = json.loads(path.read_text())
+    assert all(k in r for k in record.REQUIRED)
+    assert r["summary"]["a"]["wall_s"] == {"median": 2.0, "min": 1.0, "max": 3.0, "n": 3}
+    assert r["machine"]["cores"] >= 1 and r["machine"]["memory_gib"] > 0
