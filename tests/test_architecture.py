@@ -18,8 +18,9 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.material", "rigfem.settings"),
+    ("rigfem.errors", "rigfem.material"),
     ("rigfem.rig",),
+    ("rigfem.settings",),
     ("rigfem.linkage",),
     ("rigfem.dynamics",),
     ("rigfem.loads",),
