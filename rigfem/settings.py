@@ -184,7 +184,7 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     if local > size:
         raise InputError(f"[check].local_size_mm = {local:g} mm must not exceed size_mm = {size:g} mm")
     mat = table.get("material", "rig_steel")
-    material = material_from_dict(mat) if isinstance(mat, dict) else get_material(str(mat))
+    material = get_material(str(mat)) if not isinstance(mat, dict) else material_from_dict(mat)
     fatigue = {"surface": "machined", "reliability": 0.9, "size_mm": 19.0, **table.get("fatigue", {})}
     mesh = {f.name: getattr(chosen_preset, f.name) for f in fields(Preset)}
     mesh.update(size_mm=size, local_size_mm=local, order=int(chosen_preset.order),
