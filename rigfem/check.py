@@ -57,7 +57,7 @@ from rigfem.report.pictures import (
     utilisation_plot,
 )
 from rigfem.report.vtu import write_vtu
-from rigfem.rig.rules import rules_for
+from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
 from rigfem.settings import CheckSettings, check_settings
@@ -94,18 +94,6 @@ class CheckScene:
     csv_missing: dict | None = None  #: values stated for columns the reactions CSV lacks
 
 
-def rule_violations(sc: Scene, lk: Linkage) -> list[str]:
-    """The rig rules (rigfem.rig.rules) a rig scene breaks, each with its numbers.
-
-    A rig scene is one built from the rig's catalogue (``masses = "rig"``); the textbook
-    linkages (``masses = "none"``) are not mounted on the rig and have no rig rules.
-    """
-    if sc.raw.get("linkage", {}).get("masses", "rig") != "rig":
-        return []
-    return [f"{r.name}: {r.value:.6g} {r.unit} must be {r.relation} {r.limit:.6g} {r.unit}"
-            for r in rules_for(lk.meta) if not r.ok]
-
-
 def load_check_scene(name: str | Path, overrides: dict | None = None,
                      allow_rule_violations: bool = False) -> CheckScene:
     """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win.
@@ -119,7 +107,8 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
     path = resolve(name)
     sc = load_scene(path)
     lk = loaded_linkage(sc)
-    broken = rule_violations(sc, lk)
+    # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
+    broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
     if broken and not allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
                          f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "

@@ -46,6 +46,21 @@ class Material:
         return lame(self.E, self.nu)
 
 
+#: the Marin factors of a fatigue check (rigfem.verdict.fatigue), here so that the scene schema
+#: names the allowed surfaces and reliabilities without loading any of the verdict or FE code
+#: Marin surface factor k_a = a·Sut^b, Sut in MPa (Shigley Table 6-2)
+SURFACE = {"ground": (1.58, -0.085), "machined": (4.51, -0.265), "cold-drawn": (4.51, -0.265),
+           "hot-rolled": (57.7, -0.718), "as-forged": (272.0, -0.995)}
+
+
+#: Marin reliability factor k_e (Shigley Table 6-5)
+RELIABILITY = {0.5: 1.0, 0.9: 0.897, 0.95: 0.868, 0.99: 0.814, 0.999: 0.753, 0.9999: 0.702}
+
+
+#: Marin load factor k_c; for combined loading assessed by von Mises, k_c = 1 (Shigley §6-14)
+LOADING = {"bending": 1.0, "combined": 1.0, "axial": 0.85, "torsion": 0.59}
+
+
 MATERIALS: dict[str, Material] = {
     "rig_steel": Material("rig_steel", 210000.0, 0.3, 750.0, 7.85e-9),
     "abs": Material("abs", 2200.0, 0.35, 40.0, 1.04e-9),

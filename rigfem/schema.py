@@ -19,8 +19,8 @@ from typing import Annotated, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from rigfem.errors import InputError, plain
+from rigfem.material import RELIABILITY, SURFACE
 from rigfem.settings import FIDELITY, MODELS, MODES
-from rigfem.verdict.fatigue import RELIABILITY, SURFACE
 
 #: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
 MAX_DEPTH = 8

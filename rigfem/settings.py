@@ -17,7 +17,9 @@ Every field is optional::
     surface = "machined"; reliability = 0.9; size_mm = 19.0
 
 The parts of each linkage type, and the joints that load them, are :data:`PARTS`.  Rail
-lengths come from the linkage (``[linkage] rails_mm``), so dynamics and FE use the same rails.
+lengths come from the linkage (``[linkage] rails_mm``), so dynamics and FE use the same rails;
+the chosen parts are resolved against their definitions (rail layouts, kinds) once, here, and
+handed down to the load cases.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from dataclasses import dataclass, field, fields, replace
 
 from rigfem.errors import InputError
 from rigfem.material import Material, get_material, material_from_dict
+from rigfem.rig.layout import RigPart, resolve_parts
 
 
 @dataclass(frozen=True)
@@ -137,6 +140,7 @@ class CheckSettings(Preset):
 
     linkage_type: str
     parts: dict[str, dict]  #: instance name -> spec (see PARTS), only those to check
+    rig: dict[str, RigPart]  #: the same parts resolved against their definitions (geometry/), once
     modes: tuple[str, ...] = MODES
     fidelity: str = "standard"
     material: Material = field(default_factory=lambda: get_material("rig_steel"))
@@ -180,12 +184,12 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     if local > size:
         raise InputError(f"[check].local_size_mm = {local:g} mm must not exceed size_mm = {size:g} mm")
     mat = table.get("material", "rig_steel")
-    material = material_from_dict(mat) if isinstance(mat, dict) else get_material(str(mat))
+    material = get_material(str(mat)) if not isinstance(mat, dict) else material_from_dict(mat)
     fatigue = {"surface": "machined", "reliability": 0.9, "size_mm": 19.0, **table.get("fatigue", {})}
     mesh = {f.name: getattr(chosen_preset, f.name) for f in fields(Preset)}
     mesh.update(size_mm=size, local_size_mm=local, order=int(chosen_preset.order),
                 bearing_directions=int(chosen_preset.bearing_directions))
     return CheckSettings(
-        **mesh, linkage_type=linkage_type, parts=parts, modes=tuple(table.get("modes", MODES)), fidelity=fid,
+        **mesh, linkage_type=linkage_type, parts=parts, rig=resolve_parts(parts, PLATE), modes=tuple(table.get("modes", MODES)), fidelity=fid,
         material=material, load_factor=float(table.get("load_factor", 1.4)),
         limit_factor=float(table.get("limit_factor", 0.5)), fatigue=fatigue)

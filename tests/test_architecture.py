@@ -18,8 +18,9 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.material", "rigfem.settings", "rigfem.geometry"),  # geometry: part files (data)
+    ("rigfem.errors", "rigfem.material", "rigfem.geometry"),  # geometry: part files (data)
     ("rigfem.rig",),
+    ("rigfem.settings",),
     ("rigfem.linkage",),
     ("rigfem.dynamics",),
     ("rigfem.loads",),
@@ -150,10 +151,9 @@ def test_modules_stay_small():
 _HEAVY = ("rigfem.dynamics", "rigfem.fe", "rigfem.mesh", "skfem", "gmsh")
 
 
-#: a scene file's schema names the fatigue vocabulary (rigfem.verdict.fatigue), which takes the
-#: von Mises formula from rigfem.fe.tensors (numpy only): a scene run may load those two, no more
-_SCENE_HEAVY = ("rigfem.dynamics", "rigfem.mesh", "rigfem.fe.model", "rigfem.fe.solver", "rigfem.fe.assembly",
-                "skfem", "gmsh")
+#: a scene file's schema names the fatigue vocabulary (rigfem.material): reading a scene loads
+#: nothing of the verdict, FE or mesh code
+_SCENE_HEAVY = ("rigfem.dynamics", "rigfem.mesh", "rigfem.fe", "rigfem.verdict", "skfem", "gmsh")
 
 
 def _loaded_after(code: str, heavy: tuple[str, ...] = _HEAVY) -> list[str]:

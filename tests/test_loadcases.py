@@ -116,3 +116,29 @@ def test_dynamics_rail_matches_the_meshed_rail():
     crank = h.bodies["crank"]  # the rail's own mass and centre (point masses apart)
     assert crank.com_local_mm[0] == pytest.approx(350.0 - layout.pivot_x)
     assert crank.mass_kg == pytest.approx(0.7 * cat)
+
+
+def test_load_cases_use_the_parts_resolved_once(monkeypatch):
+    """The check's parts are resolved against geometry/ once (``check_settings``); the load cases
+    take them from the settings and look up no part definition or rail layout of their own."""
+    import rigfem.loads.cases
+    import rigfem.rig.layout
+    import rigfem.rig.parts
+    from rigfem.dynamics import peaks, simulate
+    from rigfem.linkage import four_bar
+    from rigfem.loads import part_cases
+    from rigfem.settings import check_settings
+
+    h = simulate(four_bar(540, 840, 780, 1020), samples=8)
+    s = check_settings({"modes": ["original"]}, "four-bar", [700.0, 1000.0, 1000.0])
+    expected = {c.name: c.supports for _, c in part_cases(h, peaks(h), s)}
+
+    def looked_up(*a, **k):
+        raise AssertionError("a load case looked a part up again")
+
+    for mod in (rigfem.rig.parts, rigfem.rig.layout, rigfem.loads.cases):
+        monkeypatch.setattr(mod, "load_part", looked_up, raising=False)
+        monkeypatch.setattr(mod, "rail_layout", looked_up, raising=False)
+    cases = part_cases(h, peaks(h), s)
+    assert {c.name: c.supports for _, c in cases} == expected
+    assert set(expected) == {"crank_rail", "coupler_rail", "rocker_rail", "plate_A", "plate_B", "post_B"}

@@ -31,7 +31,7 @@ import numpy as np
 
 from rigfem.dynamics.history import BodyHistory, ReactionHistory
 from rigfem.errors import InputError
-from rigfem.rig.layout import RailLayout, rail_layout
+from rigfem.rig.layout import RailLayout
 from rigfem.rig.parts import rail_hole_name
 
 #: inertia unit cases: body force -ρ·(a0 + α ẑ×r − ω² r) split into its linear parts
@@ -345,32 +345,29 @@ def cycle_fitting(h: ReactionHistory, fit: Fitting, n_dir: int) -> PartCase:
                            f"its two screws"])
 
 
-def _bar(name: str, spec: dict, h: ReactionHistory, plate: str) -> Bar:
+def _bar(name: str, spec: dict, h: ReactionHistory, layout: RailLayout) -> Bar:
     p, q = h.joints[spec["pivot"]].position_mm, h.joints[spec["far"]].position_mm
     b = float(np.hypot(*(q[0] - p[0]))) if p is not None and q is not None else 0.0
-    return Bar(name, spec["pivot"], spec["far"], spec["part"], float(spec["length"]),
-               rail_layout(spec["part"], float(spec["length"]), plate), b, bool(spec.get("driven")))
+    return Bar(name, spec["pivot"], spec["far"], spec["part"], float(spec["length"]), layout, b,
+               bool(spec.get("driven")))
 
 
 def part_cases(h: ReactionHistory, pk: dict, settings) -> list[tuple[str, PartCase]]:
     """Every (mode, PartCase) a check solves, for the parts and modes of ``settings``.
 
-    ``settings`` is a :class:`rigfem.settings.CheckSettings`; ``pk`` the peaks of ``h``.
+    ``settings`` is a :class:`rigfem.settings.CheckSettings`, its parts resolved (``settings.rig``:
+    layouts, kinds) once; ``pk`` the peaks of ``h``.
     """
-    from rigfem.rig.parts import load_part
-    from rigfem.settings import PLATE
-
     out = []
     for name, spec in settings.parts.items():
+        rig = settings.rig[name]
         for mode in settings.modes:
             if "length" in spec:
-                bar = _bar(name, spec, h, PLATE)
+                bar = _bar(name, spec, h, rig.layout)
                 case = (original_rail(h, pk, bar, settings.load_factor) if mode == "original"
                         else cycle_rail(h, bar, settings.bearing_directions))
             else:
-                bar = _bar(spec["on"], spec["rail"], h, PLATE)
-                kind = load_part(spec["part"]).kind
-                fit = Fitting(name, spec["part"], kind, spec["joint"], bar)
+                fit = Fitting(name, spec["part"], rig.kind, spec["joint"], _bar(spec["on"], spec["rail"], h, rig.layout))
                 case = (original_fitting(h, pk, fit, settings.load_factor) if mode == "original"
                         else cycle_fitting(h, fit, settings.bearing_directions))
             out.append((mode, case))

@@ -49,3 +49,24 @@ def rail_layout(rail: str, length_mm: float, plate: str) -> RailLayout:
     """The layout of rail part ``rail`` cut to ``length_mm``, with couplings of plate ``plate``."""
     r = load_part(rail, {"length": length_mm})
     return RailLayout(rail_hole_x(r), r["pitch"], load_part(plate)["screw_spacing"])
+
+
+@dataclass(frozen=True)
+class RigPart:
+    """One part instance of a linkage resolved against its definition (geometry/), once per check:
+    what its load cases need besides the reactions."""
+
+    part: str  #: part definition name
+    kind: str  #: the definition's kind ("rail", "plate", "iprofile")
+    layout: RailLayout  #: the rail it is, or the rail it is screwed to
+
+
+def resolve_parts(parts: dict[str, dict], plate: str) -> dict[str, RigPart]:
+    """The part instances ``parts`` (name -> spec, as ``rigfem.settings.PARTS``: a rail with its
+    ``length``, a fitting with the spec of its ``rail``) resolved, couplings of plate ``plate``."""
+    out = {}
+    for name, spec in parts.items():
+        rail = spec if "length" in spec else spec["rail"]
+        out[name] = RigPart(spec["part"], load_part(spec["part"]).kind,
+                            rail_layout(rail["part"], float(rail["length"]), plate))
+    return out

@@ -97,3 +97,9 @@ def rules_for(meta: dict) -> list[Rule]:
     if meta.get("type") == "slider-crank":
         return slider_crank_rules(L["b2"], L["b3"], L.get("offset", 0.0))
     return []
+
+
+def broken_rules(meta: dict) -> list[str]:
+    """The rules of a linkage (its ``meta``) that it breaks, each with its numbers."""
+    return [f"{r.name}: {r.value:.6g} {r.unit} must be {r.relation} {r.limit:.6g} {r.unit}"
+            for r in rules_for(meta) if not r.ok]

@@ -9,7 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "criterion": ["Verdict", "LIMIT_FACTOR", "IMBALANCE_TOL", "allowable_stress", "half_ultimate", "overall"],
-        "fatigue": ["SURFACE", "RELIABILITY", "LOADING", "marin_endurance", "goodman"],
+        "fatigue": ["marin_endurance", "goodman"],
         "part": ["verdict_of"],
     },
 )

@@ -6,18 +6,7 @@ import numpy as np
 
 from rigfem.errors import InputError, check_range
 from rigfem.fe.tensors import von_mises
-
-#: Marin surface factor k_a = a·Sut^b, Sut in MPa (Shigley Table 6-2)
-SURFACE = {"ground": (1.58, -0.085), "machined": (4.51, -0.265), "cold-drawn": (4.51, -0.265),
-           "hot-rolled": (57.7, -0.718), "as-forged": (272.0, -0.995)}
-
-
-#: Marin reliability factor k_e (Shigley Table 6-5)
-RELIABILITY = {0.5: 1.0, 0.9: 0.897, 0.95: 0.868, 0.99: 0.814, 0.999: 0.753, 0.9999: 0.702}
-
-
-#: Marin load factor k_c; for combined loading assessed by von Mises, k_c = 1 (Shigley §6-14)
-LOADING = {"bending": 1.0, "combined": 1.0, "axial": 0.85, "torsion": 0.59}
+from rigfem.material import LOADING, RELIABILITY, SURFACE
 
 
 def marin_endurance(sigma_u_mpa: float, surface: str = "machined", size_mm: float = 19.0,
