@@ -2,7 +2,7 @@
 
 A citation is ``NAME.md §N`` (or ``§N-M``), or a Markdown path: ``dir/name.md``, or a bare
 ``NAME.md`` whose name starts with a capital (a document such as the README; lower-case bare
-names are files a command writes, e.g. ``report.md``).  A cited path is resolved from the
+names are files a command writes, e.g. ``report.md``, and so is a ``results/`` path named in code).  A cited path is resolved from the
 repository's top and from the citing file's folder.
 """
 
@@ -35,6 +35,8 @@ def citations(path: pathlib.Path) -> list[tuple[str, pathlib.Path | None, list[i
         ref, stem, a, b = m.groups()
         if a is None and "/" not in ref and not stem[0].isupper():
             continue  # a file a command writes (report.md), not a document
+        if path.suffix == ".py" and ref.startswith("results/"):
+            continue  # code naming the result file it writes, not a document it cites
         doc = next((p for p in (ROOT / ref, path.parent / ref) if p.is_file()), None)
         secs = list(range(int(a), int(b or a) + 1)) if a else []
         out.append((m.group(0), doc, secs))
