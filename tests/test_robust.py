@@ -117,3 +117,45 @@ def test_allow_large_lifts_the_limit(tmp_path, monkeypatch):
     monkeypatch.setenv(ALLOW_LARGE_ENV, "1")
     pm = mesh_part(part, MeshSettings(12.0), use_cache=False, machine_gib=1e-7)
     assert len(pm.tets) > 0 and pm.meta["estimate_tets"] > 0
+
+
+# ----------------------------------------------------------------------------- §4 distributed runs
+def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monkeypatch):
+    import rigfem.studies.sweep as sweep
+    from rigfem.errors import ComputeError
+    from rigfem.studies.sweep_configs import SweepParams
+
+    def no_bases(*a, **k):
+        raise AssertionError("unit solutions built before the scheduler was contacted")
+
+    monkeypatch.setattr(sweep, "build_bases", no_bases)
+    t0 = time.perf_counter()
+    with pytest.raises(ComputeError) as e:
+        sweep.run_sweep(SweepParams(), tmp_path / "work", scheduler="tcp://127.0.0.1:1", progress=False)
+    took = time.perf_counter() - t0
+    print(f"unreachable scheduler refused in {took:.2f} s: {e.value}")
+    assert took < 15.0
+    assert "tcp://127.0.0.1:1" in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:70000", "tcp://127.0.0.1:0", "http://127.0.0.1:8786",
+                                     "tcp://127.0.0.1", "tcp://:8786", "tcp://host name:1"])
+def test_bad_scheduler_address_is_bad_input(tmp_path, monkeypatch, address):
+    import rigfem.studies.sweep as sweep
+    from rigfem.studies.sweep_configs import SweepParams
+
+    monkeypatch.setattr(sweep, "build_bases", lambda *a, **k: pytest.fail("bases built for a bad address"))
+    with pytest.raises(InputError, match="scheduler"):
+        sweep.run_sweep(SweepParams(), tmp_path / "work", scheduler=address, progress=False)
+
+
+@pytest.mark.parametrize("address, code, words", [("tcp://127.0.0.1:70000", 2, "[1, 65535]"),
+                                                  ("tcp://127.0.0.1:1", 3, "cannot reach")])
+def test_sweep_cli_scheduler_exit_codes(tmp_path, address, code, words):
+    t0 = time.perf_counter()
+    r = subprocess.run([*RIGFEM, "sweep", "--scheduler", address, "--out", str(tmp_path / "s"), "--quiet"],
+                       capture_output=True, text=True, env=_env(tmp_path), timeout=120, cwd=tmp_path)
+    took = time.perf_counter() - t0
+    print(f"sweep --scheduler {address}: exit {r.returncode} in {took:.2f} s: {r.stderr.strip()}")
+    assert r.returncode == code and took < 30.0
+    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
