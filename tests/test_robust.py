@@ -159,3 +159,90 @@ def test_sweep_cli_scheduler_exit_codes(tmp_path, address, code, words):
     print(f"sweep --scheduler {address}: exit {r.returncode} in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == code and took < 30.0
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+# ----------------------------------------------------------------------------- §6 the cache environment
+@pytest.fixture
+def fresh_usable():
+    from rigfem.mesh.cache import _usable
+
+    _usable.cache_clear()
+    yield
+    _usable.cache_clear()
+
+
+@pytest.mark.parametrize("where", ["file", "proc"])
+def test_unusable_cache_folder_runs_without_a_cache_and_says_so_once(tmp_path, where):
+    cache = tmp_path / "cache-file" if where == "file" else Path("/proc/rigfem-cache-test")
+    if where == "file":
+        cache.write_text("a user's file\n")
+    r = subprocess.run([*RIGFEM, "mesh", "PF_4b_006", "--size", "12", "--out", str(tmp_path / "p.vtu")],
+                       capture_output=True, text=True, env=_env(tmp_path, RIGFEM_CACHE=str(cache)), timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "running without a cache" in lines[0] and str(cache) in lines[0]
+    assert (tmp_path / "p.vtu").stat().st_size > 0
+    if where == "file":
+        assert cache.read_text() == "a user's file\n"
+
+
+def test_cache_as_file_in_process_warns_once(tmp_path, monkeypatch, caplog, fresh_usable):
+    import logging
+
+    from rigfem.mesh import MeshSettings, mesh_part
+    from rigfem.rig import load_part
+
+    (tmp_path / "c").write_text("x")
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "c"))
+    with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
+        a = mesh_part(load_part("PF_4b_006"), MeshSettings(12.0))
+        b = mesh_part(load_part("PF_4b_006"), MeshSettings(12.0))
+    assert (a.meta["cache"], b.meta["cache"]) == ("miss", "miss")
+    assert len([r for r in caplog.records if "without a cache" in r.getMessage()]) == 1
+
+
+def test_least_recently_used_entries_are_evicted(tmp_path, monkeypatch, fresh_usable):
+    from rigfem.mesh.cache import entries, read_entry, write_entry
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "2.6e-6")  # 2600 bytes: two entries of about 1.1 kB fit
+    blob = lambda d: (d / "x.bin").write_bytes(os.urandom(1000))  # noqa: E731
+    a, b, c = (tmp_path / "meshes" / n for n in "abc")
+    assert write_entry(a, {"n": "a"}, blob) and write_entry(b, {"n": "b"}, blob)
+    now = time.time()
+    os.utime(a / "manifest.json", (now - 100, now - 100))
+    os.utime(b / "manifest.json", (now - 50, now - 50))
+    assert read_entry(a, {"n": "a"}) == a  # a read makes a the most recently used
+    assert write_entry(c, {"n": "c"}, blob)
+    assert a.exists() and c.exists() and not b.exists()
+    assert sum(e[1] for e in entries()) <= 2600
+
+
+def test_bad_cache_limit_is_one_line(tmp_path, monkeypatch, capsys):
+    from rigfem.cli import main
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "-1")
+    assert main(["cache"]) == 2
+    err = capsys.readouterr().err
+    assert "RIGFEM_CACHE_MAX_GB" in err and "-1" in err and len(err.strip().splitlines()) == 1
+
+
+def test_cache_command_shows_and_clears_only_rigfems_entries(tmp_path, monkeypatch, capsys, fresh_usable):
+    from rigfem.cli import main
+    from rigfem.mesh.cache import write_entry
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "1")
+    for kind, n in (("meshes", 2), ("solutions", 1)):
+        for i in range(n):
+            assert write_entry(tmp_path / kind / f"e{i}", {"i": i}, lambda d: (d / "a.bin").write_bytes(b"1" * 5000))
+    (tmp_path / "notes.txt").write_text("mine")
+    assert main(["cache"]) == 0
+    out = capsys.readouterr().out
+    assert str(tmp_path) in out and "meshes: 2 entries" in out and "solutions: 1 entries" in out
+    assert "total 3 entries" in out and "of 1 GB" in out
+    assert main(["cache", "--clear"]) == 0
+    assert "removed 3 entries" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+    assert main(["cache"]) == 0 and "total 0 entries" in capsys.readouterr().out

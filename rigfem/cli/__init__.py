@@ -33,6 +33,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "sweep",
     "show": "show",
     "synthesize": "synthesize",
+    "cache": "cache",
 }
 
 
