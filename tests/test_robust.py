@@ -246,3 +246,50 @@ def test_cache_command_shows_and_clears_only_rigfems_entries(tmp_path, monkeypat
     assert "removed 3 entries" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
     assert main(["cache"]) == 0 and "total 0 entries" in capsys.readouterr().out
+
+
+# ----------------------------------------------------------------------------- §2 whole files
+def test_interrupted_writers_leave_no_half_file(tmp_path, monkeypatch):
+    """A mesh or CSV writer interrupted half-way leaves neither a half-written file nor a
+    temporary one; a user's file of that name keeps its content."""
+    import csv as csv_module
+
+    import meshio
+    import numpy as np
+
+    from rigfem.dynamics.cycle import simulate
+    from rigfem.io.reactions_csv import write_csv
+    from rigfem.linkage.mechanisms import four_bar
+    from rigfem.mesh.partmesh import PartMesh, write_mesh
+
+    pm = PartMesh("t", np.eye(4, 3) + [[0, 0, 0]] * 4, np.array([[0, 1, 2, 3]]), {}, {}, {}, {})
+    target = tmp_path / "m.vtu"
+    target.write_text("a user's file")
+
+    def half(self, path, *a, **k):
+        Path(path).write_text("half")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(meshio.Mesh, "write", half)
+    with pytest.raises(KeyboardInterrupt):
+        write_mesh(pm, target)
+    assert target.read_text() == "a user's file" and sorted(p.name for p in tmp_path.iterdir()) == ["m.vtu"]
+
+    h = simulate(four_bar(480, 840, 780, 1020), samples=36)
+    rows = {"n": 0}
+    real = csv_module.writer
+
+    class Stop:
+        def __init__(self, fh):
+            self.w = real(fh)
+
+        def writerow(self, row):
+            rows["n"] += 1
+            if rows["n"] > 5:
+                raise KeyboardInterrupt
+            self.w.writerow(row)
+
+    monkeypatch.setattr(csv_module, "writer", Stop)
+    with pytest.raises(KeyboardInterrupt):
+        write_csv(h, tmp_path / "r.csv")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.vtu"]
