@@ -261,6 +261,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
 
     from rigfem.errors import check_range
     from rigfem.mesh.worker import call
+    from rigfem.settings import allow_large
 
     check_range("size_mm", settings.size_mm, 0.0, None, "mm", lo_open=True)
     check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
@@ -277,7 +278,8 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         pm = load_npz(folder / "mesh.npz")
         pm.meta["cache"] = "hit"
         return pm
-    pm = call(_mesh, part, settings, machine_gib, key)
+    limit = float("inf") if allow_large() else machine_gib  # the child may not share our environment
+    pm = call(_mesh, part, settings, limit, key)
     if use_cache:
         write_entry(folder, inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm

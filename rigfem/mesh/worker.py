@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import multiprocessing as mp
 import signal
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -43,6 +44,19 @@ def _child(conn, fn: Callable, args: tuple) -> None:
     conn.close()
 
 
+def _start(proc) -> None:
+    """Start ``proc`` without running the caller's script again in it: multiprocessing imports
+    the main script in a child, and a script calling rigfem without a ``__main__`` guard would
+    then run twice."""
+    main = sys.modules["__main__"]
+    path = main.__dict__.pop("__file__", None)
+    try:
+        proc.start()
+    finally:
+        if path is not None:
+            main.__file__ = path
+
+
 def call(fn: Callable, *args: Any) -> Any:
     """``fn(*args)`` in a child process; its exception is raised here.  KeyboardInterrupt or any
     exception raised in the parent while it waits (a signal handler's) kills the child first.
@@ -52,7 +66,7 @@ def call(fn: Callable, *args: Any) -> Any:
     ctx = _context()
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(send, fn, args), daemon=True, name="rigfem-mesher")
-    proc.start()
+    _start(proc)
     send.close()
     try:
         while not recv.poll(POLL_S):
