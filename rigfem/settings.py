@@ -25,11 +25,21 @@ handed down to the load cases.
 from __future__ import annotations
 
 import difflib
+import os
 from dataclasses import dataclass, field, fields, replace
 
 from rigfem.errors import InputError
 from rigfem.material import Material, get_material, material_from_dict
 from rigfem.rig.layout import RigPart, resolve_parts
+
+
+#: environment variable that lifts rigfem's cost limits (set by ``rigfem --allow-large``)
+ALLOW_LARGE_ENV = "RIGFEM_ALLOW_LARGE"
+
+
+def allow_large() -> bool:
+    """True when the user lifted the cost limits (memory and size estimates refuse nothing)."""
+    return os.environ.get(ALLOW_LARGE_ENV, "") not in ("", "0")
 
 
 @dataclass(frozen=True)

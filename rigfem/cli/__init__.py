@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 import traceback
 
 from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, TABLE, TERMINATED, table
 from rigfem.errors import ComputeError, InputError
+from rigfem.settings import ALLOW_LARGE_ENV
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
 COMMANDS: dict[str, str] = {
@@ -31,6 +33,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "sweep",
     "show": "show",
     "synthesize": "synthesize",
+    "cache": "cache",
 }
 
 
@@ -52,6 +55,8 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser = _Parser(prog="rigfem", description="Stress checker for the configurable-bar linkage rig.",
                      epilog=TABLE)
     parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
+    parser.add_argument("--allow-large", action="store_true",
+                        help="run jobs whose cost estimate exceeds the machine's memory or a documented limit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
     for name, mod in _available(words[0] if words else None).items():
@@ -75,6 +80,8 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return BAD_INPUT
+    if args.allow_large:  # read below the CLI (rigfem.settings.allow_large), also by child processes
+        os.environ[ALLOW_LARGE_ENV] = "1"
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return int(args._run(args) or 0)

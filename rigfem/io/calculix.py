@@ -29,7 +29,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError, check_range
-from rigfem.mesh.partmesh import face_owners
+from rigfem.mesh.partmesh import face_owners, whole_file
 
 #: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
 _FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}
@@ -198,7 +198,8 @@ def write_inp(path: str | os.PathLike, nodes: np.ndarray, elements: np.ndarray, 
             out.append(f"*DLOAD\nEALL,GRAV,{gn:.14g},{g[0] / gn:.14g},{g[1] / gn:.14g},{g[2] / gn:.14g}\n")
         out.append("*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n")
     path = Path(path)
-    path.write_text("".join(out))
+    with whole_file(path) as tmp:
+        tmp.write_text("".join(out))
     return path
 
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
 from rigfem.errors import InputError
+from rigfem.mesh.partmesh import whole_file
 
 # ----------------------------------------------------------------------------- CSV
 _TORQUE_COLS = ("torque_Nm", "torque", "M2", "driver")
@@ -28,7 +29,7 @@ def write_csv(h: ReactionHistory, path: str | Path) -> None:
     names = list(h.joints)
     unit = h.meta.get("driver_unit", "N·m")
     tcol = "torque_Nm" if unit == "N·m" else "driver_force_N"
-    with open(path, "w", newline="") as fh:
+    with whole_file(path) as tmp, open(tmp, "w", newline="") as fh:
         for n in names:
             j = h.joints[n]
             fh.write(f"# joint {n}: force by {j.body_a} on {j.body_b}\n")

@@ -8,6 +8,11 @@ made from other inputs, is removed and logged once (``logging`` channel ``rigfem
 the caller computes it again.  Entries are written to a temporary folder and renamed into
 place, so a reader never sees half an entry.  Caches live under ``$RIGFEM_CACHE`` (default
 ``~/.cache/rigfem``), outside the repository.
+
+A cache folder that is a file, cannot be written or is full is not used: rigfem runs without a
+cache and says so once.  The cache holds at most ``$RIGFEM_CACHE_MAX_GB`` GB (default 5): a
+read touches the entry's manifest, and after a write the least recently used entries are
+removed until the cache fits.
 """
 
 from __future__ import annotations
@@ -27,11 +32,93 @@ import numpy as np
 #: the channel a discarded entry is reported on
 log = logging.getLogger("rigfem.cache")
 MANIFEST = "manifest.json"
+#: environment variable of the cache's size limit, GB (10^9 bytes), and its default
+MAX_GB_ENV, DEFAULT_MAX_GB = "RIGFEM_CACHE_MAX_GB", 5.0
+#: free space below which the cache folder counts as full, bytes
+MIN_FREE = 64 * 2**20
 
 
 def cache_dir() -> Path:
     """Folder of rigfem's caches: $RIGFEM_CACHE or ~/.cache/rigfem (outside the repository)."""
     return Path(os.environ.get("RIGFEM_CACHE") or Path.home() / ".cache" / "rigfem")
+
+
+def max_bytes() -> int:
+    """The cache's size limit, bytes, from ``$RIGFEM_CACHE_MAX_GB`` (InputError if not a number > 0)."""
+    from rigfem.errors import check_range
+
+    raw = os.environ.get(MAX_GB_ENV) or DEFAULT_MAX_GB
+    return int(check_range(MAX_GB_ENV, raw, 0.0, 1e6, "GB", lo_open=True) * 1e9)
+
+
+def usable() -> bool:
+    """Whether the cache folder can be used; if not, why is logged once (rigfem runs without it)."""
+    return _usable(str(cache_dir()))
+
+
+@functools.lru_cache(maxsize=None)
+def _usable(path: str) -> bool:
+    root = Path(path)
+    why = ""
+    if root.exists() and not root.is_dir():
+        why = "it is a file"
+    else:
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+            fd, probe = tempfile.mkstemp(prefix=".probe-", dir=root)
+            os.close(fd)
+            os.unlink(probe)
+            if shutil.disk_usage(root).free < MIN_FREE:
+                why = f"less than {MIN_FREE // 2**20} MiB free"
+        except OSError as exc:
+            why = f"cannot write there: {exc.strerror or type(exc).__name__}"
+    if why:
+        log.warning("cache folder %s (RIGFEM_CACHE) not usable (%s); running without a cache", path, why)
+    return not why
+
+
+def _in_cache(folder: Path) -> bool:
+    return Path(folder).is_relative_to(cache_dir())
+
+
+def entries(root: Path | None = None) -> list[tuple[Path, int, float]]:
+    """Every entry under the cache folder: (folder, bytes, last use as a timestamp), oldest first."""
+    out = []
+    for man in Path(root or cache_dir()).rglob(MANIFEST):
+        try:
+            files = [f for f in man.parent.iterdir() if f.is_file()]
+            out.append((man.parent, sum(f.stat().st_size for f in files), man.stat().st_mtime))
+        except OSError:
+            continue
+    return sorted(out, key=lambda e: e[2])
+
+
+def evict(keep: Path | None = None) -> list[Path]:
+    """Remove the least recently used entries until the cache fits :func:`max_bytes`; never ``keep``."""
+    limit, found = max_bytes(), entries()
+    total, removed = sum(e[1] for e in found), []
+    for folder, size, _ in found:
+        if total <= limit:
+            break
+        if folder != keep:
+            shutil.rmtree(folder, ignore_errors=True)
+            total -= size
+            removed.append(folder)
+    return removed
+
+
+def clear() -> tuple[int, int]:
+    """Remove every entry rigfem made under the cache folder (folders with a manifest), and the
+    kind folders left empty; anything else stays.  Returns (entries, bytes) removed."""
+    found = entries()
+    for folder, _, _ in found:
+        shutil.rmtree(folder, ignore_errors=True)
+    for kind in {f.parent for f, _, _ in found}:
+        try:
+            kind.rmdir()
+        except OSError:
+            pass
+    return len(found), sum(e[1] for e in found)
 
 
 @functools.lru_cache(maxsize=None)
@@ -73,8 +160,8 @@ def discard(folder: Path, why: str) -> None:
 
 def read_entry(folder: Path, inputs: dict) -> Path | None:
     """``folder`` if it holds a verified entry of ``inputs``; None if it is missing or was bad
-    (then it is removed and logged)."""
-    if not folder.exists():
+    (then it is removed and logged).  A hit under the cache folder marks the entry as used."""
+    if _in_cache(folder) and not usable() or not folder.exists():
         return None
     try:
         man = json.loads((folder / MANIFEST).read_text())
@@ -89,24 +176,41 @@ def read_entry(folder: Path, inputs: dict) -> Path | None:
                 return discard(folder, f"{name} does not match its checksum")
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
         return discard(folder, f"unreadable manifest: {type(e).__name__}")
+    if _in_cache(folder):
+        try:
+            os.utime(folder / MANIFEST)  # least recently used goes first
+        except OSError:
+            pass
     return folder
 
 
 def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bool:
     """Store an entry: ``write(tmp)`` makes its files in a temporary folder, the manifest is
     added, and the folder is renamed to ``folder``.  False if it could not be stored (a full
-    disk, or a concurrent writer got there first): a cache is an optimisation only."""
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}-", dir=folder.parent))
+    disk, an unusable cache folder, or a concurrent writer got there first): a cache is an
+    optimisation only.  Under the cache folder, older entries are then evicted to fit its limit."""
+    cached = _in_cache(folder)
+    if cached and not usable():
+        return False
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}-", dir=folder.parent))
+    except OSError:
+        return False
     try:
         write(tmp)
         files = {p.name: _sha256(p) for p in sorted(tmp.iterdir())}
         (tmp / MANIFEST).write_text(json.dumps({"inputs": _canonical(inputs), "files": files}))
         os.replace(tmp, folder)
-        return True
     except OSError:
         shutil.rmtree(tmp, ignore_errors=True)
         return False
+    except BaseException:  # interrupted: no half entry left behind
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if cached:
+        evict(keep=folder)
+    return True
 
 
 def save_arrays(folder: Path, arrays: dict[str, np.ndarray]) -> None:

@@ -30,6 +30,11 @@ MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
 TETS_PER_H3 = 8.4
 
 
+#: tets gmsh makes per second, second-order step included, on one core (the draft 1000 mm rail:
+#: 26.5k tets in 11-16 s on a busy 2-core machine)
+TETS_PER_S = 2000.0
+
+
 #: curved surfaces get CURVATURE_MM / size elements per 2*pi (gmsh Mesh.MeshSizeFromCurvature):
 #: 6 at the draft 8 mm, 8 at the standard 6 mm, 12 at the fine 4 mm
 CURVATURE_MM = 48.0
@@ -52,6 +57,11 @@ class Estimate:
     tets: int
     gmsh_bytes: float  #: peak memory of gmsh while meshing
     solve_bytes: float  #: memory of a direct P2 solve on the mesh (3 DOF per node)
+
+    @property
+    def seconds(self) -> float:
+        """Wall time of meshing (linear tets, second order and its smoothing), s."""
+        return self.tets / TETS_PER_S
 
     @property
     def gib(self) -> float:
@@ -214,22 +224,52 @@ def _threshold(tags: list[int], near_mm: float, s: MeshSettings) -> int:
     return th
 
 
+def estimate_part(part, s: MeshSettings) -> Estimate | None:
+    """The estimate from the part's dimensions and the mesh settings, before gmsh builds
+    anything: its envelope's volume at the global size (refinement comes on top, so a lower
+    bound on the tets and a cheap first guard); None for a custom part (known only once read)."""
+    from rigfem.rig.parts import envelope_mm3
+
+    volume = envelope_mm3(part)
+    return None if volume is None else estimate(estimate_tets(volume, 0.0, s))
+
+
+def check_estimate(est: Estimate, s: MeshSettings, machine_gib: float, what: str = "would give") -> None:
+    """Refuse (InputError, one line) a mesh whose estimate exceeds ``machine_gib``, unless the
+    user lifted the limit (``rigfem --allow-large``)."""
+    from rigfem.errors import InputError
+    from rigfem.settings import allow_large
+
+    if est.gib > machine_gib and not allow_large():
+        raise InputError(f"size_mm = {s.size_mm:g} mm (local_size_mm = {s.near_mm:g} mm) "
+                         f"{what} about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
+                         f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB) "
+                         f"and about {est.seconds:.3g} s of meshing, more than the machine's {machine_gib:g} GiB: "
+                         f"increase size_mm (--size), or pass rigfem --allow-large")
+
+
 def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
               machine_gib: float = MACHINE_GIB) -> PartMesh:
     """Mesh a part (``rigfem.rig.parts.PartDef``) with linear tets; cached by content hash.
 
-    Refuses (InputError) a request whose estimate exceeds ``machine_gib`` and a mesh whose
-    minimum minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.
+    Refuses (InputError) a request whose estimate exceeds ``machine_gib`` (from the part's
+    dimensions before gmsh starts, then from the built geometry) and a mesh whose minimum
+    minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.  gmsh runs
+    in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once.
     """
     import gmsh
 
-    from rigfem.errors import InputError, check_range
-    from rigfem.mesh.geometry import build, gmsh_session
+    from rigfem.errors import check_range
+    from rigfem.mesh.worker import call
+    from rigfem.settings import allow_large
 
     check_range("size_mm", settings.size_mm, 0.0, None, "mm", lo_open=True)
     check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
     check_range("refine_dist_mm", settings.dist_mm, 0.0, None, "mm", lo_open=True)
     check_range("min_quality", settings.min_quality, 0.0, 1.0)
+    first = estimate_part(part, settings)
+    if first is not None:
+        check_estimate(first, settings, machine_gib, "would give at least")
     inputs = {"part": part.name, "geometry": part.content_hash(), "settings": settings.key(),
               "gmsh": gmsh.__version__, "code": code_hash(*MESH_CODE)}
     key = entry_key(inputs)
@@ -238,6 +278,20 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         pm = load_npz(folder / "mesh.npz")
         pm.meta["cache"] = "hit"
         return pm
+    limit = float("inf") if allow_large() else machine_gib  # the child may not share our environment
+    pm = call(_mesh, part, settings, limit, key)
+    if use_cache:
+        write_entry(folder, inputs, lambda d: save_npz(pm, d / "mesh.npz"))
+    return pm
+
+
+def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMesh:
+    """The gmsh work of :func:`mesh_part` (run in the mesher process)."""
+    import gmsh
+
+    from rigfem.errors import InputError
+    from rigfem.mesh.geometry import build, gmsh_session
+
     t0 = time.perf_counter()
     with gmsh_session(part.name):
         gmsh.option.setNumber("General.NumThreads", 1)
@@ -251,11 +305,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
                                   for names in (settings.refine + settings.concentrate, settings.concentrate))
         est = _estimate_model(refine_tags, conc_tags, settings)
         curved = _curved_groups(groups, settings)
-        if est.gib > machine_gib:
-            raise InputError(f"size_mm = {settings.size_mm:g} mm (local_size_mm = {settings.near_mm:g} mm) "
-                             f"would give about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
-                             f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB), "
-                             f"more than the machine's {machine_gib:g} GiB: increase size_mm (--size)")
+        check_estimate(est, settings, machine_gib)
         _set_fields(refine_tags, conc_tags, settings)
         gmsh.model.mesh.generate(3)
         q = _quality()
@@ -283,8 +333,6 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
             "density": part.density, "settings": settings.key(), "hash": key,
             "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
-    if use_cache:
-        write_entry(folder, inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm
 
 

@@ -13,7 +13,8 @@ linear tets, one thread so identical input gives an identical mesh): a global ``
 Distance/Threshold field that grades down to ``local_size_mm`` at the surface groups that carry
 load (``MeshSettings.refine``), coarse elsewhere.  Before meshing it estimates the element count
 and the memory of the mesh and of a direct P2 solve on it and refuses requests above the
-machine (24 GiB); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
+machine (24 GiB), first from the part's dimensions before gmsh starts; gmsh runs in a child
+process that a signal ends at once (:mod:`rigfem.mesh.worker`); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
 refuses a mesh below ``min_quality``; then makes the mesh second order (:func:`second_order`).
 Results are cached as .npz in verified cache entries (:mod:`rigfem.mesh.cache`), keyed by the
 part definition, the settings, the gmsh version and the meshing code.
@@ -23,8 +24,10 @@ tetra10).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,6 +68,20 @@ def quality_summary(q: np.ndarray) -> dict[str, float]:
             "p05": float(np.percentile(q, 5)), "median": float(np.median(q))}
 
 
+@contextlib.contextmanager
+def whole_file(path: str | Path) -> Iterator[Path]:
+    """A temporary name beside ``path`` (same suffix, so writers pick the format from it) that is
+    renamed to ``path`` when the block completes and removed if it fails or is interrupted:
+    every file rigfem writes is whole or absent, never half-written."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def save_npz(pm: PartMesh, path: Path) -> None:
     """Store a PartMesh as .npz (atomic: written to a temporary name, then renamed)."""
     arrays = {"points": pm.points, "tets": pm.tets, "curved_edges": pm.curved_edges,
@@ -74,9 +91,8 @@ def save_npz(pm: PartMesh, path: Path) -> None:
                for k, h in pm.holes.items()}
     arrays["json"] = np.array(json.dumps({"name": pm.name, "quality": pm.quality, "meta": pm.meta}))
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
+    with whole_file(path) as tmp:
+        np.savez_compressed(tmp, **arrays)
 
 
 def load_npz(path: Path) -> PartMesh:
@@ -199,7 +215,8 @@ def write_mesh(pm: PartMesh, path: str | Path, order: int = 1) -> None:
     if suffix not in (".vtu", ".msh"):
         raise InputError(f"--out {path}: file type must be .vtu or .msh")
     mesh = to_meshio(pm, order)
-    if suffix == ".msh":
-        mesh.write(path, file_format="gmsh22", binary=False)
-    else:
-        mesh.write(path)
+    with whole_file(path) as tmp:
+        if suffix == ".msh":
+            mesh.write(tmp, file_format="gmsh22", binary=False)
+        else:
+            mesh.write(tmp, file_format="vtu")

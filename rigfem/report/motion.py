@@ -10,6 +10,7 @@ import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from rigfem.linkage.kinematics import Motion
+from rigfem.mesh.partmesh import whole_file
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 matplotlib.use("Agg")
@@ -58,7 +59,8 @@ def motion_plot(m: Motion, path: str | Path, title: str) -> Path:
     axs[0, 0].legend(loc="best", fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=90)
     plt.close(fig)
     return Path(path)
 
@@ -138,6 +140,7 @@ def structural_error_plot(gen: dict, res: dict, path: str | Path) -> Path:
     L = res["lengths"]
     fig.suptitle(f"Four-bar function generator: a={L['a']:.4g}, b={L['b']:.4g}, c={L['c']:.4g}, d={L['d']:.4g}")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=90)
     plt.close(fig)
     return Path(path)

@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from rigfem.fe.partcase import CaseResult
-from rigfem.mesh.partmesh import boundary_faces
+from rigfem.mesh.partmesh import boundary_faces, whole_file
 
 matplotlib.use("Agg")
 
@@ -51,7 +51,8 @@ def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path
     ax.set_title(f"close-up ±{zoom_mm:g} mm around the peak {values[peak]:.1f} MPa (×)", fontsize=9)
     fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, label=label)
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return path
 
@@ -74,7 +75,8 @@ def reactions_plot(h, path: str | Path) -> None:
     a1.set_title(f"{h.meta.get('type', 'linkage')} ({lengths} mm), {h.meta.get('model', '')} dynamics: "
                  f"pin reactions and driver over one crank turn", fontsize="small")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
 
 
@@ -92,7 +94,8 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path, allowable: 
     ax.grid(alpha=0.3)
     ax.set_title("peak von Mises stress per part over the crank cycle (cycle mode)", fontsize=13)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -116,7 +119,8 @@ def utilisation_plot(r: CaseResult, limit: float, path: str | Path, label: str, 
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    with whole_file(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return path
 

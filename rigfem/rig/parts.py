@@ -181,6 +181,18 @@ def _need(cond: bool, msg: str) -> None:
         raise InputError(msg)
 
 
+def envelope_mm3(part: PartDef) -> float | None:
+    """Volume of the box (plate: cylinder) that encloses the part, mm^3, from its dimensions
+    alone: what a mesh will cost is known before any geometry is built.  None for a custom part."""
+    if part.kind == "rail":
+        return part["length"] * part["width"] * part["height"]
+    if part.kind == "iprofile":
+        return part["length"] * part["flange_width"] * part["height"]
+    if part.kind == "plate":
+        return math.pi / 4 * part["diameter"] ** 2 * max(part["thickness"], part["seat_width"])
+    return None
+
+
 def rail_hole_x(part: PartDef) -> np.ndarray:
     """x of every mounting hole of a rail, mm: first_offset + i*pitch up to L - first_offset."""
     L, a, p = part["length"], part["first_offset"], part["pitch"]

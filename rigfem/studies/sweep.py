@@ -26,6 +26,8 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import re
+import socket
 import tempfile
 import time
 from pathlib import Path
@@ -177,6 +179,8 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     t0 = time.perf_counter()
     check_range("chunk_size", chunk_size, 1, 100_000)
     check_range("workers", workers, 1, 256)
+    if scheduler is not None and distributed is not False:
+        reach_scheduler(scheduler)  # in seconds, before the unit solutions are built
     configs = enumerate_configs(p) if configs is None else configs
     tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
     key = p.key()
@@ -213,6 +217,33 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     table = table[_column_order(list(table.columns), p)]
     table.attrs["compute_seconds"] = spent or None
     return table
+
+
+#: seconds a scheduler has to accept a connection before the sweep gives up
+CONNECT_TIMEOUT_S = 5.0
+
+
+def check_scheduler(address: str) -> tuple[str, int]:
+    """Host and port of a ``tcp://HOST:PORT`` scheduler address; InputError otherwise (port 1-65535)."""
+    m = re.fullmatch(r"tcp://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):([0-9]{1,10})", str(address))
+    if not m:
+        raise InputError(f"--scheduler = {str(address)[:120]!r} must be tcp://HOST:PORT (e.g. tcp://127.0.0.1:8786)")
+    port = int(m.group(2))
+    if not 1 <= port <= 65535:
+        raise InputError(f"--scheduler port = {port} is outside the allowed range [1, 65535]")
+    return m.group(1).strip("[]"), port
+
+
+def reach_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Connect to the scheduler once, within ``timeout`` s, before any heavy work: ComputeError
+    (one line) if nothing answers there."""
+    host, port = check_scheduler(address)
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        why = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or type(exc).__name__)
+        raise ComputeError(f"cannot reach the Dask scheduler at {address}: {why} (waited at most "
+                           f"{timeout:g} s); start it or fix --scheduler") from None
 
 
 class _Mapped(np.memmap):
@@ -253,7 +284,8 @@ def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> Non
         local = (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                               dashboard_address=None) if scheduler is None else nullcontext())
     maps = tempfile.TemporaryDirectory(prefix="rigfem-bases-") if scheduler is None else nullcontext()
-    with maps as folder, local as cluster, Client(scheduler or cluster) as client:  # the client closes first
+    timeout = CONNECT_TIMEOUT_S if scheduler else None
+    with maps as folder, local as cluster, Client(scheduler or cluster, timeout=timeout) as client:  # the client closes first
         if folder is not None:  # same machine: the workers map one copy of the unit fields
             bases = _map_bases(bases, Path(folder))
         [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
