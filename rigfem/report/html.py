@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from rigfem.report.document import MODE_TEXT, allowable_label, study_tables
-from rigfem.report.pages import json_script, markdown_html, png_uri, render_page
+from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
 
 __all__ = ["render_html", "write_html"]
@@ -23,7 +23,9 @@ def render_html(report: dict, folder: str | Path) -> str:
     r = report
     files = list(r.get("files", [])) + list(r.get("field_files", []))
     names = list(dict.fromkeys(p["name"] for p in r["parts"]))
-    pictures = {f: png_uri(folder / f) for f in ["reactions.png", "peak_von_mises.png"]
+    # pictures by relative name: they sit beside the page (embedding two dozen 1600 x 1000 PNGs made a
+    # 12 MB page); the 3-D view's data stays embedded, so the folder works offline as it is
+    pictures = {f: f if (folder / f).is_file() else None for f in ["reactions.png", "peak_von_mises.png"]
                 + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor")]}
     # link only files that are in the folder (a committed report may come without its VTU files)
     present = [f for f in files if (folder / f).is_file() and f != "report.html"]
