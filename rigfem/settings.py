@@ -28,6 +28,9 @@ from dataclasses import dataclass, field, fields, replace
 from rigfem.errors import InputError
 from rigfem.material import Material, get_material, material_from_dict
 
+#: the scene every command that takes a configuration runs by default (check, reactions, kinematics, ...)
+REFERENCE_SCENE = "final-cm"
+
 
 @dataclass(frozen=True)
 class MeshSettings:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
+from rigfem.cli.outputs import check_place
 from rigfem.errors import plain
 from rigfem.scene import builtin_scenes
 
@@ -83,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
             data = tomllib.loads(path.read_text())
             print(f"{name:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
         return 0
+    if args.out is not None:
+        check_place("--out", args.out, folder=True)
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
                        allow_rule_violations=args.allow_rule_violations)

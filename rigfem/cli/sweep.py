@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from pathlib import Path
 
 HELP = "sweep every mountable four-bar or slider-crank configuration of the rig (table, maps, worst list)"
 
@@ -28,11 +27,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                    help="local Dask worker processes (default: CPU count; 1 = serial, no cluster)")
     p.add_argument("--chunk-size", type=int, default=64, help="configurations per stored chunk (default 64)")
-    p.add_argument("--out", default="results/sweep", help="output folder (default results/sweep)")
+    p.add_argument("--out", default="results/sweep", help="output folder: a new one, or with --force one rigfem "
+                                                          "wrote (its stored chunks are reused)")
+    p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.cli.outputs import mark_folder, new_folder, wrote
+
+    out = new_folder("--out", args.out, args.force)   # before the heavy imports and any computation
     from rigfem.errors import InputError
     from rigfem.studies.sweep import run_sweep
     from rigfem.studies.sweep_configs import SweepParams
@@ -42,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--scheduler = {args.scheduler!r} must be tcp://HOST:PORT")
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
-    out = Path(args.out)
+    mark_folder(out)
     table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
                       scheduler=args.scheduler, progress=not args.quiet)
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
@@ -50,4 +54,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "
           f"{int((ok['verdict'] == 'fail').sum())} fail; wrote {', '.join(str(out / f) for f in files)}",
           file=sys.stdout)
+    wrote(out)
     return 0
