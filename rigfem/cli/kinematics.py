@@ -26,6 +26,8 @@ from rigfem.linkage.mechanisms import build, crank_angles, four_bar, slider_cran
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "motion printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -161,6 +163,10 @@ def format_table(res: dict, max_rows: int = 24) -> str:
     out = [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
            + (f"  branch={res['branch']}" if res.get("branch") else "")
            + f"   crank omega={res['omega_rad_s']:g} rad/s alpha={res['alpha_rad_s2']:g} rad/s²  ({res['method']})"]
+    mu = res.get("transmission_angle_deg")
+    if mu and not mu["within_band"] and not res["textbook"]:
+        out.append(f"WARNING: breaks rig rule transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, "
+                   f"allowed {mu['rig_band'][0]:g} < mu < {mu['rig_band'][1]:g} deg")
     if res["textbook"]:
         out.append("textbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     t = res["turn"]

@@ -21,6 +21,8 @@ from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.report.pictures import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "table printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -76,6 +78,9 @@ def format_table(res: dict) -> str:
     L = res["lengths_mm"] or {}
     out.append(f"{res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
                f"   model={res['model']}  speed={res['speed_hz']:g} Hz  samples={res['samples']}")
+    if not res.get("textbook"):
+        out += [f"WARNING: breaks rig rule {r['name']}: {r['value']:.4g} {r['relation']} {r['limit']:.4g}"
+                for r in res["rules"] if not r["ok"]]
     if res.get("textbook"):
         out.append("\ntextbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     elif res["rules"]:

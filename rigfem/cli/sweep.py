@@ -7,6 +7,8 @@ import os
 import sys
 
 HELP = "sweep every mountable four-bar or slider-crank configuration of the rig (table, maps, worst list)"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "sweep written (a configuration that fails is a row of the table, not an exit code)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -20,6 +20,9 @@ from rigfem.settings import FIDELITY
 
 HELP = ("design a linkage: a four-bar generating a function or a coupler-point motion, and with --rig "
         "the nearest buildable rig configurations, checked")
+#: the meaning of exit codes 0 and 1
+SUCCESS = ("linkage found (with --rig and stress: a listed configuration passes), 1 no listed configuration "
+           "passes or the generated function is far beyond useful accuracy")
 
 
 def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:

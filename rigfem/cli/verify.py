@@ -20,6 +20,8 @@ from rigfem.errors import InputError, check_range
 from rigfem.studies.verify import verify_scene
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
+#: the meaning of exit codes 0 and 1
+SUCCESS = "every case agrees within the tolerances, 1 a case does not"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
