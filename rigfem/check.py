@@ -60,12 +60,9 @@ from rigfem.report.vtu import write_vtu
 from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
-from rigfem.settings import CheckSettings, check_settings
+from rigfem.settings import REFERENCE_SCENE, CheckSettings, check_settings
 from rigfem.verdict.criterion import allowable_stress, overall
 from rigfem.verdict.part import verdict_of
-
-#: the built-in reference scene ``rigfem check`` runs with no argument
-REFERENCE_SCENE = "final-cm"
 
 
 #: a reaction history whose joint forces (N) and driver load (N·m or N) all stay below this loads

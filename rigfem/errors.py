@@ -45,3 +45,32 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
             or (hi is not None and v > hi)):
         raise InputError(f"{name} = {value!r}{u} is outside the allowed range {bracket}{lo_s}, {hi_s}]{u}")
     return v
+
+
+_BOMS = ((b"\xef\xbb\xbf", "utf-8"), (b"\xff\xfe", "utf-16-le"), (b"\xfe\xff", "utf-16-be"))
+
+
+def decode_text(blob: bytes, what: str) -> str:
+    """Text of a file as other programs write it: UTF-8 with or without BOM (Excel CSV), UTF-16
+    with BOM or without (Windows tools), CRLF or CR line ends (read as LF); InputError naming
+    ``what`` for real binary (NUL or control bytes) or text in another encoding."""
+    enc, body = "utf-8", blob
+    for bom, name in _BOMS:
+        if blob.startswith(bom):
+            enc, body = name, blob[len(bom):]
+            break
+    else:
+        if len(blob) >= 4 and blob[1::2].count(0) > 0.9 * (len(blob) // 2) and blob[0::2].count(0) == 0:
+            enc = "utf-16-le"
+        elif len(blob) >= 4 and blob[0::2].count(0) > 0.9 * (len(blob) // 2) and blob[1::2].count(0) == 0:
+            enc = "utf-16-be"
+    try:
+        text = body.decode(enc)
+    except UnicodeDecodeError as exc:
+        if b"\x00" in blob:
+            raise InputError(f"{what} is a binary file, not text") from None
+        raise InputError(f"{what} is not UTF-8 or UTF-16 text (byte {exc.start}); save it as UTF-8") from None
+    if any(ch in text for ch in "\x00\x01\x02\x03\x04\x05\x06\x07\x08\x0e\x0f\x10\x11\x12\x13\x14\x15\x16\x17"
+                                "\x18\x19\x1a\x1b\x1c\x1d\x1e\x1f\x7f"):
+        raise InputError(f"{what} is a binary file, not text")
+    return text.replace("\r\n", "\n").replace("\r", "\n")

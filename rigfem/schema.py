@@ -18,7 +18,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from rigfem.errors import InputError, plain
+from rigfem.errors import InputError, decode_text, plain
 from rigfem.material import RELIABILITY, SURFACE
 from rigfem.settings import FIDELITY, MODELS, MODES
 
@@ -289,12 +289,7 @@ def read_toml(path: Path) -> dict:
         raise InputError(f"scene {name!r} cannot be read: {plain(exc.strerror or exc, 80)}") from None
     if len(blob) > MAX_BYTES:
         raise InputError(f"scene {name!r} is {len(blob)} bytes; a scene file is at most {MAX_BYTES} bytes")
-    if b"\x00" in blob:
-        raise InputError(f"scene {name!r} is a binary file, not a TOML text file")
-    try:
-        text = blob.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"scene {name!r} is not UTF-8 text (byte {exc.start}); save it as UTF-8 TOML") from None
+    text = decode_text(blob, f"scene {name!r}")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

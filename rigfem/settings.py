@@ -41,6 +41,9 @@ def allow_large() -> bool:
     """True when the user lifted the cost limits (memory and size estimates refuse nothing)."""
     return os.environ.get(ALLOW_LARGE_ENV, "") not in ("", "0")
 
+#: the scene every command that takes a configuration runs by default (check, reactions, kinematics, ...)
+REFERENCE_SCENE = "final-cm"
+
 
 @dataclass(frozen=True)
 class MeshSettings:

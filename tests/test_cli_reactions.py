@@ -17,13 +17,14 @@ def _run(capsys, *argv):
 
 
 def test_default_is_the_reference_configuration_table(capsys):
+    """No configuration: the same reference scene as ``rigfem check`` (final-cm)."""
     rc, out, err = _run(capsys)
     assert rc == 0 and err == ""
-    assert "b2=540" in out and "d=1020" in out and "rigid-body" in out
+    assert "b2=480" in out and "d=1020" in out and "rigid-body" in out
     for j in ("O2", "A", "B", "O4"):
         assert f"\n{j} " in out
-    assert "transmission angle: min 34.2161 deg, max 148.6930 deg" in out
     assert "peak driver torque" in out
+    assert _run(capsys, "final-cm")[1] == out
 
 
 def test_json_original_model_reproduces_calibration(capsys):

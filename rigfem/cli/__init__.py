@@ -17,7 +17,8 @@ import signal
 import sys
 import traceback
 
-from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, TABLE, TERMINATED, table
+from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, PIPE_CLOSED, TABLE, TERMINATED, table
+from rigfem.cli.progress import heartbeat
 from rigfem.errors import ComputeError, InputError
 from rigfem.settings import ALLOW_LARGE_ENV
 
@@ -44,11 +45,35 @@ def _available(only: str | None = None) -> dict[str, object]:
     return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in names}
 
 
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Every default shown: argparse's ``(default: X)`` unless the help already names it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if ("default" in text or action.default in (None, False, "", [], argparse.SUPPRESS)
+                or not action.option_strings):
+            return text
+        return super()._get_help_string(action)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with exit code 2 and a one-line message (argparse's own default is 2 too)."""
+    """argparse with exit code 2, a one-line message and every default in ``--help``."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse API
         self.exit(2, f"rigfem: error: {message}\n")
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rigfem")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -57,6 +82,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     parser.add_argument("--allow-large", action="store_true",
                         help="run jobs whose cost estimate exceeds the machine's memory or a documented limit")
+    parser.add_argument("--version", action="version", version=f"rigfem {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
     for name, mod in _available(words[0] if words else None).items():
@@ -84,7 +110,13 @@ def main(argv: list[str] | None = None) -> int:
         os.environ[ALLOW_LARGE_ENV] = "1"
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        return int(args._run(args) or 0)
+        with heartbeat(_what(args), on_terminal=_quiet_bar(args)):
+            code = int(args._run(args) or 0)
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:  # `rigfem ... | head`: the reader left; end quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return PIPE_CLOSED
     except InputError as exc:
         print(f"rigfem: error: {exc}", file=sys.stderr)
         return BAD_INPUT
@@ -105,6 +137,16 @@ def main(argv: list[str] | None = None) -> int:
         return NO_COMPUTE
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _what(args: argparse.Namespace) -> str:
+    """The command (and task) a progress line names."""
+    return " ".join(str(w) for w in (args.command, getattr(args, "task", None)) if w)
+
+
+def _quiet_bar(args: argparse.Namespace) -> bool:
+    """True if the command draws no bar of its own on a terminal (check and sweep do, unless --quiet)."""
+    return args.command not in ("check", "sweep") or getattr(args, "quiet", False)
 
 
 if __name__ == "__main__":

@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import tomllib
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
+from rigfem.cli.outputs import check_place, wrote
 from rigfem.errors import plain
 from rigfem.scene import builtin_scenes
 
@@ -83,8 +85,12 @@ def run(args: argparse.Namespace) -> int:
             data = tomllib.loads(path.read_text())
             print(f"{name:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
         return 0
+    if args.out is not None:
+        check_place("--out", args.out, folder=True)
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
                        allow_rule_violations=args.allow_rule_violations)
     print(json.dumps(report, indent=2) if args.json else _summary(report))
+    out = Path(args.out) if args.out is not None else Path("results") / report["scene"]
+    wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")
     return EXIT[report["verdict"]]

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE
+from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
 from rigfem.errors import InputError, check_range
 from rigfem.settings import FIDELITY, MODES, PARTS
 from rigfem.studies.convergence import (
@@ -29,6 +30,8 @@ from rigfem.studies.convergence import (
 )
 
 HELP = "mesh convergence (h and p) of each part's peak von Mises: Richardson limit, order, error vs time"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "study written"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,7 +44,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--extra-levels", default=str(EXTEND),
                    help=f"finer h levels added while a peak is not converging, 0..3 (default {EXTEND})")
     p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
-    p.add_argument("--out", default="results/convergence", help="folder (default results/convergence)")
+    p.add_argument("--out", default="results/convergence",
+                   help="folder: a new one, or with --force one rigfem wrote (studies accumulate there)")
+    p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
     p.add_argument("--render", action="store_true",
                    help="no computing: re-analyse the study JSONs in --out and rewrite tables, plots, summary")
 
@@ -138,9 +143,10 @@ def plot(res: dict, path: Path) -> None:
         ax.axhline(100 * t, color="grey", lw=0.6, ls=":")
         ax.annotate(f"{p} target", (0.01, 100 * t), xycoords=("axes fraction", "data"), fontsize=7,
                     va="bottom")
-    ax.xaxis.set_minor_locator(LogLocator(subs=(2.0, 3.0, 5.0)))
-    for axis in (ax.xaxis.set_major_formatter, ax.xaxis.set_minor_formatter):
-        axis(FuncFormatter(lambda v, _: f"{v:g}"))
+    if ax.get_xscale() == "log":   # nothing converging: no error curve, the axis stays linear
+        ax.xaxis.set_minor_locator(LogLocator(subs=(2.0, 3.0, 5.0)))
+        for axis in (ax.xaxis.set_major_formatter, ax.xaxis.set_minor_formatter):
+            axis(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_xlabel(f"{'CPU' if cpu else 'wall'} time per step (s): mesh + assembly + solves + cycle sweep")
     ax.set_ylabel("|error| vs extrapolated peak (%)")
     ax.set_title(f"{res['part']}: peak von Mises error vs time" + (f"\n{'; '.join(notes)}" if notes else ""),
@@ -269,12 +275,10 @@ def run(args: argparse.Namespace) -> int:
     n_extra = check_range("--extra-levels", args.extra_levels, 0, 3)
     if n_extra != int(n_extra):
         raise InputError(f"--extra-levels = {args.extra_levels!r} must be a whole number in [0, 3]")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} exists and is not a folder")
+    if args.render and not Path(args.out).is_dir():
+        raise InputError(f"--out = {args.out!r}: no such folder to render")
+    out = new_folder("--out", args.out, args.force or args.render)
     if args.render:
-        if not out.is_dir():
-            raise InputError(f"--out {out}: no such folder to render")
         for path in sorted(out.glob("*.json")):
             res = json.loads(path.read_text())
             if "steps" in res:
@@ -282,28 +286,29 @@ def run(args: argparse.Namespace) -> int:
     else:
         scene, parts = _targets(args.target)
         settings, by_part = scene_cases(scene, parts)
-        out.mkdir(parents=True, exist_ok=True)
+        mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
             extra = {"scene": scene, "command": _command(args)}
 
             def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
-                (out / f"{stem}.json").write_text(to_json({**partial, **extra, "partial": True}))
+                write_text(out / f"{stem}.json", to_json({**partial, **extra, "partial": True}))
 
             res = study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
                         max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
                         progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
             print(_write({**res, **extra}, out, stem))
     studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
-    (out / "summary.md").write_text(summary([s for s in studies if "steps" in s]))
+    write_text(out / "summary.md", summary([s for s in studies if "steps" in s]))
+    wrote(out / "summary.md")
     return 0
 
 
 def _write(res: dict, out: Path, stem: str) -> str:
     """Write <stem>.json, .md and .png; return the Markdown table."""
-    (out / f"{stem}.json").write_text(to_json(res))
+    write_text(out / f"{stem}.json", to_json(res))
     md = table(res)
-    (out / f"{stem}.md").write_text(f"# Convergence: {res['scene']} {res['part']}\n\nCommand: "
+    write_text(out / f"{stem}.md", f"# Convergence: {res['scene']} {res['part']}\n\nCommand: "
                                     f"`{res['command']}`\n\n{md}")
-    plot(res, out / f"{stem}.png")
+    write_file(out / f"{stem}.png", lambda tmp: plot(res, tmp))
     return md

@@ -2,13 +2,13 @@
 
 0 every part passes; 1 a part fails or cannot be decided; 2 bad input; 3 could not compute
 (mesher, solver, an external program or an internal error); 130 interrupted (Ctrl-C);
-143 terminated (SIGTERM).
+143 terminated (SIGTERM); 141 the reader of the output went away (``rigfem ... | head``).
 """
 
 from __future__ import annotations
 
 PASS, FAIL, BAD_INPUT, NO_COMPUTE = 0, 1, 2, 3
-INTERRUPTED, TERMINATED = 130, 143
+INTERRUPTED, TERMINATED, PIPE_CLOSED = 130, 143, 141
 
 #: verdict of a check -> exit code
 EXIT = {"pass": PASS, "fail": FAIL, "undecided": FAIL}
@@ -21,7 +21,7 @@ def table(success: str | None = None) -> str:
     first = (f"0 {success}" if success else
              "0 every part passes, 1 a part fails or cannot be decided")
     return (f"exit codes: {first}, 2 bad input, 3 could not compute (mesher, solver or internal error), "
-            "130 Ctrl-C, 143 SIGTERM")
+            "130 Ctrl-C, 143 SIGTERM, 141 output pipe closed")
 
 
 #: the table printed by ``rigfem --help`` and README

@@ -17,14 +17,17 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.settings import REFERENCE_SCENE
 from rigfem.cli.linkage_args import add_linkage_arguments
-from rigfem.cli.outputs import new_output
+from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.errors import InputError, check_range
 from rigfem.linkage.kinematics import Motion, linkage_motion, linkage_turn
 from rigfem.linkage.mechanisms import build, crank_angles, four_bar, slider_crank
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "motion printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,7 +44,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--csv", metavar="PATH", help="write one row per crank angle")
     p.add_argument("--plot", metavar="PATH.png", help="angle, velocity, acceleration and transmission-angle curves")
     p.add_argument("--animate", metavar="PATH.gif", help="GIF of the linkage over one turn")
-    p.add_argument("--force", action="store_true", help="overwrite existing --csv/--plot/--animate files")
+    p.add_argument("--force", action="store_true", help="replace existing --csv/--plot/--animate files (only files rigfem wrote)")
 
 
 def _build(args):
@@ -59,22 +62,19 @@ def _build(args):
         if args.coupler_point:
             cp = (check_range("--coupler-point DIST", args.coupler_point[0], 0.0, 1e5, "mm"),
                   check_range("--coupler-point ANGLE", args.coupler_point[1], -360.0, 360.0, "deg"))
-        lk = four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp)
+        lk = four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp, whole_turn=False)
         name = "four-bar " + " ".join(args.four_bar)
     elif args.slider_crank:
         L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
         lk = slider_crank(*L, off, masses=None)
         name = "slider-crank " + " ".join(args.slider_crank)
-    elif args.scene:
+    else:
         from rigfem.scene import load_scene
 
-        sc = load_scene(args.scene)
+        sc = load_scene(args.scene or REFERENCE_SCENE)
         lk, name = build(sc), sc.name
         omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
-    else:
-        raise InputError("give a scene (rigfem check --list shows the built-in ones), --four-bar B2 B3 B4 D "
-                         "or --slider-crank B2 B3")
     if args.omega is not None:
         omega = check_range("--omega", args.omega, -1e4, 1e4, "rad/s")
         if omega == 0:
@@ -84,10 +84,34 @@ def _build(args):
     return lk, name, omega, alpha, instant, textbook
 
 
-def _refuse_existing(args) -> None:
-    for flag, path, suffix in (("--csv", args.csv, ".csv"), ("--plot", args.plot, ".png"),
-                               ("--animate", args.animate, ".gif")):
-        new_output(flag, path, suffix, args.force)
+def _refuse_existing(args) -> tuple:
+    return tuple(new_output(flag, path, suffix, args.force) for flag, path, suffix in
+                 (("--csv", args.csv, ".csv"), ("--plot", args.plot, ".png"), ("--animate", args.animate, ".gif")))
+
+
+def _range_of_motion(name: str, turn: dict, samples: int) -> np.ndarray:
+    """``samples`` crank angles over the arc a linkage that does not make a whole turn moves through
+    (strictly between its dead points, the limit positions); InputError if it has no such arc."""
+    if not turn.get("crank_range_deg"):
+        raise InputError(f"{name}: the linkage does not assemble at any crank angle (dead points "
+                         f"{', '.join(f'{x:.4f}' for x in turn['dead_points_deg'])} deg)")
+    a, b = turn["crank_range_deg"]
+    return np.linspace(a, b, samples + 2)[1:-1]   # the dead points themselves: rates unbounded
+
+
+def _assembles(name: str, turn: dict, deg: float) -> float:
+    """``deg`` moved into the crank's range of motion (by whole turns); InputError naming the
+    range and the limit positions where the linkage does not assemble at ``deg``."""
+    rng = turn.get("crank_range_deg")
+    if rng:
+        a, b = rng
+        shifted = a + (deg - a) % 360.0
+        if shifted <= b + 1e-9:
+            return float(shifted if not a <= deg <= b else deg)
+    dead = ", ".join(f"{x:.4f}" for x in turn["dead_points_deg"])
+    where = f"its crank moves only between {rng[0]:.4f} and {rng[1]:.4f} deg" if rng else "it assembles nowhere"
+    raise InputError(f"--at = {deg:g} deg: {name} does not assemble there ({where}; limit positions at "
+                     f"the dead points {dead} deg)")
 
 
 def _num(x) -> float | None:
@@ -139,6 +163,10 @@ def format_table(res: dict, max_rows: int = 24) -> str:
     out = [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
            + (f"  branch={res['branch']}" if res.get("branch") else "")
            + f"   crank omega={res['omega_rad_s']:g} rad/s alpha={res['alpha_rad_s2']:g} rad/s²  ({res['method']})"]
+    mu = res.get("transmission_angle_deg")
+    if mu and not mu["within_band"] and not res["textbook"]:
+        out.append(f"WARNING: breaks rig rule transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, "
+                   f"allowed {mu['rig_band'][0]:g} < mu < {mu['rig_band'][1]:g} deg")
     if res["textbook"]:
         out.append("textbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     t = res["turn"]
@@ -224,7 +252,7 @@ def write_csv(m: Motion, path: str | Path) -> None:
 
 
 def run(args) -> int:
-    _refuse_existing(args)
+    csv_path, png, gif = _refuse_existing(args)
     lk, name, omega, alpha, instant, textbook = _build(args)
     samples = 360
     if args.samples is not None:
@@ -233,14 +261,13 @@ def run(args) -> int:
             raise InputError(f"--samples = {args.samples!r} must be a whole number in [8, 1000000]")
     samples = int(samples)
     turn = linkage_turn(lk)
-    if turn is not None and not turn["crank_turns_fully"]:
-        a, b = turn.get("crank_range_deg") or (None, None)
-        raise InputError(f"{name}: the crank cannot turn fully (dead points at "
-                         f"{', '.join(f'{x:.4f}' for x in turn['dead_points_deg'])} deg"
-                         + (f"; it moves between {a:.4f} and {b:.4f} deg)" if a is not None else ")"))
     full = crank_angles(samples)
+    if turn is not None and not turn["crank_turns_fully"]:
+        full = _range_of_motion(name, turn, samples)
     if args.at:
         deg = np.array([check_range("--at", v, -3600.0, 3600.0, "deg") for v in args.at])
+        if turn is not None and not turn["crank_turns_fully"]:
+            deg = np.array([_assembles(name, turn, a) for a in deg])
     elif instant is not None and args.samples is None:
         deg = np.array([instant])
     else:
@@ -249,24 +276,23 @@ def run(args) -> int:
     mu_turn = m if deg is full else (linkage_motion(lk, full, omega, alpha) if turn is not None else None)
     res = result(lk, name, textbook, m, turn, mu_turn)
     title = f"{name}: {lk.meta.get('type')} " + ", ".join(f"{k} {v:g}" for k, v in (lk.meta.get("lengths_mm") or {}).items()) + " mm"
-    try:
-        if args.csv:
-            write_csv(m, args.csv)
-        if args.plot:
-            from rigfem.report.motion import motion_plot
+    if csv_path:
+        write_file(csv_path, lambda tmp: write_csv(m, tmp))
+    if png:
+        from rigfem.report.motion import motion_plot
 
-            motion_plot(m if deg is full else linkage_motion(lk, full, omega, alpha), args.plot, title)
-        if args.animate:
-            from rigfem.report.motion import motion_gif
+        whole = m if deg is full else linkage_motion(lk, full, omega, alpha)
+        write_file(png, lambda tmp: motion_plot(whole, tmp, title))
+    if gif:
+        from rigfem.report.motion import motion_gif
 
-            marks = []
-            if turn is not None:
-                marks = [t["crank_deg"] for t in turn.get("toggles", [])] + [t["crank_deg"] for t in turn.get("limits", [])]
-            motion_gif(linkage_motion(lk, crank_angles(72), omega, alpha), args.animate, title, marks)
-    except OSError as exc:
-        raise InputError(f"cannot write an output file: {exc.filename}: {exc.strerror}") from None
+        marks = []
+        if turn is not None:
+            marks = [t["crank_deg"] for t in turn.get("toggles", [])] + [t["crank_deg"] for t in turn.get("limits", [])]
+        write_file(gif, lambda tmp: motion_gif(linkage_motion(lk, crank_angles(72), omega, alpha), tmp, title, marks))
     if args.json:
         print(json.dumps(res, indent=1))
     else:
         print(format_table(res))
+    wrote(csv_path, png, gif)
     return 0

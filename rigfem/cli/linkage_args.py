@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import argparse
 
+from rigfem.settings import REFERENCE_SCENE
+
 
 def add_linkage_arguments(p: argparse.ArgumentParser) -> None:
     """SCENE, or --four-bar B2 B3 B4 D / --slider-crank B2 B3 [--offset E] (mm)."""
-    p.add_argument("scene", nargs="?", help="scene file (TOML with a [linkage] table) or built-in scene name")
+    p.add_argument("scene", nargs="?", help=f"scene file (TOML with a [linkage] table) or built-in scene name "
+                                            f"(default {REFERENCE_SCENE}, the same as rigfem check's, unless "
+                                            f"--four-bar or --slider-crank is given)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--four-bar", nargs=4, metavar=("B2", "B3", "B4", "D"),
                    help="four-bar crank, coupler, rocker, ground lengths (mm)")

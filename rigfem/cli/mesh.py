@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
+from rigfem.cli.outputs import new_output, write_file
 from rigfem.errors import InputError, check_range
 from rigfem.mesh.mesher import DEFAULT_SIZE, mesh_part
 from rigfem.mesh.partmesh import PartMesh, write_mesh
@@ -23,7 +24,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"start from a check's mesh preset ({' | '.join(FIDELITY)}); --size and "
                              f"--local-size override it")
     parser.add_argument("--size", type=float, metavar="MM",
-                        help=f"global element size, mm (default: the preset's, else by kind: {DEFAULT_SIZE})")
+                        help="global element size, mm (default: the preset's, else by kind: "
+                             + ", ".join(f"{k} {v:g}" for k, v in DEFAULT_SIZE.items()) + ")")
     parser.add_argument("--refine", default="", metavar="G1,G2",
                         help="surface groups that carry load, refined (e.g. hole_10,hole_11)")
     parser.add_argument("--local-size", "--refine-size", dest="local_size", type=float, metavar="MM",
@@ -34,6 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-quality", type=float, default=0.1, help="smallest allowed minSICN (default 0.1)")
     parser.add_argument("--no-cache", action="store_true", help="remesh even if a cached mesh exists")
     parser.add_argument("--out", required=True, metavar="FILE", help="output .vtu or .msh")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file (only one rigfem wrote)")
 
 
 def _overrides(args: argparse.Namespace) -> dict[str, float]:
@@ -77,12 +80,11 @@ def refinement(pm: PartMesh, settings: MeshSettings) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    out = new_output("--out", args.out, (".vtu", ".msh"), args.force)
     part = load_part(args.part, _overrides(args))
     settings = _settings(args, part.kind)
-    if not args.out.lower().endswith((".vtu", ".msh")):
-        raise InputError(f"--out {args.out}: file type must be .vtu or .msh")
     pm = mesh_part(part, settings, use_cache=not args.no_cache)
-    write_mesh(pm, args.out, args.order)
+    write_file(out, lambda tmp: write_mesh(pm, tmp, args.order))
     q, m = pm.quality, pm.meta
     dims = ", ".join(f"{k} {d.value:g}" for k, d in part.dims.items() if d.source == "override")
     print(f"{part.name}{f' ({dims} mm)' if dims else ''}: {len(pm.points)} nodes, {len(pm.tets)} tets, "

@@ -8,6 +8,8 @@ from rigfem.mesh.geometry import mass_kg
 from rigfem.rig.parts import GEOMETRY_DIR, known_parts, load_part, rail_hole_x
 
 HELP = "list the known parts (geometry/*.toml) with dimensions and masses"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "part list printed"
 
 _KEY_DIMS = {"rail": ("length", "width", "height", "pitch"),
              "plate": ("diameter", "thickness", "bore_diameter", "screw_spacing"),

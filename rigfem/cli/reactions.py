@@ -1,7 +1,6 @@
 """``rigfem reactions``: rig rules, transmission angle, peak pin reactions and torque of a linkage.
 
-With no configuration it runs the reference configuration of the 2013 study
-(four-bar b2=540 b3=840 b4=780 d=1020 mm).  Lengths in mm, forces N, torque N·m.
+With no configuration it runs the reference scene, the same as ``rigfem check``'s.  Lengths in mm, forces N, torque N·m.
 """
 
 from __future__ import annotations
@@ -10,17 +9,20 @@ import argparse
 import json
 import math
 
+from rigfem.settings import REFERENCE_SCENE
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.dynamics.cycle import MODELS, simulate
 from rigfem.dynamics.forces import loaded_linkage
 from rigfem.dynamics.history import summary
 from rigfem.errors import InputError, check_range
+from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.io.reactions_csv import write_csv
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.report.pictures import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
-REFERENCE = (540.0, 840.0, 780.0, 1020.0)
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "table printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,6 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     p.add_argument("--csv", metavar="PATH", help="write the full history per crank angle")
     p.add_argument("--plot", metavar="PATH.png", help="plot reactions and torque against crank angle")
+    p.add_argument("--force", action="store_true", help="replace existing --csv/--plot files (only files rigfem wrote)")
 
 
 def _lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
@@ -51,13 +54,11 @@ def _build(args) -> tuple[object, float, str]:
     elif args.slider_crank:
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
         lk = slider_crank(*_lengths(("B2", "B3"), args.slider_crank), off)
-    elif args.scene:
+    else:
         from rigfem.scene import load_scene
 
-        sc = load_scene(args.scene)
+        sc = load_scene(args.scene or REFERENCE_SCENE)
         lk, speed = loaded_linkage(sc), speed if speed is not None else sc.speed_hz
-    else:
-        lk = four_bar(*REFERENCE)
     return lk, (1.0 if speed is None else speed)
 
 
@@ -77,6 +78,9 @@ def format_table(res: dict) -> str:
     L = res["lengths_mm"] or {}
     out.append(f"{res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
                f"   model={res['model']}  speed={res['speed_hz']:g} Hz  samples={res['samples']}")
+    if not res.get("textbook"):
+        out += [f"WARNING: breaks rig rule {r['name']}: {r['value']:.4g} {r['relation']} {r['limit']:.4g}"
+                for r in res["rules"] if not r["ok"]]
     if res.get("textbook"):
         out.append("\ntextbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     elif res["rules"]:
@@ -119,30 +123,25 @@ def run(args) -> int:
     samples = check_range("--samples", args.samples, 8, 1_000_000)
     if samples != int(samples):
         raise InputError(f"--samples = {args.samples!r} must be a whole number in [8, 1000000]")
-    if args.plot and not str(args.plot).lower().endswith(".png"):
-        raise InputError(f"--plot = {args.plot!r} must be a .png path")
+    csv_path = new_output("--csv", args.csv, ".csv", args.force)
+    png = new_output("--plot", args.plot, ".png", args.force)
     lk, speed = _build(args)
-    note = massless_note(lk, args.scene or "this linkage")
+    note = massless_note(lk, args.scene or ("this linkage" if args.four_bar or args.slider_crank else REFERENCE_SCENE))
     if note:
         print(json.dumps({"linkage": lk.meta.get("type"), "massless": True, "note": note}, indent=1)
               if args.json else note)
         return 0
     h = simulate(lk, samples=int(samples), speed_hz=speed, model=args.model)
     res = summary(h)
-    if args.csv:
-        try:
-            write_csv(h, args.csv)
-        except OSError as exc:
-            raise InputError(f"--csv {args.csv!r}: cannot write ({exc.strerror})") from None
-    if args.plot:
-        try:
-            reactions_plot(h, args.plot)
-        except OSError as exc:
-            raise InputError(f"--plot {args.plot!r}: cannot write ({exc.strerror})") from None
+    if csv_path:
+        write_file(csv_path, lambda tmp: write_csv(h, tmp))
+    if png:
+        write_file(png, lambda tmp: reactions_plot(h, tmp))
     if args.json:
         print(json.dumps(_finite(res), indent=1))
     else:
         print(format_table(res))
+    wrote(csv_path, png)
     return 0
 
 

@@ -9,6 +9,8 @@ from pathlib import Path
 from rigfem.errors import InputError
 
 HELP = "open a result folder's report.html in the browser (or print its path)"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "report opened or its path printed"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

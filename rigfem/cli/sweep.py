@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from pathlib import Path
 
 HELP = "sweep every mountable four-bar or slider-crank configuration of the rig (table, maps, worst list)"
+#: the meaning of exit code 0 (the command has no verdict)
+SUCCESS = "sweep written (a configuration that fails is a row of the table, not an exit code)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -29,13 +30,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                    help="local Dask worker processes (default: CPU count; 1 = serial, no cluster)")
     p.add_argument("--chunk-size", type=int, default=64, help="configurations per stored chunk (default 64)")
-    p.add_argument("--out", default="results/sweep", help="output folder (default results/sweep)")
+    p.add_argument("--out", default="results/sweep", help="output folder: a new one, or with --force one rigfem "
+                                                          "wrote (its stored chunks are reused)")
+    p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--report-only", action="store_true",
                    help="rewrite the maps, worst list, HTML pages and explorer from the folder's table (no sweep)")
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.cli.outputs import mark_folder, new_folder, wrote
+
+    out = new_folder("--out", args.out, args.force)   # before the heavy imports and any computation
+    from rigfem.errors import InputError
     from rigfem.studies.sweep import check_scheduler, run_sweep
     from rigfem.studies.sweep_configs import SweepParams
     from rigfem.studies.sweep_report import write_report
@@ -44,7 +51,6 @@ def run(args: argparse.Namespace) -> int:
         check_scheduler(args.scheduler)  # bad input before anything; run_sweep connects before any work
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
-    out = Path(args.out)
     if args.report_only:
         import pandas as pd
 
@@ -53,7 +59,9 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--out = {str(out)!r} has no {csv.name}: run the sweep first (without --report-only)")
         files = write_report(pd.read_csv(csv), p, out)
         print(f"{p.linkage_type}: wrote {', '.join(str(out / f) for f in files)}")
+        wrote(out)
         return 0
+    mark_folder(out)
     table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
                       scheduler=args.scheduler, progress=not args.quiet)
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
@@ -61,4 +69,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "
           f"{int((ok['verdict'] == 'fail').sum())} fail; wrote {', '.join(str(out / f) for f in files)}",
           file=sys.stdout)
+    wrote(out)
     return 0

@@ -14,12 +14,15 @@ import argparse
 import json
 import re
 
-from rigfem.cli.outputs import new_output, write_text
+from rigfem.cli.outputs import new_output, write_file, write_text, wrote
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.settings import FIDELITY
 
 HELP = ("design a linkage: a four-bar generating a function or a coupler-point motion, and with --rig "
         "the nearest buildable rig configurations, checked")
+#: the meaning of exit codes 0 and 1
+SUCCESS = ("linkage found (with --rig and stress: a listed configuration passes), 1 no listed configuration "
+           "passes or the generated function is far beyond useful accuracy")
 
 
 def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:
@@ -32,6 +35,8 @@ def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:
     g.add_argument("--no-stress", action="store_true", help="rules and motion error only (no FE)")
     g.add_argument("--scene-out", metavar="TOML", help="write the best rig configuration as a scene file "
                                                         "(then: rigfem check TOML)")
+    p.add_argument("--force", action="store_true",
+                   help="replace existing --plot/--scene-out files (only files rigfem wrote)")
     if motion:
         g.add_argument("--scale", metavar="K", help="rig mm per unit of the positions (default: every scale "
                                                     "at which the design fits the rails)")
@@ -99,11 +104,26 @@ def _table(r: dict) -> str:
     return "\n".join(out)
 
 
+#: largest coordinate or length accepted (in the unit of the positions or of --ground)
+MAX_COORD = 1e9
+
+
 def _point(text: str) -> tuple[float, float]:
     parts = text.split(",")
     if len(parts) != 2:
         raise InputError(f"--points: {text!r} must be X,Y")
-    return check_range("--points X", parts[0]), check_range("--points Y", parts[1])
+    return (check_range("--points X", parts[0], -MAX_COORD, MAX_COORD),
+            check_range("--points Y", parts[1], -MAX_COORD, MAX_COORD))
+
+
+def _distinct(P: list[tuple[float, float]]) -> None:
+    """Three positions, no two coincident (to 1e-9 of their span): else InputError naming them."""
+    span = max(max(abs(a - b) for a, b in zip(p, q)) for p in P for q in P)
+    for i in range(3):
+        for j in range(i + 1, 3):
+            if max(abs(a - b) for a, b in zip(P[i], P[j])) <= 1e-9 * max(span, 1e-300):
+                raise InputError(f"--points: position {i + 1} = {P[i][0]:g},{P[i][1]:g} and position {j + 1} = "
+                                 f"{P[j][0]:g},{P[j][1]:g} coincide; give three distinct positions")
 
 
 def _motion(args) -> int:
@@ -114,6 +134,7 @@ def _motion(args) -> int:
     )
 
     P = [_point(t) for t in args.points]
+    _distinct(P)
     rig = _rig_options(args, motion=True)
 
     def angles(flag, v):
@@ -130,6 +151,7 @@ def _motion(args) -> int:
     status = _snap(r, rig, "motion") if rig else 0
     if args.json:
         print(json.dumps(r, indent=1))
+        wrote(rig and rig["scene"])
         return status
     L = r["lengths"]
     how = "optimised free choices (largest smallest transmission angle)" if r["optimised"] else "given free choices"
@@ -150,6 +172,7 @@ def _motion(args) -> int:
     print("\n".join(out))
     if rig:
         print(_rig_text(r["rig"], "motion"))
+    wrote(rig and rig["scene"])
     return status
 
 
@@ -161,28 +184,31 @@ def run(args) -> int:
                          "--output START RANGE --ground D, or rigfem synthesize motion --points X,Y X,Y X,Y")
     from rigfem.linkage.synthesis import synthesize_function
 
-    png = new_output("--plot", args.plot, ".png")
+    png = new_output("--plot", args.plot, ".png", args.force)
     rig = _rig_options(args, motion=False)
-    nums = dict(x0=check_range("--x X0", args.x[0]), x1=check_range("--x X1", args.x[1]),
+    nums = dict(x0=check_range("--x X0", args.x[0], -1e15, 1e15), x1=check_range("--x X1", args.x[1], -1e15, 1e15),
                 in_start=check_range("--input START", args.input[0], -360, 360, "deg"),
                 in_range=check_range("--input RANGE", args.input[1], -360, 360, "deg"),
                 out_start=check_range("--output START", args.output[0], -360, 360, "deg"),
                 out_range=check_range("--output RANGE", args.output[1], -360, 360, "deg"),
-                d=check_range("--ground", args.ground, 0, None, lo_open=True))
+                d=check_range("--ground", args.ground, 0, MAX_COORD, lo_open=True))
     points = check_range("--points", args.points, 3, 3)
     r = synthesize_function(args.expr, points=int(points), **nums)
     gen = r.pop("generated", None)
     if png and gen is not None:
         from rigfem.report.motion import structural_error_plot
 
-        structural_error_plot(gen, r, png)
+        write_file(png, lambda tmp: structural_error_plot(gen, r, tmp))
     status = _snap(r, rig, "function") if rig else 0
+    if any(d.startswith("accuracy defect") for d in r["defects"]):
+        status = max(status, 1)   # flagged: this linkage does not generate the function
     if args.json:
         print(json.dumps(r, indent=1))
     else:
         print(_table(r))
         if rig:
             print(_rig_text(r["rig"], "function"))
+    wrote(png if gen is not None else None, rig and rig["scene"])
     return status
 
 
@@ -203,7 +229,7 @@ def _rig_options(args, motion: bool) -> dict | None:
         raise InputError(f"--fidelity = {fidelity!r} must be one of {', '.join(FIDELITY)}")
     return dict(top=int(top), fidelity=fidelity, stress=not args.no_stress,
                 scale=None if scale is None else check_range("--scale", scale, 0.0, 1e4, lo_open=True),
-                scene=new_output("--scene-out", args.scene_out, ".toml"))
+                scene=new_output("--scene-out", args.scene_out, ".toml", args.force))
 
 
 def _snap(r: dict, opts: dict, task: str) -> int:

@@ -15,21 +15,26 @@ import time
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, load_check_scene
+from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
 from rigfem.errors import InputError, check_range
-from rigfem.report import check_target
 from rigfem.studies.verify import verify_scene
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
+#: the meaning of exit codes 0 and 1
+SUCCESS = "every case agrees within the tolerances, 1 a case does not"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", default=REFERENCE_SCENE, help="scene file or built-in name")
+    p.add_argument("scene", nargs="?", default=REFERENCE_SCENE,
+                   help=f"scene file or built-in name (default {REFERENCE_SCENE}, the same as rigfem check's)")
     p.add_argument("--against", default="calculix", help="the other solver (calculix)")
     p.add_argument("--fidelity", default="draft", help="draft | standard | fine (default draft)")
     p.add_argument("--threads", default="1", help="ccx threads (default 1)")
     p.add_argument("--peak-tol", default="1.0", help="allowed peak von Mises difference, %% (default 1)")
     p.add_argument("--disp-tol", default="0.5", help="allowed displacement difference, %% (default 0.5)")
-    p.add_argument("--out", metavar="DIR", help="also write calculix_verify_<scene>.md/.json into DIR")
+    p.add_argument("--out", metavar="DIR", help="also write calculix_verify_<scene>.md/.json into DIR (a new folder, "
+                                                "or with --force one rigfem wrote)")
+    p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
 
 
 def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
@@ -54,8 +59,7 @@ def run(args: argparse.Namespace) -> int:
     threads = int(check_range("--threads", args.threads, 1, 64))
     peak_tol = check_range("--peak-tol", args.peak_tol, 0.0, 100.0, "%")
     disp_tol = check_range("--disp-tol", args.disp_tol, 0.0, 100.0, "%")
-    if args.out:
-        check_target(Path(args.out))
+    out = new_folder("--out", args.out, args.force) if args.out else None
     cs = load_check_scene(args.scene, {"fidelity": args.fidelity, "frames": 0})
     if shutil.which("ccx") is None:
         raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
@@ -66,13 +70,13 @@ def run(args: argparse.Namespace) -> int:
     text = table(rows, f"rigfem vs CalculiX 2.20: scene {name} ({args.fidelity})", command,
                  time.perf_counter() - t0)
     print(text, end="")
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / f"calculix_verify_{name}.md").write_text(text)
-        (out / f"calculix_verify_{name}.json").write_text(json.dumps(
+    if out is not None:
+        mark_folder(out)
+        write_text(out / f"calculix_verify_{name}.md", text)
+        write_text(out / f"calculix_verify_{name}.json", json.dumps(
             {"scene": name, "fidelity": args.fidelity, "ccx_threads": threads, "command": command,
              "cases": rows}, indent=2) + "\n")
+        wrote(out / f"calculix_verify_{name}.md", out / f"calculix_verify_{name}.json")
     ok = all(abs(r["peak_rel_diff"]) * 100 <= peak_tol and r["displacement_rel_diff"] * 100 <= disp_tol
              for r in rows)
     return 0 if ok else 1

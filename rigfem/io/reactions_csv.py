@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
-from rigfem.errors import InputError
+from rigfem.errors import InputError, decode_text
 from rigfem.mesh.partmesh import whole_file
 
 # ----------------------------------------------------------------------------- CSV
@@ -138,7 +138,11 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
         raise InputError(f"reaction CSV {str(p)!r} does not exist")
     pairs: dict[str, tuple[str, str]] = {}
     lines = []
-    for line in p.read_text().splitlines():
+    try:
+        blob = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"reaction CSV {str(p)!r} cannot be read: {exc.strerror or exc}") from None
+    for line in decode_text(blob, f"reaction CSV {str(p)!r}").splitlines():
         s = line.strip()
         if s.startswith("#"):
             parts = s[1:].split()

@@ -17,6 +17,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "model": ["GROUND", "ClosureError", "AssemblyError", "BodyHistory", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage"],
         "mechanisms": ["four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "inverted_slider_crank", "quick_return", "BUILDERS", "build", "crank_angles"],
         "general": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "is_full_turn", "move"],
-        "synthesis": ["parse_function", "chebyshev_points", "synthesize_function", "three_position", "crank_in_order", "check_three_position", "optimise_three_position"],
+        "expression": ["parse_function", "check_interval"],
+        "synthesis": ["chebyshev_points", "synthesize_function", "three_position", "crank_in_order", "check_three_position", "optimise_three_position"],
     },
 )

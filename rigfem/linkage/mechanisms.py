@@ -83,7 +83,7 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
              rails_mm: tuple[float, float, float] = RIG_RAILS_MM, branch: str = "open",
              coupler_point: tuple[float, float] | None = None, body_masses: dict | None = None,
              start_deg: float = 0.0, catalogue: RigMasses = RIG_MASSES,
-             gravity_mm_s2: tuple[float, float] = (0.0, 0.0)) -> Linkage:
+             gravity_mm_s2: tuple[float, float] = (0.0, 0.0), whole_turn: bool = True) -> Linkage:
     """Four-bar O2-A-B-O4: crank b2, coupler b3, rocker b4, ground d (mm), O4 at (d, 0).
 
     Bodies ``crank`` (O2->A), ``coupler`` (A->B), ``rocker`` (O4->B); joints O2, A, B, O4.
@@ -92,16 +92,19 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
     ``masses=None``: massless unless ``body_masses`` (name -> Body keyword dict) says so.
     ``coupler_point`` (distance mm from A, angle deg from the coupler line) is recorded
     in meta and reported by :func:`coupler_point_path`.  Raises AssemblyError naming the
-    crank-angle range where the loop cannot close.
+    crank-angle range where the loop cannot close, unless ``whole_turn`` is False (a kinematics
+    run over the crank's range of motion): then it is built at an angle where it closes.
     """
     _check_lengths(b2=b2, b3=b3, b4=b4, d=d)
     if masses == "rig":
         _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4}, catalogue.rail_behind_mm)
     grid = np.linspace(0.0, 360.0, 3601)
     ok = fourbar_closes(b2, b3, b4, d, grid)
-    if not ok.all():
+    if not ok.all() and (whole_turn or not ok.any()):
         raise ClosureError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled "
                             f"for crank angles {_ranges_text(grid, ~ok)}")
+    if not fourbar_closes(b2, b3, b4, d, np.array([start_deg]))[0]:
+        start_deg = float(grid[np.flatnonzero(ok)[0]])
     if branch not in ("open", "crossed"):
         raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
     th = np.radians(start_deg)

@@ -11,61 +11,14 @@ The generated function is then computed by the closed-form kinematics
 
 from __future__ import annotations
 
-import ast
-import operator
-
 import numpy as np
 
 from rigfem.linkage.kinematics import fourbar_motion, fourbar_turn
 from rigfem.errors import ComputeError, InputError
+from rigfem.linkage.expression import check_interval, parse_function
 
-_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
-           ast.Pow: operator.pow}
-_UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
-_FUNCS = {n: getattr(np, n) for n in ("sin", "cos", "tan", "arcsin", "arccos", "arctan", "sinh", "cosh", "tanh",
-                                      "exp", "log", "log10", "log2", "sqrt", "abs")}
-_CONSTS = {"pi": np.pi, "e": np.e}
-
-
-def parse_function(expr: str):
-    """A safe function of ``x`` from an expression (numbers, x, pi, e, + - * / **, and numpy's
-    sin cos tan arcsin arccos arctan sinh cosh tanh exp log log10 log2 sqrt abs); nothing else
-    is evaluated.  Raises InputError naming what is not allowed."""
-    try:
-        tree = ast.parse(expr, mode="eval")
-    except SyntaxError:
-        raise InputError(f"EXPR = {expr!r} is not a valid expression of x") from None
-
-    def build(node):
-        if isinstance(node, ast.Expression):
-            return build(node.body)
-        if (isinstance(node, ast.Constant) and isinstance(node.value, (int, float))
-                and not isinstance(node.value, bool)):
-            v = float(node.value)
-            return lambda x: v
-        if isinstance(node, ast.Name):
-            if node.id == "x":
-                return lambda x: x
-            if node.id in _CONSTS:
-                v = _CONSTS[node.id]
-                return lambda x: v
-            raise InputError(f"EXPR: unknown name {node.id!r}; allowed x, pi, e and {', '.join(_FUNCS)}")
-        if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
-            f, lft, rgt = _BINOPS[type(node.op)], build(node.left), build(node.right)
-            return lambda x: f(lft(x), rgt(x))
-        if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
-            f, arg = _UNARY[type(node.op)], build(node.operand)
-            return lambda x: f(arg(x))
-        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCS
-                and len(node.args) == 1 and not node.keywords):
-            f, arg = _FUNCS[node.func.id], build(node.args[0])
-            return lambda x: f(arg(x))
-        raise InputError(f"EXPR: {ast.unparse(node)!r} is not allowed; use x, numbers, + - * / **, pi, e "
-                         f"and {', '.join(_FUNCS)}")
-
-    fn = build(tree)
-    return lambda x: np.asarray(fn(np.asarray(x, float)), float) + np.zeros_like(np.asarray(x, float))
-
+#: a structural error above this share of the output range (%) is flagged as a defect
+USEFUL_ERROR_PCT = 10.0
 
 def chebyshev_points(x0: float, x1: float, n: int) -> np.ndarray:
     """Chebyshev spacing of ``n`` precision points on [x0, x1]: x_j = m − h cos((2j − 1)π/(2n))."""
@@ -99,11 +52,7 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
     for name, v in (("--input RANGE", in_range), ("--output RANGE", out_range)):
         if v == 0 or abs(v) >= 360:
             raise InputError(f"{name} = {v:g} deg must be non-zero and within (-360, 360) deg")
-    xs = np.linspace(x0, x1, samples)
-    with np.errstate(all="ignore"):
-        ys = f(xs)
-    if not np.all(np.isfinite(ys)):
-        raise InputError(f"EXPR = {expr!r} is not finite everywhere on [{x0:g}, {x1:g}]")
+    xs, ys = check_interval(f, expr, x0, x1, samples)
     y0, y1 = float(ys[0]), float(ys[-1])
     if y1 == y0:
         raise InputError(f"EXPR = {expr!r} has f(X0) = f(X1) = {y0:g}: the output range would be zero")
@@ -170,9 +119,13 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
     y_gen = y0 + (psi - out_start) / out_range * (y1 - y0)
     err = y_gen - ys
     i = int(np.argmax(np.abs(err)))
+    pct = float(100 * abs(err[i]) / abs(y1 - y0))
+    if pct > USEFUL_ERROR_PCT:
+        defects.append(f"accuracy defect: structural error {pct:.4g} % of the output range, far beyond any useful "
+                       f"accuracy (> {USEFUL_ERROR_PCT:g} %): this four-bar does not generate the function")
     res.update(defects=defects, generated=dict(x=xs, y_ideal=ys, y_generated=y_gen, error=err),
                structural_error=dict(max_abs=float(abs(err[i])), at_x=float(xs[i]),
-                                     percent_of_range=float(100 * abs(err[i]) / abs(y1 - y0))),
+                                     percent_of_range=pct),
                transmission_deg=dict(min=float(m.transmission_deg.min()), max=float(m.transmission_deg.max())))
     return res
 

@@ -10,7 +10,7 @@ from typing import Iterator
 import gmsh
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import InputError, plain
 from rigfem.mesh.partmesh import Hole
 from rigfem.rig.parts import PartDef, rail_hole_groups, rail_hole_x
 
@@ -213,14 +213,42 @@ def _build_iprofile(part: PartDef) -> dict[str, Hole]:
     return {k: _vertical_hole(Lx / 2, y, z0, z0 + tf, r) for k, (y, z0) in spots.items()}
 
 
+@contextmanager
+def _captured(lines: list[str]) -> Iterator[None]:
+    """Collect what C++ libraries print on stdout (fd 1) during the block into ``lines``."""
+    import os
+    import sys
+    import tempfile
+
+    sys.stdout.flush()
+    saved = os.dup(1)
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 1)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+            tmp.seek(0)
+            lines += tmp.read(20_000).decode("utf-8", "replace").splitlines()
+
+
 def _build_custom(part: PartDef) -> dict[str, Hole]:
     assert part.path is not None
-    if part.path.suffix.lower() == ".geo":
-        gmsh.open(str(part.path))
-    else:
-        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
-        gmsh.merge(str(part.path))
-        gmsh.model.occ.synchronize()
+    said: list[str] = []
+    try:
+        with _captured(said):  # OpenCASCADE prints the STEP parser's line and message on stdout
+            if part.path.suffix.lower() == ".geo":
+                gmsh.open(str(part.path))
+            else:
+                gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
+                gmsh.merge(str(part.path))
+                gmsh.model.occ.synchronize()
+    except Exception as exc:  # gmsh raises a bare Exception carrying its parser's message and line
+        why = next((plain(x, 160).strip(" *") for x in said if "ERR" in x or "rror" in x), "")
+        raise InputError(f"part file {plain(part.path, 120)}: gmsh cannot read it: {plain(exc, 160)}"
+                         + (f" ({why})" if why else "")) from None
+    if part.path.suffix.lower() != ".geo":
         by_name: dict[str, list[int]] = {}
         for _, tag in gmsh.model.getEntities(2):  # named faces (CAD labels) become surface groups
             label = gmsh.model.getEntityName(2, tag)

@@ -26,9 +26,10 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError
+from rigfem.linkage.expression import parse_function
 from rigfem.linkage.kinematics import fourbar_motion
 from rigfem.linkage.loops import BRANCHES, fourbar_angles
-from rigfem.linkage.synthesis import crank_in_order, parse_function
+from rigfem.linkage.synthesis import crank_in_order
 from rigfem.rig.rules import HOLE_PITCH_MM, fourbar_rules
 from rigfem.studies.sweep import evaluate
 from rigfem.studies.sweep_bases import build_bases
