@@ -122,7 +122,7 @@ def _sweep(sw: dict) -> str:
 
 #: README's Figures table: (record, figure, result from the record)
 ROWS = [
-    ("check", "`rigfem check final-cm`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
+    ("check", "`rigfem check final-cm --force`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
      "HTML)", _check),
     ("calculix_vs_rigfem", "rigfem vs CalculiX 2.20, 700 mm rail, curved P2, 1 thread each", _calculix),
     (VERIFY, "every part case of final-cm re-solved in CalculiX",
@@ -143,7 +143,7 @@ ROWS = [
      lambda d: f"closed form **{med(d, 'closed form, 5000 angles (simulate)', 'wall_ms'):.1f} ms** vs the general "
                f"solver {med(d, 'general solver, 5000 angles', 'wall_ms'):.1f} ms (same run) — "
                "results/benchmarks/dynamics.md, results/dynamics/"),
-    (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm` (see "
+    (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm --force` (see "
      "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
     ("band_coverage", "coverage of the peaks' error band (an estimate) per preset, and its calibration",
      lambda b: "raw ZZ estimate: " + ", ".join(f"{k} {v['coverage_raw_pct']:.0f} %" for k, v in b["coverage"].items())
