@@ -133,6 +133,7 @@ def test_render_tables_plot_and_summary(tmp_path, capsys):
     res = _synthetic_study({"original": [100 - 8 * x ** 2 for x in h],  # converges, order 2, limit 100
                             "cycle": [50 * x ** -0.45 for x in h]})  # singular
     (tmp_path / "crank_rail.json").write_text(json.dumps(res))
+    (tmp_path / ".rigfem-result").write_text("")   # --render rewrites only a folder rigfem wrote
     assert main(["convergence", "--render", "--out", str(tmp_path)]) == 0
     md = (tmp_path / "crank_rail.md").read_text()
     assert "extrapolated **100.00 MPa**, observed order 2.00" in md and "**NOT CONVERGING**" in md

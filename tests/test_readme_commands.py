@@ -90,13 +90,13 @@ def _runnable(cmd: str) -> bool:
 
     try:
         with open(os.devnull, "w") as null:
-            old, sys.stderr = sys.stderr, null
+            old, sys.stderr, sys.stdout = (sys.stderr, sys.stdout), null, null
             try:
                 build_parser(argv).parse_args(argv)
             finally:
-                sys.stderr = old
-    except SystemExit:
-        return False   # a mention (an option without its value)
+                sys.stderr, sys.stdout = old
+    except SystemExit as exc:
+        return exc.code == 0   # --version, --help run; else a mention (an option without its value)
     return True
 
 

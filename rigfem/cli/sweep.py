@@ -40,17 +40,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rigfem.cli.outputs import mark_folder, new_folder, wrote
-
-    out = new_folder("--out", args.out, args.force)   # before the heavy imports and any computation
     from rigfem.errors import InputError
-    from rigfem.studies.sweep import check_scheduler, run_sweep
     from rigfem.studies.sweep_configs import SweepParams
-    from rigfem.studies.sweep_report import write_report
 
     if args.scheduler is not None:
+        from rigfem.studies.sweep import check_scheduler
+
         check_scheduler(args.scheduler)  # bad input before anything; run_sweep connects before any work
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
+    out = new_folder("--out", args.out, args.force)   # before the heavy imports and any computation
+    from rigfem.studies.sweep import run_sweep
+    from rigfem.studies.sweep_report import write_report
+
     if args.report_only:
         import pandas as pd
 

@@ -213,41 +213,49 @@ def _build_iprofile(part: PartDef) -> dict[str, Hole]:
     return {k: _vertical_hole(Lx / 2, y, z0, z0 + tf, r) for k, (y, z0) in spots.items()}
 
 
-@contextmanager
-def _captured(lines: list[str]) -> Iterator[None]:
-    """Collect what C++ libraries print on stdout (fd 1) during the block into ``lines``."""
-    import os
-    import sys
-    import tempfile
+#: read a part file with gmsh in a child process: a parse error there leaves this process's gmsh
+#: parser intact (after a syntax error gmsh misreads the next file once it is re-initialised)
+_PARSE = """
+import sys, gmsh
+gmsh.initialize(interruptible=False)
+gmsh.option.setNumber("General.Terminal", 1)
+try:
+    if sys.argv[1].lower().endswith(".geo"):
+        gmsh.open(sys.argv[1])
+    else:
+        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
+        gmsh.merge(sys.argv[1])
+except Exception as exc:
+    print("RIGFEM-PARSE-ERROR", exc, flush=True)
+    sys.exit(1)
+"""
 
-    sys.stdout.flush()
-    saved = os.dup(1)
-    with tempfile.TemporaryFile() as tmp:
-        os.dup2(tmp.fileno(), 1)
-        try:
-            yield
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-            tmp.seek(0)
-            lines += tmp.read(20_000).decode("utf-8", "replace").splitlines()
+
+def _check_parses(path) -> None:
+    """InputError with gmsh's line and message if gmsh cannot read the part file ``path``."""
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-c", _PARSE, str(path)], capture_output=True, text=True, timeout=600)
+    if r.returncode == 0:
+        return
+    said = (r.stdout + r.stderr).splitlines()
+    why = next((x.split("RIGFEM-PARSE-ERROR", 1)[1].strip() for x in said if "RIGFEM-PARSE-ERROR" in x), "")
+    detail = next((plain(x, 160).strip(" *") for x in said if ("ERR" in x or "rror" in x)
+                   and "RIGFEM-PARSE-ERROR" not in x), "")
+    raise InputError(f"part file {plain(path, 120)}: gmsh cannot read it: {plain(why or r.returncode, 160)}"
+                     + (f" ({detail})" if detail and why not in detail else ""))
 
 
 def _build_custom(part: PartDef) -> dict[str, Hole]:
     assert part.path is not None
-    said: list[str] = []
-    try:
-        with _captured(said):  # OpenCASCADE prints the STEP parser's line and message on stdout
-            if part.path.suffix.lower() == ".geo":
-                gmsh.open(str(part.path))
-            else:
-                gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
-                gmsh.merge(str(part.path))
-                gmsh.model.occ.synchronize()
-    except Exception as exc:  # gmsh raises a bare Exception carrying its parser's message and line
-        why = next((plain(x, 160).strip(" *") for x in said if "ERR" in x or "rror" in x), "")
-        raise InputError(f"part file {plain(part.path, 120)}: gmsh cannot read it: {plain(exc, 160)}"
-                         + (f" ({why})" if why else "")) from None
+    _check_parses(part.path)
+    if part.path.suffix.lower() == ".geo":
+        gmsh.open(str(part.path))
+    else:
+        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
+        gmsh.merge(str(part.path))
+        gmsh.model.occ.synchronize()
     if part.path.suffix.lower() != ".geo":
         by_name: dict[str, list[int]] = {}
         for _, tag in gmsh.model.getEntities(2):  # named faces (CAD labels) become surface groups
