@@ -62,7 +62,8 @@ def test_signal_during_meshing_ends_within_seconds(tmp_path, sig, code):
     print(f"{signal.Signals(sig).name}: exited {proc.returncode} after {delay:.2f} s")
     assert proc.returncode == code, err
     assert delay < 10.0
-    assert b"Traceback" not in err and len(err.decode().strip().splitlines()) == 1
+    said = [ln for ln in err.decode().strip().splitlines() if ": running, " not in ln]  # progress lines aside
+    assert b"Traceback" not in err and len(said) == 1, err
     time.sleep(0.5)
     assert not [k for k in kids if Path(f"/proc/{k}").exists()
                 and (Path(f"/proc/{k}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z")]
