@@ -206,6 +206,6 @@ def test_rail_meshed_far_too_coarse_is_a_clear_error():
     from rigfem.mesh import MeshSettings, mesh_part
     from rigfem.rig import load_part
 
-    with pytest.raises(InputError, match=r"^part rail_size25: mesh quality .* change size = 200 mm") as e:
+    with pytest.raises(InputError, match=r"^part rail_size25: mesh quality .* change size_mm = 200 mm") as e:
         mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(200.0), use_cache=False)
     assert "\n" not in str(e.value)
