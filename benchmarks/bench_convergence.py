@@ -55,7 +55,7 @@ def directions(part: str) -> list[dict]:
     for preset in ("draft",):
         f = FIDELITY[preset]
         for n in (8, 12, 24, 48):
-            spec = StepSpec(f"{preset}/{n}", "d", 2, f["size_mm"], f["local_size_mm"], n)
+            spec = StepSpec(f"{preset}/{n}", "d", 2, f.size_mm, f.local_size_mm, n)
             r = run_step(by[part](n), settings, spec, isolate=False)
             rows.append({"part": part, "mesh": preset, "directions": n,
                          "peak_mpa": r["modes"]["cycle"]["peak_mpa"], "seconds": r["seconds"],

@@ -40,7 +40,7 @@ def preset_mesh(preset: str) -> tuple[int, float, float]:
     """Element order, global and local size (mm) of a preset ("P1@standard": order 1 on the standard mesh)."""
     name = preset.split("@")[-1]
     f = FIDELITY[name]
-    return (1 if preset.startswith("P1") else f["order"]), f["size_mm"], f["local_size_mm"]
+    return (1 if preset.startswith("P1") else f.order), f.size_mm, f.local_size_mm
 
 
 def closed_form_case(case: str, order: int, size: float, local: float) -> dict:
