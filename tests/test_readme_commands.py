@@ -44,8 +44,6 @@ LONG = {
     "rigfem verify --against calculix final-cm --fidelity draft --threads 1":
         ("CalculiX on 12 part cases (~80 s)", None),
     "rigfem sweep --four-bar": ("51 156 configurations, 3 306 with FE (~3 min, ~5 GB)", None),
-    "rigfem sweep": ("51 156 configurations, 3 306 with FE (~3 min, ~5 GB)", None),
-    "rigfem verify --against calculix": ("CalculiX on 12 part cases (~80 s)", None),
 }
 #: mentions that name a file the reader makes (no README command writes it)
 READER_FILES = {"rigfem check best.toml": "best.toml is the reader's own --scene-out file"}
