@@ -284,8 +284,9 @@ def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> Non
         local = (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                               dashboard_address=None) if scheduler is None else nullcontext())
     maps = tempfile.TemporaryDirectory(prefix="rigfem-bases-") if scheduler is None else nullcontext()
-    timeout = CONNECT_TIMEOUT_S if scheduler else None
-    with maps as folder, local as cluster, Client(scheduler or cluster, timeout=timeout) as client:  # the client closes first
+    # a remote scheduler is given a connect timeout; a local cluster keeps Dask's default
+    connect = {"timeout": CONNECT_TIMEOUT_S} if scheduler else {}
+    with maps as folder, local as cluster, Client(scheduler or cluster, **connect) as client:  # the client closes first
         if folder is not None:  # same machine: the workers map one copy of the unit fields
             bases = _map_bases(bases, Path(folder))
         [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
