@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import datetime
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -11,11 +12,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-import publish  # noqa: E402
-import record  # noqa: E402
-import tables  # noqa: E402
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark scripts import each other as siblings
+# the repository's own scripts (not a package), loaded as the modules their siblings import
+publish, record, tables = (importlib.import_module(m) for m in ("publish", "record", "tables"))
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,6 @@ overwritten without ``--force``, ``--force`` replacing only what rigfem wrote, w
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import shutil
@@ -22,6 +21,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from rigfem.errors import InputError, plain
+from rigfem.files import file_sha256
 from rigfem.report.folder import MARKER
 
 __all__ = ["LEDGER", "MIN_FREE_BYTES", "check_place", "new_output", "new_folder", "written", "write_text",
@@ -72,14 +72,6 @@ def _ledger(folder: Path) -> dict[str, str]:
         return {}
 
 
-def _digest(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def rigfem_wrote(path: Path) -> bool:
     """True if ``path`` is a file rigfem wrote and nobody changed since (ledger), or lies in a
     result folder rigfem wrote (marker)."""
@@ -88,7 +80,7 @@ def rigfem_wrote(path: Path) -> bool:
         return False
     if (path.parent / MARKER).is_file():
         return True
-    return _ledger(path.parent).get(path.name) == _digest(path)
+    return _ledger(path.parent).get(path.name) == file_sha256(path)
 
 
 def new_output(flag: str, path: str | None, suffix: str | tuple[str, ...], force: bool = False) -> Path | None:
@@ -141,7 +133,7 @@ def _record(path: Path) -> None:
     if (folder / MARKER).is_file():
         return
     ledger = _ledger(folder)
-    ledger[path.name] = _digest(path)
+    ledger[path.name] = file_sha256(path)
     tmp = folder / f".{LEDGER}.{os.getpid()}.tmp"
     try:
         tmp.write_text(json.dumps(ledger, indent=1, sort_keys=True) + "\n", encoding="utf-8")

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.files import file_sha256
+
 #: the channel a discarded entry is reported on
 log = logging.getLogger("rigfem.cache")
 MANIFEST = "manifest.json"
@@ -144,14 +146,6 @@ def entry_key(inputs: dict) -> str:
     return hashlib.sha256(json.dumps(_canonical(inputs), sort_keys=True).encode()).hexdigest()[:32]
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def discard(folder: Path, why: str) -> None:
     """Remove a bad entry and say so once; the caller computes it again."""
     log.warning("cache entry %s discarded (%s); computing it again", folder, why)
@@ -172,7 +166,7 @@ def read_entry(folder: Path, inputs: dict) -> Path | None:
         if present != set(files):
             return discard(folder, f"files {sorted(present ^ set(files))} missing or unexpected")
         for name, digest in files.items():
-            if _sha256(folder / name) != digest:
+            if file_sha256(folder / name) != digest:
                 return discard(folder, f"{name} does not match its checksum")
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
         return discard(folder, f"unreadable manifest: {type(e).__name__}")
@@ -199,7 +193,7 @@ def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bo
         return False
     try:
         write(tmp)
-        files = {p.name: _sha256(p) for p in sorted(tmp.iterdir())}
+        files = {p.name: file_sha256(p) for p in sorted(tmp.iterdir())}
         (tmp / MANIFEST).write_text(json.dumps({"inputs": _canonical(inputs), "files": files}))
         os.replace(tmp, folder)
     except OSError:
