@@ -27,10 +27,13 @@ from __future__ import annotations
 import difflib
 import os
 from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
 
 from rigfem.errors import InputError
 from rigfem.material import Material, get_material, material_from_dict
-from rigfem.rig.layout import RigPart, resolve_parts
+
+if TYPE_CHECKING:  # rig.layout loads numpy: imported where a scene is resolved, so the CLI starts light
+    from rigfem.rig.layout import RigPart
 
 
 #: environment variable that lifts rigfem's cost limits (set by ``rigfem --allow-large``)
@@ -170,6 +173,8 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     only what depends on the linkage is checked: the parts it has.  ``rails_mm``: the
     linkage's rail lengths in the order of its rails in :data:`PARTS`.
     """
+    from rigfem.rig.layout import resolve_parts
+
     if linkage_type not in PARTS:
         raise InputError(f"linkage type {linkage_type!r} has no stress check yet; checkable types: "
                          f"{', '.join(PARTS)}")

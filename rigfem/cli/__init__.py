@@ -38,11 +38,10 @@ COMMANDS: dict[str, str] = {
 }
 
 
-def _available(only: str | None = None) -> dict[str, object]:
-    """The subcommand modules: ``only`` that one when it names one (a kinematics run then loads
-    no dynamics, FE or mesh code), else all (for the command list)."""
-    names = [only] if only in COMMANDS else list(COMMANDS)
-    return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in names}
+def _available() -> dict[str, object]:
+    """Every subcommand module, for the command list: each is light at import (its heavy imports
+    are inside ``run``), so ``rigfem --help`` loads no FE, mesh or plotting code."""
+    return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in COMMANDS}
 
 
 class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -85,9 +84,10 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"rigfem {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
-    for name, mod in _available(words[0] if words else None).items():
+    for name, mod in _available().items():
         p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=table(getattr(mod, "SUCCESS", None)))
-        mod.add_arguments(p)
+        if words and words[0] == name:  # only the chosen command's options (they may load its defaults)
+            mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
 

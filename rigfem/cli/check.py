@@ -11,11 +11,10 @@ import os
 import tomllib
 from pathlib import Path
 
-from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
 from rigfem.cli.outputs import check_place, wrote
 from rigfem.errors import plain
-from rigfem.scene import builtin_scenes
+from rigfem.settings import REFERENCE_SCENE
 
 HELP = "stress verdict (σu/2) per part of a rig configuration, with report, VTK files and plots"
 
@@ -80,6 +79,9 @@ def _summary(r: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.check import run_check
+    from rigfem.scene import builtin_scenes
+
     if args.list:
         for name, path in sorted(builtin_scenes().items()):
             data = tomllib.loads(path.read_text())

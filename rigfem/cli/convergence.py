@@ -14,20 +14,10 @@ import os
 import sys
 from pathlib import Path
 
-from rigfem.check import REFERENCE_SCENE
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
 from rigfem.errors import InputError, check_range
-from rigfem.settings import FIDELITY, MODES, PARTS
-from rigfem.studies.convergence import (
-    AWAY_MM,
-    EXTEND,
-    RATIO,
-    TARGETS,
-    analyse,
-    scene_cases,
-    study,
-    to_json,
-)
+from rigfem import studies  # lazy (lazy_loader): the FE stack loads when a study runs, not for --help
+from rigfem.settings import FIDELITY, MODES, PARTS, REFERENCE_SCENE
 
 HELP = "mesh convergence (h and p) of each part's peak von Mises: Richardson limit, order, error vs time"
 #: the meaning of exit code 0 (the command has no verdict)
@@ -39,10 +29,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"scene (file or built-in name) or a part of {REFERENCE_SCENE} (e.g. plate_A)")
     p.add_argument("--mode", help="original | cycle (default both)")
     p.add_argument("--levels", default="4", help="h levels, 3..8 (default 4)")
-    p.add_argument("--ratio", default=str(RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
+    p.add_argument("--ratio", default=str(studies.RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
     p.add_argument("--max-gib", default="12", help="refuse an h level predicted above this memory (GiB)")
-    p.add_argument("--extra-levels", default=str(EXTEND),
-                   help=f"finer h levels added while a peak is not converging, 0..3 (default {EXTEND})")
+    p.add_argument("--extra-levels", default=str(studies.EXTEND),
+                   help=f"finer h levels added while a peak is not converging, 0..3 (default {studies.EXTEND})")
     p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
     p.add_argument("--out", default="results/convergence",
                    help="folder: a new one, or with --force one rigfem wrote (studies accumulate there)")
@@ -76,7 +66,7 @@ def table(res: dict) -> str:
             row += f" {s['modes'][m][q]:.2f} | {_pct(err)} |"
         lines.append(row)
     lines += ["", "'away': peak away from the I-profile's sharp web-flange corners (fillet_radius = 0 only) "
-              f"(nodes farther than {AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
+              f"(nodes farther than {studies.AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
     for m in res["modes"]:
         for qty, a in res["modes"][m].items():
             ex = a.get("extrapolation")
@@ -139,7 +129,7 @@ def plot(res: dict, path: Path) -> None:
                     e = max(abs(a["errors"][s["label"]]), 1e-6) * 100
                     ax.loglog(t_of(s), e, "s" if s["kind"] == "preset" else "^", color=f"C{i}")
                     ax.annotate(s["label"], (t_of(s), e), fontsize=7)
-    for p, t in TARGETS.items():
+    for p, t in studies.TARGETS.items():
         ax.axhline(100 * t, color="grey", lw=0.6, ls=":")
         ax.annotate(f"{p} target", (0.01, 100 * t), xycoords=("axes fraction", "data"), fontsize=7,
                     va="bottom")
@@ -190,7 +180,7 @@ def summary(results: list[dict]) -> str:
     """summary.md: per part, mode and preset the cost and the error against the extrapolated peak."""
     lines = ["# Convergence summary: what each preset costs and how accurate it is", "",
              "Error = preset peak vs the Richardson-extrapolated peak of the h sequence (P2, three finest "
-             "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in TARGETS.items()) + ". "
+             "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in studies.TARGETS.items()) + ". "
              "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
              "Presets: " + "; ".join(f"{n}: P{f.order}, {f.size_mm:g}/{f.near_mm:g} mm, "
                                      f"{f.bearing_directions} dirs" for n, f in FIDELITY.items()) + ".",
@@ -228,17 +218,17 @@ def summary(results: list[dict]) -> str:
               "Per part and mode, the coarsest level of the h sequence whose peak is within the target "
               "of the extrapolated peak (and every finer level is too); a preset meeting the target on "
               "every part needs sizes no larger than the finest of these.", "",
-              "| part | mode | " + " | ".join(f"{p} ≤ {100 * t:g} %" for p, t in TARGETS.items()) + " |",
-              "|---|---|" + "---|" * len(TARGETS)]
+              "| part | mode | " + " | ".join(f"{p} ≤ {100 * t:g} %" for p, t in studies.TARGETS.items()) + " |",
+              "|---|---|" + "---|" * len(studies.TARGETS)]
     for res in results:
         hs = [s for s in res["steps"] if s["kind"] == "h"]
         for m, a, ex in _quantities(res):
             if not ex or not ex["converging"]:
-                lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in TARGETS)
+                lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in studies.TARGETS)
                              + " |")
                 continue
             cells = []
-            for t in TARGETS.values():
+            for t in studies.TARGETS.values():
                 ok = [s for i, s in enumerate(hs) if all(_abs_err(a, x["label"]) <= t for x in hs[i:])]
                 t_s = ok[0].get("cpu_seconds") if ok else None
                 cost = (f"{t_s:.0f} s CPU" if t_s else f"{ok[0]['seconds']:.0f} s wall") if ok else ""
@@ -258,9 +248,9 @@ def _targets(target: str) -> tuple[str, list[str] | None]:
 
 def _command(a: argparse.Namespace) -> str:
     opts = [f"--mode {a.mode}" if a.mode else "", f"--levels {a.levels}" if a.levels != "4" else "",
-            f"--ratio {a.ratio}" if a.ratio != str(RATIO) else "", "--no-presets" if a.no_presets else "",
+            f"--ratio {a.ratio}" if a.ratio != str(studies.RATIO) else "", "--no-presets" if a.no_presets else "",
             f"--max-gib {a.max_gib}" if a.max_gib != "12" else "",
-            f"--extra-levels {a.extra_levels}" if a.extra_levels != str(EXTEND) else ""]
+            f"--extra-levels {a.extra_levels}" if a.extra_levels != str(studies.EXTEND) else ""]
     return " ".join(["rigfem convergence", a.target, *[o for o in opts if o]])
 
 
@@ -282,19 +272,19 @@ def run(args: argparse.Namespace) -> int:
         for path in sorted(out.glob("*.json")):
             res = json.loads(path.read_text())
             if "steps" in res:
-                _write(analyse(res), out, path.stem)
+                _write(studies.analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        settings, by_part = scene_cases(scene, parts)
+        settings, by_part = studies.scene_cases(scene, parts)
         mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
             extra = {"scene": scene, "command": _command(args)}
 
             def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
-                write_text(out / f"{stem}.json", to_json({**partial, **extra, "partial": True}))
+                write_text(out / f"{stem}.json", studies.to_json({**partial, **extra, "partial": True}))
 
-            res = study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
+            res = studies.study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
                         max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
                         progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
             print(_write({**res, **extra}, out, stem))
@@ -306,7 +296,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _write(res: dict, out: Path, stem: str) -> str:
     """Write <stem>.json, .md and .png; return the Markdown table."""
-    write_text(out / f"{stem}.json", to_json(res))
+    write_text(out / f"{stem}.json", studies.to_json(res))
     md = table(res)
     write_text(out / f"{stem}.md", f"# Convergence: {res['scene']} {res['part']}\n\nCommand: "
                                     f"`{res['command']}`\n\n{md}")

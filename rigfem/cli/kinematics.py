@@ -15,15 +15,15 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
+import lazy_loader
 
-from rigfem.settings import REFERENCE_SCENE
+from rigfem import linkage, rig  # lazy (lazy_loader): numpy and the solvers load when a linkage moves
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.errors import InputError, check_range
-from rigfem.linkage.kinematics import Motion, linkage_motion, linkage_turn
-from rigfem.linkage.mechanisms import build, crank_angles, four_bar, slider_crank
-from rigfem.rig.rules import MU_LIMITS_DEG
+from rigfem.settings import REFERENCE_SCENE
+
+np = lazy_loader.load("numpy")
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
 #: the meaning of exit code 0 (the command has no verdict)
@@ -62,18 +62,18 @@ def _build(args):
         if args.coupler_point:
             cp = (check_range("--coupler-point DIST", args.coupler_point[0], 0.0, 1e5, "mm"),
                   check_range("--coupler-point ANGLE", args.coupler_point[1], -360.0, 360.0, "deg"))
-        lk = four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp, whole_turn=False)
+        lk = linkage.four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp, whole_turn=False)
         name = "four-bar " + " ".join(args.four_bar)
     elif args.slider_crank:
         L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
-        lk = slider_crank(*L, off, masses=None)
+        lk = linkage.slider_crank(*L, off, masses=None)
         name = "slider-crank " + " ".join(args.slider_crank)
     else:
         from rigfem.scene import load_scene
 
         sc = load_scene(args.scene or REFERENCE_SCENE)
-        lk, name = build(sc), sc.name
+        lk, name = linkage.build(sc), sc.name
         omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
     if args.omega is not None:
         omega = check_range("--omega", args.omega, -1e4, 1e4, "rad/s")
@@ -120,7 +120,7 @@ def _num(x) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _records(m: Motion) -> list[dict]:
+def _records(m: linkage.Motion) -> list[dict]:
     out = []
     for i, deg in enumerate(m.crank_deg):
         r = {"crank_deg": float(deg),
@@ -135,7 +135,7 @@ def _records(m: Motion) -> list[dict]:
     return out
 
 
-def result(lk, name: str, textbook: bool, m: Motion, turn: dict | None, mu_turn: Motion | None) -> dict:
+def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None, mu_turn: linkage.Motion | None) -> dict:
     """The JSON object: the linkage, its turn analysis and the motion at every requested angle."""
     res = {"scene": name, "linkage": lk.meta.get("type"), "lengths_mm": lk.meta.get("lengths_mm"),
            "textbook": textbook, "branch": lk.meta.get("branch", m.meta.get("branch")),
@@ -144,8 +144,8 @@ def result(lk, name: str, textbook: bool, m: Motion, turn: dict | None, mu_turn:
     if mu_turn is not None and mu_turn.transmission_deg is not None:
         mu = mu_turn.transmission_deg
         res["transmission_angle_deg"] = {"min": float(mu.min()), "max": float(mu.max()),
-                                         "rig_band": list(MU_LIMITS_DEG),
-                                         "within_band": bool(mu.min() > MU_LIMITS_DEG[0] and mu.max() < MU_LIMITS_DEG[1])}
+                                         "rig_band": list(rig.MU_LIMITS_DEG),
+                                         "within_band": bool(mu.min() > rig.MU_LIMITS_DEG[0] and mu.max() < rig.MU_LIMITS_DEG[1])}
     for k in ("mechanical_advantage", "transmission_angle"):
         if k in m.meta:
             res[f"{k}_definition"] = m.meta[k]
@@ -228,7 +228,7 @@ def format_table(res: dict, max_rows: int = 24) -> str:
     return "\n".join(out)
 
 
-def write_csv(m: Motion, path: str | Path) -> None:
+def write_csv(m: linkage.Motion, path: str | Path) -> None:
     """One row per crank angle: link angles and rates, point positions, velocities, accelerations."""
     cols = {"crank_deg": m.crank_deg}
     for n, v in m.links.items():
@@ -260,8 +260,8 @@ def run(args) -> int:
         if samples != int(samples):
             raise InputError(f"--samples = {args.samples!r} must be a whole number in [8, 1000000]")
     samples = int(samples)
-    turn = linkage_turn(lk)
-    full = crank_angles(samples)
+    turn = linkage.linkage_turn(lk)
+    full = linkage.crank_angles(samples)
     if turn is not None and not turn["crank_turns_fully"]:
         full = _range_of_motion(name, turn, samples)
     if args.at:
@@ -272,8 +272,8 @@ def run(args) -> int:
         deg = np.array([instant])
     else:
         deg = full
-    m = linkage_motion(lk, deg, omega, alpha)
-    mu_turn = m if deg is full else (linkage_motion(lk, full, omega, alpha) if turn is not None else None)
+    m = linkage.linkage_motion(lk, deg, omega, alpha)
+    mu_turn = m if deg is full else (linkage.linkage_motion(lk, full, omega, alpha) if turn is not None else None)
     res = result(lk, name, textbook, m, turn, mu_turn)
     title = f"{name}: {lk.meta.get('type')} " + ", ".join(f"{k} {v:g}" for k, v in (lk.meta.get("lengths_mm") or {}).items()) + " mm"
     if csv_path:
@@ -281,7 +281,7 @@ def run(args) -> int:
     if png:
         from rigfem.report.motion import motion_plot
 
-        whole = m if deg is full else linkage_motion(lk, full, omega, alpha)
+        whole = m if deg is full else linkage.linkage_motion(lk, full, omega, alpha)
         write_file(png, lambda tmp: motion_plot(whole, tmp, title))
     if gif:
         from rigfem.report.motion import motion_gif
@@ -289,7 +289,7 @@ def run(args) -> int:
         marks = []
         if turn is not None:
             marks = [t["crank_deg"] for t in turn.get("toggles", [])] + [t["crank_deg"] for t in turn.get("limits", [])]
-        write_file(gif, lambda tmp: motion_gif(linkage_motion(lk, crank_angles(72), omega, alpha), tmp, title, marks))
+        write_file(gif, lambda tmp: motion_gif(linkage.linkage_motion(lk, linkage.crank_angles(72), omega, alpha), tmp, title, marks))
     if args.json:
         print(json.dumps(res, indent=1))
     else:

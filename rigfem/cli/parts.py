@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from rigfem.mesh.geometry import mass_kg
-from rigfem.rig.parts import GEOMETRY_DIR, known_parts, load_part, rail_hole_x
+from rigfem import mesh as fem_mesh  # lazy (lazy_loader): gmsh loads when a mass is computed
+from rigfem import rig  # lazy (lazy_loader)
 
 HELP = "list the known parts (geometry/*.toml) with dimensions and masses"
 #: the meaning of exit code 0 (the command has no verdict)
@@ -21,16 +21,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    print(f"parts in {GEOMETRY_DIR} (mm, kg):")
-    for name, (path, _) in known_parts().items():
-        part = load_part(name)
-        m = mass_kg(part)
+    print(f"parts in {rig.GEOMETRY_DIR} (mm, kg):")
+    for name, (path, _) in rig.known_parts().items():
+        part = rig.load_part(name)
+        m = fem_mesh.mass_kg(part)
         dims = ", ".join(f"{k} {part[k]:g}" for k in _KEY_DIMS.get(part.kind, ()))
         note = ""
         if part.kind == "rail":
             per_m = m / part["length"] * 1000
             ref = part.reference
-            note = (f"; {len(rail_hole_x(part))} holes; {per_m:.3f} kg/m "
+            note = (f"; {len(rig.rail_hole_x(part))} holes; {per_m:.3f} kg/m "
                     f"(catalogue {ref['linear_mass_catalogue'].value:g}: "
                     f"{100 * (per_m / ref['linear_mass_catalogue'].value - 1):+.1f} %, "
                     f"study {ref['linear_mass_study'].value:g}: "

@@ -9,16 +9,10 @@ import argparse
 import json
 import math
 
-from rigfem.settings import REFERENCE_SCENE
+from rigfem.settings import MODELS, REFERENCE_SCENE
 from rigfem.cli.linkage_args import add_linkage_arguments
-from rigfem.dynamics.cycle import MODELS, simulate
-from rigfem.dynamics.forces import loaded_linkage
-from rigfem.dynamics.history import summary
 from rigfem.errors import InputError, check_range
 from rigfem.cli.outputs import new_output, write_file, wrote
-from rigfem.io.reactions_csv import write_csv
-from rigfem.linkage.mechanisms import four_bar, slider_crank
-from rigfem.report.pictures import reactions_plot
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
 #: the meaning of exit code 0 (the command has no verdict)
@@ -42,6 +36,9 @@ def _lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
 
 
 def _build(args) -> tuple[object, float, str]:
+    from rigfem.dynamics.forces import loaded_linkage
+    from rigfem.linkage.mechanisms import four_bar, slider_crank
+
     speed = None
     if args.speed_hz is not None:
         speed = check_range("--speed-hz", args.speed_hz, 0.0, 100.0, "Hz", lo_open=True)
@@ -118,6 +115,11 @@ def format_table(res: dict) -> str:
 
 
 def run(args) -> int:
+    from rigfem.dynamics.cycle import simulate
+    from rigfem.dynamics.history import summary
+    from rigfem.io.reactions_csv import write_csv
+    from rigfem.report.pictures import reactions_plot
+
     if args.model not in MODELS:
         raise InputError(f"--model = {args.model!r} must be one of {', '.join(MODELS)}")
     samples = check_range("--samples", args.samples, 8, 1_000_000)

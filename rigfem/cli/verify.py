@@ -14,10 +14,9 @@ import shutil
 import time
 from pathlib import Path
 
-from rigfem.check import REFERENCE_SCENE, load_check_scene
 from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
 from rigfem.errors import InputError, check_range
-from rigfem.studies.verify import verify_scene
+from rigfem.settings import REFERENCE_SCENE
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
 #: the meaning of exit codes 0 and 1
@@ -53,6 +52,9 @@ def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.check import load_check_scene
+    from rigfem.studies.verify import verify_scene
+
     # every option and the scene are checked before ccx is looked for and before any computation
     if args.against != "calculix":
         raise InputError(f"--against = {args.against!r}: the only other solver is 'calculix'")
