@@ -288,8 +288,8 @@ def run(args: argparse.Namespace) -> int:
                         max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
                         progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
             print(_write({**res, **extra}, out, stem))
-    studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
-    write_text(out / "summary.md", summary([s for s in studies if "steps" in s]))
+    done = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+    write_text(out / "summary.md", summary([s for s in done if "steps" in s]))
     wrote(out / "summary.md")
     return 0
 

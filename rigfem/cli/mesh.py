@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
+from rigfem import rig  # lazy (lazy_loader)
 from rigfem.cli.outputs import new_output, write_file
 from rigfem.errors import InputError, check_range
-from rigfem import mesh as fem_mesh  # lazy (lazy_loader): gmsh loads when a part is meshed, not for --help
-from rigfem import rig  # lazy (lazy_loader)
 from rigfem.settings import FIDELITY, MeshSettings, preset
+
+if TYPE_CHECKING:
+    from rigfem.mesh.partmesh import PartMesh
 
 HELP = "mesh a part (known name or .geo/.step/.brep file) and write .vtu or .msh"
 #: the meaning of exit code 0 (the command has no verdict)
@@ -17,6 +20,8 @@ SUCCESS = "mesh written"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from rigfem.mesh.mesher import DEFAULT_SIZE  # the mesh code loads for `rigfem mesh` only, not for --help
+
     parser.add_argument("part", metavar="PART", help="part name (see `rigfem parts`) or geometry file")
     parser.add_argument("--length", type=float, metavar="MM", help="part length, mm (rails: any length)")
     parser.add_argument("--fidelity", choices=list(FIDELITY), metavar="PRESET",
@@ -24,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"--local-size override it")
     parser.add_argument("--size", type=float, metavar="MM",
                         help="global element size, mm (default: the preset's, else by kind: "
-                             + ", ".join(f"{k} {v:g}" for k, v in fem_mesh.DEFAULT_SIZE.items()) + ")")
+                             + ", ".join(f"{k} {v:g}" for k, v in DEFAULT_SIZE.items()) + ")")
     parser.add_argument("--refine", default="", metavar="G1,G2",
                         help="surface groups that carry load, refined (e.g. hole_10,hole_11)")
     parser.add_argument("--local-size", "--refine-size", dest="local_size", type=float, metavar="MM",
@@ -52,7 +57,9 @@ def _overrides(args: argparse.Namespace) -> dict[str, float]:
 
 def _settings(args: argparse.Namespace, kind: str) -> MeshSettings:
     """The preset (or the kind's default size), with the options given on top of it."""
-    base = preset(args.fidelity) if args.fidelity else MeshSettings(fem_mesh.DEFAULT_SIZE[kind])
+    from rigfem.mesh.mesher import DEFAULT_SIZE
+
+    base = preset(args.fidelity) if args.fidelity else MeshSettings(DEFAULT_SIZE[kind])
     size = check_range("--size", args.size if args.size is not None else base.size_mm, 0.0, None, "mm",
                        lo_open=True)
     local = args.local_size if args.local_size is not None else (base.local_size_mm if args.fidelity else None)
@@ -63,7 +70,7 @@ def _settings(args: argparse.Namespace, kind: str) -> MeshSettings:
                    min_quality=check_range("--min-quality", args.min_quality, 0.0, 1.0))
 
 
-def refinement(pm: fem_mesh.PartMesh, settings: MeshSettings) -> str:
+def refinement(pm: PartMesh, settings: MeshSettings) -> str:
     """Where the mesh is finer than the global size, by surface name: the groups refined on
     request and the curved ones that curvature sizing meshes finer, or why nothing is."""
     said = []
@@ -79,11 +86,14 @@ def refinement(pm: fem_mesh.PartMesh, settings: MeshSettings) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.mesh.mesher import mesh_part
+    from rigfem.mesh.partmesh import write_mesh
+
     out = new_output("--out", args.out, (".vtu", ".msh"), args.force)
     part = rig.load_part(args.part, _overrides(args))
     settings = _settings(args, part.kind)
-    pm = fem_mesh.mesh_part(part, settings, use_cache=not args.no_cache)
-    write_file(out, lambda tmp: fem_mesh.write_mesh(pm, tmp, args.order))
+    pm = mesh_part(part, settings, use_cache=not args.no_cache)
+    write_file(out, lambda tmp: write_mesh(pm, tmp, args.order))
     q, m = pm.quality, pm.meta
     dims = ", ".join(f"{k} {d.value:g}" for k, d in part.dims.items() if d.source == "override")
     print(f"{part.name}{f' ({dims} mm)' if dims else ''}: {len(pm.points)} nodes, {len(pm.tets)} tets, "

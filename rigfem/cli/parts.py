@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from rigfem import mesh as fem_mesh  # lazy (lazy_loader): gmsh loads when a mass is computed
 from rigfem import rig  # lazy (lazy_loader)
 
 HELP = "list the known parts (geometry/*.toml) with dimensions and masses"
@@ -21,10 +20,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.mesh.geometry import mass_kg  # gmsh (OpenCASCADE volumes): loaded by this command only
+
     print(f"parts in {rig.GEOMETRY_DIR} (mm, kg):")
     for name, (path, _) in rig.known_parts().items():
         part = rig.load_part(name)
-        m = fem_mesh.mass_kg(part)
+        m = mass_kg(part)
         dims = ", ".join(f"{k} {part[k]:g}" for k in _KEY_DIMS.get(part.kind, ()))
         note = ""
         if part.kind == "rail":
