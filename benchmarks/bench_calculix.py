@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from record import summarise, write_record
+from record import OUT, summarise, write_record
 
 from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve, von_mises
 from rigfem.io import export_model, run_ccx
@@ -71,6 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--size", type=float, default=6.0, help="global element size, mm")
     ap.add_argument("--refine-size", type=float, default=1.25, help="element size on the loaded holes, mm")
     ap.add_argument("--cases", type=int, default=4, help="unit load cases of the multi-case comparison")
+    ap.add_argument("--out", type=Path, default=OUT, help="record folder (benchmarks/bench_perf.py: a scratch one)")
     args = ap.parse_args(argv)
     settings = MeshSettings(size_mm=args.size, refine=HOLES, local_size_mm=args.refine_size)
     rig, ccx, agree, multi = [], [], [], []
@@ -124,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
                                               for x in agree),
                "tip displacement rel diff": max(abs(x["tip_disp_ccx"] / x["tip_disp_rigfem"] - 1) for x in agree)}
     samples = {"rigfem": rig, "ccx": ccx, "agreement": agree, "unit cases": multi}
-    print(f"wrote {write_record('calculix_vs_rigfem', samples, derived, params)}")
+    print(f"wrote {write_record('calculix_vs_rigfem', samples, derived, params, out=args.out)}")
     return 0
 
 

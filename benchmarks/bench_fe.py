@@ -2,6 +2,10 @@
 solvers (pypardiso vs SuperLU vs CG+AMG) on a ~100k-DOF P2 rail-like bar.
 
     python benchmarks/bench_fe.py [--reps 3] [--nx 140]
+    python benchmarks/bench_fe.py --rss-nx 1378   # one bar of about 1M DOF: assemble, factorise, solve
+
+``--rss-nx`` builds, factorises and solves one bar and prints ``{"dof", "factorise_s", "solve_s"}``:
+benchmarks/bench_perf.py runs it in a process per mesh to publish peak RSS against DOF.
 
 Writes results/benchmarks/fe_assembly.json (raw runs, medians over ``--reps``; ``python benchmarks/publish.py``
 writes the .md).
@@ -10,6 +14,7 @@ writes the .md).
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import time
 
@@ -60,13 +65,28 @@ def timed(fn, reps: int):
     return out, statistics.median(ts), ts
 
 
+def rss_run(nx: int) -> dict:
+    """The check's FE path on one bar (P2, clamped root, a tip force): what its peak memory is made of."""
+    model = build_model(rail_bar(nx), get_material("rig_steel"), 2)
+    t0 = time.perf_counter()
+    problem = StaticProblem(model, [Fixed("root")], "pardiso")
+    t1 = time.perf_counter()
+    F = load_matrix(model, [[SurfaceForce("tip", (0.0, 100.0, 0.0))]])
+    problem.linear_solver.solve(F[problem.free, 0])
+    return {"dof": int(model.mesh.ndof), "factorise_s": t1 - t0, "solve_s": time.perf_counter() - t1}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
+    ap.add_argument("--rss-nx", type=int, metavar="NX", help="only: solve one bar of NX divisions, print its DOF")
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--nx", type=int, default=140)
     ap.add_argument("--ncube", type=int, default=13)
     ap.add_argument("--amg-maxiter", type=int, default=400)
     a = ap.parse_args()
+    if a.rss_nx:
+        print(json.dumps(rss_run(a.rss_nx)))
+        return
     part = rail_bar(a.nx)
     mat = get_material("rig_steel")
     fm = fe_mesh(part, 2)
