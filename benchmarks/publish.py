@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
-from tables import LE10_TARGET, RENDER, grid_note, grid_rows, hms, le10_outliers, med
+from tables import LE10_TARGET, RENDER, grid_note, grid_rows, hms, le10_outliers, med, perf_note, perf_rows
 
 README = ROOT / "README.md"
 VERIFY = "calculix_verify_final-cm"  #: written by `rigfem verify --against calculix`, not a benchmark
@@ -46,7 +46,7 @@ COMMANDS = {
     "le10": "python benchmarks/bench_le10.py --sizes 400 283 200 141 100",
     "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
     "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
-    "band_coverage": "python benchmarks/band_coverage.py"}
+    "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py"}
 
 
 def problems(recs: dict[str, dict]) -> list[str]:
@@ -199,7 +199,10 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
     g = recs.get("sweep_grid_cost")
     grid = (f"Command: `{g['command']}` (results/benchmarks/sweep_grid_cost.md, {g['date'][:10]}):\n\n"
             + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
-    return {"figures": "\n".join(figure_rows(recs)) + "\n", "grid-cost": grid}
+    p = recs.get("perf")
+    perf = (f"Command: `{COMMANDS['perf']}` (this record: `{p['command']}`):\n\n" + "\n".join(perf_rows(p)) + "\n\n"
+            + perf_note(p) + "\n") if p else _missing("perf") + ".\n"
+    return {"figures": "\n".join(figure_rows(recs)) + "\n", "grid-cost": grid, "performance": perf}
 
 
 def render_readme(text: str, recs: dict[str, dict]) -> str:

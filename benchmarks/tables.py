@@ -286,7 +286,47 @@ def malloc_trim(rec: dict) -> str:
 
 
 #: record name -> its table renderer (results/benchmarks/<name>.md)
+def perf_rows(rec: dict) -> list[str]:
+    """Issue 26's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals)."""
+    from bench_perf import status  # the one home of the goals (loads no FE code)
+
+    def t(s: float | None) -> str:
+        return "-" if s is None else hms(s) if s >= 10 else f"{s:.2f} s"
+
+    out = ["| work | goal | cold | warm | peak RSS | |", "|---|---|---:|---:|---:|---|"]
+    for v in status(rec):
+        extra = (f"; ratio {v['ratio']:.2f}" if "ratio" in v else "") + (
+            f"; up to {v['dof']:,.0f} DOF, {rec['derived']['dof MiB per 1000 DOF']:.1f} MiB per 1000 DOF, "
+            f"R² {v['r2']:.3f}" if "dof" in v else "")
+        met = {None: "not measured", True: "met", False: "**not met**"}[v["met"]]
+        rss = "-" if v["rss_mib"] is None else f"{v['rss_mib']:.0f} MiB"
+        out.append(f"| {v['work']} | {v['goal']} | {t(v['cold_s'])} | {t(v['warm_s'])} | {rss}{extra} | {met} |")
+    return out
+
+
+def perf_note(rec: dict) -> str:
+    """When and where each row was measured (rows are kept until re-measured)."""
+    by = {}
+    for series, p in rec["params"]["provenance"].items():
+        by.setdefault(f"{p['date'][:10]} at commit {p['commit'][:10]}", []).append(series)
+    return ("Medians of separate processes (cold: empty rigfem and numba caches; warm: the caches a first run "
+            "filled); peak RSS: the largest of the row's runs, whole process tree.  Measured "
+            + "; ".join(f"{w}: {', '.join(s)}" for w, s in by.items()) + f" on {rec['machine']['cores']} shared "
+            "cores — results/benchmarks/perf.md.")
+
+
+def perf(rec: dict) -> str:
+    lines = head(rec, "Performance goals of issue 26: every row cold and warm, separate processes")
+    lines += perf_rows(rec) + ["", perf_note(rec), "", "| series | runs | wall s | peak tree RSS MiB | "
+                                                      "load average at the starts |", "|---|---:|---:|---:|---|"]
+    for s, rows in rec["samples"].items():
+        loads = ", ".join(f"{x['load_before'][0]:.1f}" for x in rows if "load_before" in x)
+        lines.append(f"| {s} | {len(rows)} | {rng(rec, s, fmt='.2f')} | {rng(rec, s, 'peak_tree_rss_mib', '.0f')} "
+                     f"| {loads} |")
+    return "\n".join(lines) + "\n"
+
+
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
-    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim}
+    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf}

@@ -99,3 +99,45 @@ def test_write_record_computes_the_summaries(tmp_path):
     assert all(k in r for k in record.REQUIRED)
     assert r["summary"]["a"]["wall_s"] == {"median": 2.0, "min": 1.0, "max": 3.0, "n": 3}
     assert r["machine"]["cores"] >= 1 and r["machine"]["memory_gib"] > 0
+
+
+def _fake_perf(tmp_path: Path, samples: dict) -> dict:
+    """A tiny perf record written by the real path (record.write_record, bench_perf's derive and merge)."""
+    bench_perf = importlib.import_module("bench_perf")
+    merged, prov = bench_perf.merge(samples, None)
+    path = record.write_record("perf", merged, bench_perf.derive(merged), {"provenance": prov}, command="fake",
+                               out=tmp_path)
+    return json.loads(path.read_text())
+
+
+def _run(wall: float, rss: float = 50.0, **extra) -> dict:
+    return {"wall_s": wall, "peak_tree_rss_mib": rss, "exit": 0, "load_before": [1.0, 1.0, 1.0], **extra}
+
+
+def test_perf_table_says_met_from_the_data(tmp_path):
+    """Each row is met / not met / not measured from the record and bench_perf.GOALS, never typed."""
+    rec = _fake_perf(tmp_path, {"help cold": [_run(0.1), _run(0.2)], "help warm": [_run(0.1)],
+                                "parts cold": [_run(0.5)], "parts warm": [_run(0.1)],
+                                "check draft cold": [_run(40.0, 2000.0)], "check draft warm": [_run(2.5, 1200.0)],
+                                "dof": [_run(1.0, 100.0 + 0.5 * n / 1000, dof=n) for n in (10_000, 100_000, 1_000_000)],
+                                "ccx": [_run(5.0, ratio=0.52, dof=167_529)]})
+    assert publish.problems({"perf": rec}) == []
+    rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in tables.perf_rows(rec)[2:]}
+    assert rows["`rigfem --help`"].endswith("| met |") and "0.15 s" in rows["`rigfem --help`"]
+    assert rows["`rigfem parts`"].endswith("| **not met** |")  # cold 0.5 s > 0.3 s although warm is fast
+    assert rows["`rigfem check final-cm --fidelity draft`"].endswith("| met |")  # the draft goal is warm only
+    assert rows["`rigfem check final-cm`, standard"].endswith("| not measured |")
+    assert "ratio 0.52" in rows[next(k for k in rows if "CalculiX" in k)] and "**not met**" in rows[
+        next(k for k in rows if "CalculiX" in k)]
+    dof = rows[next(k for k in rows if k.startswith("peak RSS"))]
+    assert "up to 1,000,000 DOF, 0.5 MiB per 1000 DOF, R² 1.000" in dof and dof.endswith("| met |")
+    block = publish.blocks({**publish.load(), "perf": rec})["performance"]
+    assert "| `rigfem --help` | < 0.3 s | 0.15 s | 0.10 s | 50 MiB | met |" in block and "perf.md" in block
+
+
+def test_perf_record_keeps_rows_not_remeasured(tmp_path):
+    bench_perf = importlib.import_module("bench_perf")
+    old = _fake_perf(tmp_path, {"help cold": [_run(0.1)], "parts cold": [_run(0.5)]})
+    merged, prov = bench_perf.merge({"parts cold": [_run(0.2)]}, old)
+    assert merged["help cold"] == old["samples"]["help cold"] and merged["parts cold"][0]["wall_s"] == 0.2
+    assert set(prov) == {"help cold", "parts cold"}
