@@ -32,3 +32,13 @@ def test_light_command_imports_no_heavy_module(args):
 def test_help_imports_no_numpy():
     """The command list needs only each subcommand's one-line help."""
     assert "numpy" not in imported("--help")
+
+
+def test_parts_computes_volumes_once(tmp_path, monkeypatch):
+    """``rigfem parts`` builds each solid in gmsh once; later runs read the cached volumes (no gmsh)."""
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    assert "gmsh" in imported("parts")  # first run: OpenCASCADE volumes
+    mods = imported("parts")
+    heavy = sorted(m for m in mods if m.split(".")[0] in HEAVY)
+    assert not heavy, f"rigfem parts (cached volumes) imported {heavy[:8]}"
+    assert (tmp_path / "volumes").is_dir()

@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigfem.mesh.geometry import mass_kg  # gmsh (OpenCASCADE volumes): loaded by this command only
+    from rigfem.mesh.volume import mass_kg  # cached OpenCASCADE volumes (gmsh only on a cache miss)
 
     print(f"parts in {rig.GEOMETRY_DIR} (mm, kg):")
     for name, (path, _) in rig.known_parts().items():

@@ -286,16 +286,11 @@ def build(part: PartDef) -> dict[str, Hole]:
     return builders[part.kind](part)
 
 
-def volume_mm3(part: PartDef) -> float:
-    """Volume of the part's solid from the OCC geometry, mm^3."""
+def occ_volume_mm3(part: PartDef) -> float:
+    """Volume of the part's solid from the OCC geometry, mm^3 (cached: :func:`rigfem.mesh.volume.volume_mm3`)."""
     with gmsh_session("volume"):
         build(part)
         vols = gmsh.model.getEntities(3)
         if part.kind == "custom" and not gmsh.model.occ.getEntities(3):
             raise InputError(f"custom part {part.path}: volume needs an OpenCASCADE geometry")
         return float(sum(gmsh.model.occ.getMass(d, t) for d, t in vols))
-
-
-def mass_kg(part: PartDef) -> float:
-    """Mass of the part, kg (volume in mm^3 times density in kg/m^3 * 1e-9)."""
-    return volume_mm3(part) * part.density * 1e-9
