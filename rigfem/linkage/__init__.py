@@ -11,7 +11,8 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "closed": ["ClosedMotion", "closed_motion"],
+        "closed": ["closed_motion"],
+        "state": ["BodyState", "GeneralState", "LinkageState", "linkage_state"],
         "loops": ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "slider_crank_angles", "singular_ranges"],
         "kinematics": ["Motion", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
         "model": ["GROUND", "ClosureError", "AssemblyError", "BodyHistory", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage"],

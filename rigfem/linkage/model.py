@@ -35,11 +35,6 @@ def perp(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """z component of a × b, (..., 2) -> (...)."""
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
 class ClosureError(InputError):
     """The given lengths cannot close the loop at all (message names the lengths and the rule)."""
 
