@@ -14,7 +14,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "forces": ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"],
         "cycle": ["MODELS", "simulate", "simulate_original"],
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],
-        "closed": ["closed_form"],
+        "closed": ["closed_reactions"],
         "solver": ["solve"],
     },
 )

@@ -3,17 +3,15 @@
 The general solver (``rigfem.linkage.general``) closes the loop by continuation and Newton
 and inverts a 9×9 constraint Jacobian per crank angle; for the two linkages the rig is
 built as, positions, rates and accelerations have closed forms
-(``rigfem.linkage.closed``) and the joint reactions follow from two moment balances
+(``rigfem.linkage.closed``, handed over as a ``LinkageState`` by
+``rigfem.linkage.state.linkage_state``) and the joint reactions follow from two moment balances
 per angle (a 2×2 system solved in closed form), all vectorised over crank angles:
 
 * four-bar: rocker about O4 and coupler about A give the force at B; force balances then
   give A, O4, O2, and the crank's moment about O2 the driver torque;
 * slider-crank: rod about A and the slider's balance along the slide give the force at B.
 
-``closed_form`` returns None where it does not apply (another topology, or a toggle
-anywhere in the turn: there the general solver's continuation and toggle report are
-the reference), so ``solve`` can always try it first.  Same sign conventions and units
-as the general solver (``rigfem.dynamics.history``).
+Same sign conventions and units as the general solver (``rigfem.dynamics.history``).
 """
 
 from __future__ import annotations
@@ -22,11 +20,9 @@ import numpy as np
 
 from rigfem.dynamics.forces import applied, cross, inertia_load
 from rigfem.dynamics.history import JointHistory, ReactionHistory
-from rigfem.linkage.closed import closed_motion
-from rigfem.linkage.model import Linkage, Prismatic
-from rigfem.linkage.state import LinkageState
+from rigfem.linkage.model import Linkage, LinkageState, Prismatic
 
-__all__ = ["closed_form"]
+__all__ = ["closed_reactions"]
 
 
 def _two_moments(r1: np.ndarray, m1: np.ndarray, r2: np.ndarray, m2: np.ndarray) -> np.ndarray:
@@ -34,8 +30,9 @@ def _two_moments(r1: np.ndarray, m1: np.ndarray, r2: np.ndarray, m2: np.ndarray)
     return (m1[:, None] * r2 - m2[:, None] * r1) / cross(r1, r2)[:, None]
 
 
-def _history(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
-    """The joint forces and driver torque balancing the bodies' loads on ``motion``."""
+def closed_reactions(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
+    """The joint forces and driver torque balancing the bodies' loads on the closed-form
+    ``motion`` (at ``deg``); its evaluator re-solves on the same linkage at any angle."""
     g = np.asarray(lk.gravity_mm_s2, float) / 1000
     D, M = {}, {}                       # per body: applied + d'Alembert force, its moment about the origin
     for b in lk.bodies:
@@ -66,19 +63,11 @@ def _history(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float
                                       -M["slider"] if prism else None, "prismatic" if prism else "revolute")
     meta = {k: v for k, v in lk.meta.items() if k != "singular_fn"}
     meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=None)
-    return ReactionHistory(deg, joints, torque, motion.histories, meta, singular_mask=None,
-                           evaluator=lambda a: _at(lk, np.atleast_1d(np.asarray(a, float)), speed_hz))
+    h = ReactionHistory(deg, joints, torque, motion.histories, meta, singular_mask=None)
 
+    def evaluator(angles: np.ndarray) -> ReactionHistory:
+        a = np.atleast_1d(np.asarray(angles, float))
+        return closed_reactions(lk, motion.at(a), a, speed_hz)
 
-def _at(lk: Linkage, deg: np.ndarray, speed_hz: float) -> ReactionHistory | None:
-    motion = closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)
-    return None if motion is None else _history(lk, motion, deg, speed_hz)
-
-
-def closed_form(lk: Linkage, crank_deg: np.ndarray, speed_hz: float) -> ReactionHistory | None:
-    """Reaction history of a toggle-free rig four-bar or slider-crank in closed form, or None.
-
-    A linkage that enters the toggle band (``MU_TOGGLE_DEG``) anywhere in the turn is left
-    to the general solver, whose continuation reports the toggle ranges.
-    """
-    return _at(lk, np.asarray(crank_deg, float), float(speed_hz))
+    h.evaluator = evaluator
+    return h

@@ -3,7 +3,7 @@ each body's motion and mass totals, and the external loads (the compressor's gas
 
 The one home of the Newton–Euler body terms: the general solver (``rigfem.dynamics.solver``)
 and the closed forms (``rigfem.dynamics.closed``) both balance the joint forces against these,
-on the whole motion the linkage hands over (:class:`rigfem.linkage.state.LinkageState`).
+on the whole motion the linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
 SI inside (m, rad, N, N·m); a scene's gas force is given in N and mm.
 """
 
@@ -12,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.linkage.mechanisms import build
-from rigfem.linkage.model import Linkage, Load
-from rigfem.linkage.state import BodyState, LinkageState
+from rigfem.linkage.model import BodyState, Linkage, LinkageState, Load
 
 __all__ = ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"]
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.closed import closed_form
+from rigfem.dynamics.closed import closed_reactions
 from rigfem.dynamics.forces import applied, cross, inertia_load
 from rigfem.dynamics.history import JointHistory, ReactionHistory, merge_ranges, singular_ranges
-from rigfem.linkage.general import RCOND_SINGULAR, general_motion
-from rigfem.linkage.model import CrankDriver, Linkage, Revolute, SliderDriver
-from rigfem.linkage.state import LinkageState
+from rigfem.linkage.general import RCOND_SINGULAR
+from rigfem.linkage.model import CrankDriver, Linkage, LinkageState, Revolute, SliderDriver
+from rigfem.linkage.state import linkage_state
 
 __all__ = ["solve"]
 
@@ -34,10 +34,9 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     ``singular_mask`` flags toggle samples and whose ``evaluator`` re-solves at any angle.
     """
     deg = np.asarray(crank_deg, float)
-    fast = None if general else closed_form(lk, deg, speed_hz)
-    if fast is not None:
-        return fast
-    motion = general_motion(lk, deg, speed_hz, tol_mm, check_closure)
+    motion = linkage_state(lk, deg, speed_hz, tol_mm, check_closure, general)
+    if motion.general is None:
+        return closed_reactions(lk, motion, deg, speed_hz)
     h = _dynamics(lk, motion, deg, speed_hz)
     if motion.probe is not None:  # toggles between the samples, seen at the continuation points
         probe = _dynamics(lk, motion.probe, np.degrees(motion.probe.theta), speed_hz)

@@ -5,7 +5,7 @@ acceleration, and every joint's position follow from the loop closures
 (:mod:`rigfem.linkage.loops`), vectorised over crank angles; the general solver
 (:mod:`rigfem.linkage.general`) is needed only for other topologies or near a toggle.
 The closed-form dynamics (``rigfem.dynamics.closed``) balance forces on this motion, handed
-over whole as a :class:`~rigfem.linkage.state.LinkageState`.
+over whole as a :class:`~rigfem.linkage.model.LinkageState`.
 SI (m, rad, s) like the dynamics.
 """
 
@@ -14,8 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
-from rigfem.linkage.model import GROUND, CrankDriver, Linkage, Prismatic, Revolute, rotate
-from rigfem.linkage.state import LinkageState, linkage_state
+from rigfem.linkage.model import GROUND, CrankDriver, Linkage, LinkageState, Prismatic, Revolute, rotate, state_of
 
 __all__ = ["closed_motion"]
 
@@ -81,10 +80,13 @@ def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> LinkageState | N
         out["coupler"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
         out["rocker"] = (k["theta4"], k["omega4"], k["alpha4"], O4, zeros2, zeros2)
         B = O4 + rotate(k["theta4"], (L["b4"], 0.0))
-        return linkage_state(lk, theta, out, {"O2": zeros2, "A": A, "B": B, "O4": O4}, kind)
-    k = slider_crank_angles(L["b2"], L["b3"], L.get("offset", 0.0), theta, w2)
-    x = k["x"]
-    out["rod"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
-    B = np.stack([x, np.full(n, L.get("offset", 0.0))], -1)
-    out["slider"] = (zero, zero, zero, B, np.stack([k["v"], zero], -1), np.stack([k["acc"], zero], -1))
-    return linkage_state(lk, theta, out, {"O2": zeros2, "A": A, "B": B, "slide": B}, kind)
+        joints = {"O2": zeros2, "A": A, "B": B, "O4": O4}
+    else:
+        k = slider_crank_angles(L["b2"], L["b3"], L.get("offset", 0.0), theta, w2)
+        out["rod"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
+        B = np.stack([k["x"], np.full(n, L.get("offset", 0.0))], -1)
+        out["slider"] = (zero, zero, zero, B, np.stack([k["v"], zero], -1), np.stack([k["acc"], zero], -1))
+        joints = {"O2": zeros2, "A": A, "B": B, "slide": B}
+    st = state_of(lk, theta, out, joints, kind)
+    st.at = lambda deg: closed_motion(lk, np.radians(np.atleast_1d(np.asarray(deg, float))), w2)
+    return st

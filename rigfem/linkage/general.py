@@ -10,7 +10,7 @@ one-degree-of-freedom linkage (:mod:`rigfem.linkage.model`) at given driver phas
 
 Every stage after the continuation pass is vectorised over crank angles.  The forces
 (inverse dynamics) build on this in :mod:`rigfem.dynamics.solver`, which gets the whole
-motion in one call (:func:`general_motion`, a :class:`~rigfem.linkage.state.LinkageState`).
+motion in one call (:func:`rigfem.linkage.state.linkage_state`).
 """
 
 from __future__ import annotations
@@ -21,8 +21,17 @@ import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.linkage.constraints import Constraints
-from rigfem.linkage.model import AssemblyError, BodyHistory, CrankDriver, Linkage, Revolute, SliderDriver
-from rigfem.linkage.state import GeneralState, LinkageState, linkage_state
+from rigfem.linkage.model import (
+    AssemblyError,
+    BodyHistory,
+    CrankDriver,
+    GeneralState,
+    Linkage,
+    LinkageState,
+    Revolute,
+    SliderDriver,
+    state_of,
+)
 
 __all__ = ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "Trace", "trace", "positions",
            "rates", "is_full_turn", "conditioning", "general_motion", "move"]
@@ -304,7 +313,7 @@ def _state(tr: Trace, deg: np.ndarray, q, qd, qdd, J, Jinv) -> LinkageState:
         motion[b.name] = (q[:, i + 2], qd[:, i + 2], qdd[:, i + 2], q[:, i:i + 2], qd[:, i:i + 2], qdd[:, i:i + 2])
     gen = GeneralState(model.m, dict(model.index), list(model.rows), model.drow, Jinv,
                        conditioning(model, J, Jinv), frames, list(tr.warnings))
-    return linkage_state(lk, np.radians(deg), motion, {n: f[0] for n, f in frames.items()}, "general", gen, q, qd)
+    return state_of(lk, np.radians(deg), motion, {n: f[0] for n, f in frames.items()}, "general", gen, q, qd)
 
 
 def _on_branch(tr: Trace, deg: np.ndarray, speed_hz: float) -> LinkageState:
