@@ -104,17 +104,17 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
     path = resolve(name)
     sc = load_scene(path)
     lk = loaded_linkage(sc)
+    data = sc.raw
+    table = {**data.get("check", {}), **(overrides or {})}
+    validate_check(table, path.name)
+    dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
+    settings = check_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
     # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
     broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
     if broken and not allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
                          f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "
                          f"mounted as given; pass --allow-rule-violations to check it anyway")
-    data = sc.raw
-    table = {**data.get("check", {}), **(overrides or {})}
-    validate_check(table, path.name)
-    dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
-    settings = check_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
     desc = data.get("description", data["linkage"].get("title", ""))
     csv_path = None
     if dyn["reactions_csv"] is not None:
@@ -260,7 +260,8 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
         return h, []
     force = max(float(np.abs(j.force_N).max()) for j in h.joints.values())
     torque = float(np.abs(h.torque_Nm).max())
-    cases = part_cases(h, peaks(h), cs.settings)
+    pk = peaks(h)
+    cases = part_cases(h, pk, cs.settings)
     if max(force, torque) < UNLOADED or not any(np.any(case.coef) for _, case in cases):
         raise InputError(f"scene {plain(cs.scene.name, 80)!r}: nothing loads its parts (largest joint force "
                          f"{force:.3g} N, driver {torque:.3g}: no masses or a massless linkage), so a stress "

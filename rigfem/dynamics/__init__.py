@@ -11,10 +11,10 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "history": ["JointHistory", "ReactionHistory", "merge_ranges", "spline_evaluator", "peaks", "summary"],
-        "forces": ["inertia_load", "applied", "compressor_gas_force", "loaded_linkage"],
+        "forces": ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"],
         "cycle": ["MODELS", "simulate", "simulate_original"],
         "original": ["fourbar_kinematics", "original_reactions", "original_program"],
-        "closed": ["closed_form"],
+        "closed": ["closed_reactions"],
         "solver": ["solve"],
     },
 )

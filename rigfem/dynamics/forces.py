@@ -1,8 +1,9 @@
 """The forces on a linkage's bodies besides the joints': gravity and d'Alembert inertia from
-each body's mass data and motion, and the external loads (the compressor's gas force).
+each body's motion and mass totals, and the external loads (the compressor's gas force).
 
 The one home of the Newton–Euler body terms: the general solver (``rigfem.dynamics.solver``)
-and the closed forms (``rigfem.dynamics.closed``) both balance the joint forces against these.
+and the closed forms (``rigfem.dynamics.closed``) both balance the joint forces against these,
+on the whole motion the linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
 SI inside (m, rad, N, N·m); a scene's gas force is given in N and mm.
 """
 
@@ -11,29 +12,30 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.linkage.mechanisms import build
-from rigfem.linkage.model import Body, Linkage, Load, cross, perp, rotate
+from rigfem.linkage.model import BodyState, Linkage, LinkageState, Load
 
-__all__ = ["inertia_load", "applied", "compressor_gas_force", "loaded_linkage"]
+__all__ = ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"]
 
 
-def inertia_load(body: Body, phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, acc_origin: np.ndarray,
-                 gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z component of a × b, (..., 2) -> (...): the moment of a planar force b at lever arm a."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def inertia_load(body: BodyState, gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gravity plus d'Alembert force at the centre of mass (N, (n, 2)) and its moment about
-    the body's frame origin (N·m, (n,)), from the body's motion (SI: rad, rad/s, rad/s², m/s²)."""
-    m, c, inertia = body.totals()
-    rc = rotate(phi, c)
-    f = m * (gravity - (acc_origin + perp(rc) * alpha[:, None] - rc * (omega**2)[:, None]))
-    return f, cross(rc, f) - inertia * alpha
+    the body's frame origin (N·m, (n,)), from the body's motion (SI)."""
+    f = body.mass_kg * (gravity - body.com_acc)
+    return f, cross(body.com, f) - body.inertia_kg_m2 * body.alpha
 
 
-def applied(load: Load, theta_rad: np.ndarray, origin_m: np.ndarray, phi: np.ndarray, q: np.ndarray,
-            qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """An external load's force (N, (n, 2)) and its moment about the body's origin (N·m) at driver
-    phases ``theta_rad``, the body at ``origin_m``/``phi``; ``q``, ``qd`` the solver's coordinates."""
-    s = rotate(phi, np.asarray(load.local_mm, float) / 1000)
-    f = np.asarray(load.force({"theta_rad": theta_rad, "point_mm": (origin_m + s) * 1000, "q": q, "qd": qd}),
-                   float).reshape(len(theta_rad), 2)
-    return f, cross(s, f)
+def applied(load: Load, arm: np.ndarray, motion: LinkageState) -> tuple[np.ndarray, np.ndarray]:
+    """An external load's force (N, (n, 2)) and its moment about the body's origin (N·m) on
+    ``motion``, its point at ``arm`` (m) from the body's origin."""
+    point = motion.bodies[load.body].origin + arm
+    f = np.asarray(load.force({"theta_rad": motion.theta, "point_mm": point * 1000, "q": motion.q,
+                               "qd": motion.qd}), float).reshape(len(motion.theta), 2)
+    return f, cross(arm, f)
 
 
 def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,

@@ -4,38 +4,23 @@ For the two linkages the rig is built as, every body's angle, rates, frame origi
 acceleration, and every joint's position follow from the loop closures
 (:mod:`rigfem.linkage.loops`), vectorised over crank angles; the general solver
 (:mod:`rigfem.linkage.general`) is needed only for other topologies or near a toggle.
-The closed-form dynamics (``rigfem.dynamics.closed``) balance forces on this motion.
+The closed-form dynamics (``rigfem.dynamics.closed``) balance forces on this motion, handed
+over whole as a :class:`~rigfem.linkage.model.LinkageState`.
 SI (m, rad, s) like the dynamics.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
-from rigfem.linkage.model import GROUND, CrankDriver, Linkage, Prismatic, Revolute, rotate
+from rigfem.linkage.model import GROUND, CrankDriver, Linkage, LinkageState, Prismatic, Revolute, rotate, state_of
 
-__all__ = ["ClosedMotion", "closed_motion"]
+__all__ = ["closed_motion"]
 
 #: joints (name, body_a, body_b) the builders make
 _FOURBAR = (("O2", GROUND, "crank"), ("A", "crank", "coupler"), ("B", "coupler", "rocker"), ("O4", GROUND, "rocker"))
 _SLIDER = (("O2", GROUND, "crank"), ("A", "crank", "rod"), ("B", "rod", "slider"), ("slide", GROUND, "slider"))
-
-
-@dataclass
-class ClosedMotion:
-    """The motion of a rig four-bar or slider-crank at crank angles ``theta`` (rad), SI.
-
-    ``bodies``: name -> (phi, omega, alpha, origin, origin velocity, origin acceleration);
-    ``joints``: joint name -> position (n, 2) m.
-    """
-
-    kind: str  #: "four-bar" | "slider-crank"
-    theta: np.ndarray
-    bodies: dict[str, tuple[np.ndarray, ...]]
-    joints: dict[str, np.ndarray]
 
 
 def _kind(lk: Linkage) -> str | None:
@@ -74,7 +59,7 @@ def _toggle_free(L: dict, kind: str) -> bool:
     return bool(s3 < 1.0 and np.sqrt(1.0 - s3**2) >= lim)
 
 
-def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> ClosedMotion | None:
+def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> LinkageState | None:
     """The motion of ``lk`` at crank angles ``theta`` (rad) and crank speed ``w2`` (rad/s), or
     None where no closed form applies (another topology, or a toggle anywhere in the turn)."""
     kind = _kind(lk)
@@ -95,10 +80,13 @@ def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> ClosedMotion | N
         out["coupler"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
         out["rocker"] = (k["theta4"], k["omega4"], k["alpha4"], O4, zeros2, zeros2)
         B = O4 + rotate(k["theta4"], (L["b4"], 0.0))
-        return ClosedMotion(kind, theta, out, {"O2": zeros2, "A": A, "B": B, "O4": O4})
-    k = slider_crank_angles(L["b2"], L["b3"], L.get("offset", 0.0), theta, w2)
-    x = k["x"]
-    out["rod"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
-    B = np.stack([x, np.full(n, L.get("offset", 0.0))], -1)
-    out["slider"] = (zero, zero, zero, B, np.stack([k["v"], zero], -1), np.stack([k["acc"], zero], -1))
-    return ClosedMotion(kind, theta, out, {"O2": zeros2, "A": A, "B": B, "slide": B})
+        joints = {"O2": zeros2, "A": A, "B": B, "O4": O4}
+    else:
+        k = slider_crank_angles(L["b2"], L["b3"], L.get("offset", 0.0), theta, w2)
+        out["rod"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
+        B = np.stack([k["x"], np.full(n, L.get("offset", 0.0))], -1)
+        out["slider"] = (zero, zero, zero, B, np.stack([k["v"], zero], -1), np.stack([k["acc"], zero], -1))
+        joints = {"O2": zeros2, "A": A, "B": B, "slide": B}
+    st = state_of(lk, theta, out, joints, kind)
+    st.at = lambda deg: closed_motion(lk, np.radians(np.atleast_1d(np.asarray(deg, float))), w2)
+    return st

@@ -9,7 +9,8 @@ one-degree-of-freedom linkage (:mod:`rigfem.linkage.model`) at given driver phas
 * velocities: Phi_q qdot = -Phi_t;  accelerations: Phi_q qddot = gamma.
 
 Every stage after the continuation pass is vectorised over crank angles.  The forces
-(inverse dynamics) build on this in :mod:`rigfem.dynamics.solver`.
+(inverse dynamics) build on this in :mod:`rigfem.dynamics.solver`, which gets the whole
+motion in one call (:func:`rigfem.linkage.state.linkage_state`).
 """
 
 from __future__ import annotations
@@ -20,10 +21,20 @@ import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.linkage.constraints import Constraints
-from rigfem.linkage.model import AssemblyError, BodyHistory, CrankDriver, Linkage, Revolute, SliderDriver
+from rigfem.linkage.model import (
+    AssemblyError,
+    BodyHistory,
+    CrankDriver,
+    GeneralState,
+    Linkage,
+    LinkageState,
+    Revolute,
+    SliderDriver,
+    state_of,
+)
 
 __all__ = ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "Trace", "trace", "positions",
-           "rates", "is_full_turn", "conditioning", "body_motion", "move"]
+           "rates", "is_full_turn", "conditioning", "general_motion", "move"]
 
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
 #: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
@@ -286,20 +297,46 @@ def conditioning(model: Constraints, J: np.ndarray, Jinv: np.ndarray) -> np.ndar
     return np.where(np.isfinite(rcond), rcond, 0.0)
 
 
-def body_motion(model: Constraints, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> dict[str, BodyHistory]:
-    """Every moving body's motion record (mm, rad) at solved coordinates, joint points included."""
-    lk = model.lk
-    out = {}
+def _state(tr: Trace, deg: np.ndarray, q, qd, qdd, J, Jinv) -> LinkageState:
+    """The whole motion at solved coordinates: bodies, joints' geometry, conditioning."""
+    model, lk = tr.model, tr.model.lk
+    fr = model.frame(q)
+    frames = {}
+    for j in lk.joints:
+        rb, _ = model.pose(q, j.body_b)
+        sb = fr[j.name][1]
+        frames[j.name] = (np.broadcast_to(rb + sb, (q.shape[0], 2)), sb,
+                          *((None, None) if isinstance(j, Revolute) else fr[j.name][2:4]))
+    motion = {}
     for b in lk.bodies:
         i = 3 * model.index[b.name]
-        out[b.name] = b.history(q[:, i + 2], qd[:, i + 2], qdd[:, i + 2], q[:, i:i + 2], qd[:, i:i + 2],
-                                qdd[:, i:i + 2])
-    lk.record_joint_points(out)
-    return out
+        motion[b.name] = (q[:, i + 2], qd[:, i + 2], qdd[:, i + 2], q[:, i:i + 2], qd[:, i:i + 2], qdd[:, i:i + 2])
+    gen = GeneralState(model.m, dict(model.index), list(model.rows), model.drow, Jinv,
+                       conditioning(model, J, Jinv), frames, list(tr.warnings))
+    return state_of(lk, np.radians(deg), motion, {n: f[0] for n, f in frames.items()}, "general", gen, q, qd)
+
+
+def _on_branch(tr: Trace, deg: np.ndarray, speed_hz: float) -> LinkageState:
+    st = _state(tr, deg, *positions(tr, deg, speed_hz))
+    st.at = lambda angles: _on_branch(tr, np.atleast_1d(np.asarray(angles, float)), speed_hz)
+    return st
+
+
+def general_motion(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
+                   check_closure: bool = True) -> LinkageState:
+    """``lk``'s whole motion at the increasing driver phases ``crank_deg`` (deg) at ``speed_hz``,
+    in one piece: traced, solved, with the motion at the continuation points as ``probe`` where
+    they are denser than the samples (a toggle narrower than the sampling shows there)."""
+    deg = np.asarray(crank_deg, float)
+    tr = trace(lk, deg, tol_mm, check_closure)
+    st = _on_branch(tr, deg, speed_hz)
+    theta = np.radians(deg)
+    if tr.theta.size > 1 and deg.size > 1 and np.min(np.abs(np.diff(tr.theta))) < abs(theta[1] - theta[0]):
+        st.probe = _state(tr, np.degrees(tr.theta), tr.q, *rates(tr.model, tr.q, tr.theta, 2 * np.pi * speed_hz))
+    return st
 
 
 def move(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0) -> dict[str, BodyHistory]:
     """Every body's motion at the increasing driver phases ``crank_deg`` (deg) at ``speed_hz``."""
     tr = trace(lk, crank_deg)
-    q, qd, qdd, _, _ = positions(tr, crank_deg, speed_hz)
-    return body_motion(tr.model, q, qd, qdd)
+    return _state(tr, np.asarray(crank_deg, float), *positions(tr, crank_deg, speed_hz)).histories

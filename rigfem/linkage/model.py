@@ -1,5 +1,7 @@
 """A planar one-degree-of-freedom linkage as data: bodies, revolute and prismatic joints, one
-driver, and the motion record of a body over a crank turn.
+driver, the motion record of a body over a crank turn, and the whole linkage's motion at
+given driver phases (:class:`LinkageState`: what the dynamics balances forces on, handed
+over as plain arrays so the forces need no call back into the linkage).
 
 Lengths in mm, angles in rad, masses in kg (a body's mass data is plain data here; the
 forces it causes are :mod:`rigfem.dynamics`' business).  The general planar solver that
@@ -33,11 +35,6 @@ def perp(v: np.ndarray) -> np.ndarray:
     out[..., 0] = -v[..., 1]
     out[..., 1] = v[..., 0]
     return out
-
-
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """z component of a × b, (..., 2) -> (...)."""
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
 class ClosureError(InputError):
@@ -173,3 +170,79 @@ class Linkage:
             for bn, loc in ((j.body_a, j.local_a_mm), (j.body_b, j.local_b_mm)):
                 if bn != GROUND:
                     bodies[bn].joint_local_mm[j.name] = np.asarray(loc, float)
+
+
+@dataclass
+class BodyState:
+    """One body's motion (n samples, SI) and mass totals (particles included)."""
+
+    phi: np.ndarray
+    omega: np.ndarray
+    alpha: np.ndarray
+    origin: np.ndarray  #: frame origin (n, 2) m
+    origin_vel: np.ndarray  #: (n, 2) m/s
+    mass_kg: float
+    inertia_kg_m2: float  #: about the centre of mass
+    com: np.ndarray  #: centre of mass from the frame origin, world axes (n, 2) m
+    com_acc: np.ndarray  #: acceleration of the centre of mass (n, 2) m/s²
+
+
+@dataclass
+class GeneralState:
+    """What the general solver's inverse dynamics needs besides the bodies' motion: the
+    coordinates' layout, the inverse constraint Jacobian and each joint's geometry."""
+
+    n_coords: int
+    index: dict[str, int]  #: body -> its block (x, y, phi) in the coordinates
+    rows: list[int]  #: first constraint row of each joint (in ``lk.joints``' order)
+    drow: int  #: the driver's constraint row
+    Jinv: np.ndarray  #: (n, m, m)
+    rcond: np.ndarray  #: reciprocal condition number of the scaled Jacobian (n,)
+    #: joint -> (point on body_b (n, 2) m, its offset from body_b's origin, slide axis u, normal) (u, normal None
+    #: for a revolute)
+    frames: dict[str, tuple]
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class LinkageState:
+    """The motion of a linkage at driver phases ``theta`` (rad)."""
+
+    theta: np.ndarray
+    bodies: dict[str, BodyState]
+    joints: dict[str, np.ndarray]  #: joint position (n, 2) m
+    histories: dict[str, BodyHistory]  #: mm, joint points recorded
+    load_arms: list[np.ndarray]  #: each of ``lk.loads``' points from its body's origin (n, 2) m
+    q: np.ndarray | None  #: the general solver's coordinates (x, y, phi per body; None without loads)
+    qd: np.ndarray | None
+    kind: str = "general"  #: "four-bar" | "slider-crank" (closed forms) | "general"
+    general: GeneralState | None = None
+    #: the same branch's motion where the solver's continuation points are denser than ``theta`` (a toggle
+    #: narrower than the sampling shows there), else None
+    probe: LinkageState | None = None
+    #: the motion at other phases (deg) on the same branch
+    at: Callable[[np.ndarray], LinkageState | None] | None = None
+
+
+def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: dict[str, np.ndarray],
+                  kind: str = "general", general: GeneralState | None = None,
+                  q: np.ndarray | None = None, qd: np.ndarray | None = None) -> LinkageState:
+    """Assemble a :class:`LinkageState` from every body's (phi, omega, alpha, origin, origin velocity,
+    origin acceleration) in ``motion`` and the joints' positions (SI); ``q``, ``qd`` the general
+    solver's coordinates where it gave them."""
+    bodies, hist = {}, {}
+    for b in lk.bodies:
+        phi, w, al, r, v, a = motion[b.name]
+        m, c, inertia = b.totals()
+        rc = rotate(phi, c)
+        bodies[b.name] = BodyState(phi, w, al, r, v, m, inertia, rc,
+                                   a + perp(rc) * al[:, None] - rc * (w**2)[:, None])
+        hist[b.name] = b.history(phi, w, al, r, v, a)
+    lk.record_joint_points(hist)
+    arms = [rotate(bodies[ld.body].phi, np.asarray(ld.local_mm, float) / 1000) for ld in lk.loads]
+    if lk.loads and q is None:  # the loads see the general solver's coordinates
+        q = np.concatenate([np.column_stack([bodies[b.name].origin, bodies[b.name].phi]) for b in lk.bodies], 1)
+        qd = np.concatenate([np.column_stack([bodies[b.name].origin_vel, bodies[b.name].omega])
+                             for b in lk.bodies], 1)
+    return LinkageState(theta, bodies, joints, hist, arms, q if lk.loads else None, qd if lk.loads else None,
+                        kind, general)
