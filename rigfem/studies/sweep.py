@@ -37,6 +37,7 @@ import numpy as np
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
 from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.files import whole_file
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import part_cases
 from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
@@ -186,8 +187,10 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     key = p.key()
     work = Path(work_dir) / f"{key}-{tag}"
     work.mkdir(parents=True, exist_ok=True)
-    (Path(work_dir) / ".gitignore").write_text("*\n")  # stored chunks never enter the repository
-    (work / "params.json").write_text(json.dumps(dataclasses.asdict(p), indent=1, default=str))
+    for path, text in ((Path(work_dir) / ".gitignore", "*\n"),  # stored chunks never enter the repository
+                       (work / "params.json", json.dumps(dataclasses.asdict(p), indent=1, default=str))):
+        with whole_file(path) as tmp:
+            tmp.write_text(text)
     chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
     todo = [i for i in range(len(chunks)) if read_entry(*_chunk(work, key, i, chunks[i])) is None]
     bar = tqdm(total=len(configs), unit="cfg", disable=not progress or None, desc=p.linkage_type,
@@ -210,7 +213,8 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     spent = json.loads(timing.read_text())["seconds"] if timing.is_file() else 0.0
     if todo:  # compute time over every run that computed chunks of this sweep
         spent += time.perf_counter() - t0
-        timing.write_text(json.dumps({"seconds": spent}))
+        with whole_file(timing) as tmp:
+            tmp.write_text(json.dumps({"seconds": spent}))
     table = pd.concat([pd.read_csv(_chunk(work, key, i, chunks[i])[0] / "rows.csv", keep_default_na=False,
                                    na_values=[""])
                        for i in range(len(chunks))], ignore_index=True)
