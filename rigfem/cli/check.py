@@ -14,6 +14,7 @@ from pathlib import Path
 from rigfem.check import REFERENCE_SCENE, run_check
 from rigfem.cli.exitcodes import EXIT
 from rigfem.cli.outputs import check_place, wrote
+from rigfem.cli.progress import stage
 from rigfem.errors import plain
 from rigfem.scene import builtin_scenes
 
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         check_place("--out", args.out, folder=True)
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
-                       allow_rule_violations=args.allow_rule_violations)
+                       allow_rule_violations=args.allow_rule_violations, on_stage=stage)
     print(json.dumps(report, indent=2) if args.json else _summary(report))
     out = Path(args.out) if args.out is not None else Path("results") / report["scene"]
     wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")

@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
+from rigfem.cli.progress import stage
 from rigfem.errors import InputError, check_range
 from rigfem.settings import FIDELITY, MODES, PARTS
 from rigfem.studies.convergence import (
@@ -296,8 +296,9 @@ def run(args: argparse.Namespace) -> int:
 
             res = study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
                         max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
-                        progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
+                        progress=lambda part, step: stage(f"part {part}: step {step}"))
             print(_write({**res, **extra}, out, stem))
+    stage("summary")
     studies = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     write_text(out / "summary.md", summary([s for s in studies if "steps" in s]))
     wrote(out / "summary.md")

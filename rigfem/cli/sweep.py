@@ -40,6 +40,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rigfem.cli.outputs import mark_folder, new_folder, wrote
+    from rigfem.cli.progress import stage
     from rigfem.errors import InputError
     from rigfem.studies.sweep_configs import SweepParams
 
@@ -63,9 +64,18 @@ def run(args: argparse.Namespace) -> int:
         print(f"{p.linkage_type}: wrote {', '.join(str(out / f) for f in files)}")
         wrote(out)
         return 0
+    from rigfem.errors import check_range
+    from rigfem.mesh.mesher import MACHINE_GIB
+    from rigfem.studies.cost import check_cost, sweep_cost
+    from rigfem.studies.sweep_configs import enumerate_configs
+
+    configs = enumerate_configs(p)
+    check_range("--workers", args.workers, 1, 256)
+    check_cost(sweep_cost(p, configs, args.workers), MACHINE_GIB)  # before the folder is made
     mark_folder(out)
-    table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
-                      scheduler=args.scheduler, progress=not args.quiet)
+    table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers, configs=configs,
+                      scheduler=args.scheduler, progress=not args.quiet, on_stage=stage)
+    stage("report")
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
     ok = table[table["status"] == "ok"]
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from rigfem.check import REFERENCE_SCENE, load_check_scene
 from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
+from rigfem.cli.progress import stage
 from rigfem.errors import InputError, check_range
 from rigfem.studies.verify import verify_scene
 
@@ -64,13 +65,14 @@ def run(args: argparse.Namespace) -> int:
     if shutil.which("ccx") is None:
         raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
     t0 = time.perf_counter()
-    rows = verify_scene(cs, threads=threads)
+    rows = verify_scene(cs, threads=threads, on_stage=stage)
     name = Path(str(args.scene)).stem
     command = f"rigfem verify --against calculix {args.scene} --fidelity {args.fidelity} --threads {threads}"
     text = table(rows, f"rigfem vs CalculiX 2.20: scene {name} ({args.fidelity})", command,
                  time.perf_counter() - t0)
     print(text, end="")
     if out is not None:
+        stage("report")
         mark_folder(out)
         write_text(out / f"calculix_verify_{name}.md", text)
         write_text(out / f"calculix_verify_{name}.json", json.dumps(
