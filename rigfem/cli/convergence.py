@@ -13,10 +13,11 @@ import json
 import os
 from pathlib import Path
 
-from rigfem.check import REFERENCE_SCENE
+from rigfem.check import REFERENCE_SCENE, load_check_scene
+from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
 from rigfem.cli.progress import stage
-from rigfem.errors import InputError, check_range
+from rigfem.errors import InputError, check_range, plain
 from rigfem.settings import FIDELITY, MODES, PARTS
 from rigfem.studies.convergence import (
     AWAY_MM,
@@ -47,6 +48,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="results/convergence",
                    help="folder: a new one, or with --force one rigfem wrote (studies accumulate there)")
     p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
+    add_rule_argument(p)
     p.add_argument("--render", action="store_true",
                    help="no computing: re-analyse the study JSONs in --out and rewrite tables, plots, summary")
 
@@ -285,11 +287,14 @@ def run(args: argparse.Namespace) -> int:
                 _write(analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        settings, by_part = scene_cases(scene, parts)
+        broken = load_check_scene(scene, None, args.allow_rule_violations).rule_violations
+        for v in broken:
+            print(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)", flush=True)
+        settings, by_part = scene_cases(scene, parts, allow_rule_violations=True)
         mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
-            extra = {"scene": scene, "command": _command(args)}
+            extra = {"scene": scene, "command": _command(args), "rule_violations": broken}
 
             def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
                 write_text(out / f"{stem}.json", to_json({**partial, **extra, "partial": True}))

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.settings import REFERENCE_SCENE
+from rigfem.cli.exitcodes import RULES_SHOWN
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.errors import InputError, check_range
@@ -27,7 +28,7 @@ from rigfem.rig.rules import MU_LIMITS_DEG
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
 #: the meaning of exit code 0 (the command has no verdict)
-SUCCESS = "motion printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
+SUCCESS = f"motion printed; {RULES_SHOWN}"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -149,6 +150,10 @@ def result(lk, name: str, textbook: bool, m: Motion, turn: dict | None, mu_turn:
     for k in ("mechanical_advantage", "transmission_angle"):
         if k in m.meta:
             res[f"{k}_definition"] = m.meta[k]
+    mu = res.get("transmission_angle_deg")
+    res["rule_violations"] = ([f"transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, allowed "
+                               f"{MU_LIMITS_DEG[0]:g} < mu < {MU_LIMITS_DEG[1]:g} deg"]
+                              if mu and not mu["within_band"] and not textbook else [])
     res["angles"] = _records(m)
     return res
 
@@ -160,13 +165,10 @@ def _fmt(x, w=11, p=4) -> str:
 def format_table(res: dict, max_rows: int = 24) -> str:
     """Readable summary and a table of the motion (at most ``max_rows`` evenly chosen angles)."""
     L = res["lengths_mm"] or {}
-    out = [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
+    out = [f"WARNING: breaks rig rule {v}" for v in res["rule_violations"]]   # first, whatever follows
+    out += [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
            + (f"  branch={res['branch']}" if res.get("branch") else "")
            + f"   crank omega={res['omega_rad_s']:g} rad/s alpha={res['alpha_rad_s2']:g} rad/s²  ({res['method']})"]
-    mu = res.get("transmission_angle_deg")
-    if mu and not mu["within_band"] and not res["textbook"]:
-        out.append(f"WARNING: breaks rig rule transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, "
-                   f"allowed {mu['rig_band'][0]:g} < mu < {mu['rig_band'][1]:g} deg")
     if res["textbook"]:
         out.append("textbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     t = res["turn"]
