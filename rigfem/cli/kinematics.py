@@ -68,13 +68,13 @@ def _build(args):
     elif args.slider_crank:
         L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
-        lk = slider_crank(*L, off, masses=None)
+        lk = slider_crank(*L, off, masses=None, whole_turn=False)
         name = "slider-crank " + " ".join(args.slider_crank)
     else:
         from rigfem.scene import load_scene
 
         sc = load_scene(args.scene or REFERENCE_SCENE)
-        lk, name = build(sc), sc.name
+        lk, name = build(sc, whole_turn=False), sc.name
         omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
     if args.omega is not None:
         omega = check_range("--omega", args.omega, -1e4, 1e4, "rad/s")
@@ -104,13 +104,14 @@ def _assembles(name: str, turn: dict, deg: float) -> float:
     """``deg`` moved into the crank's range of motion (by whole turns); InputError naming the
     range and the limit positions where the linkage does not assemble at ``deg``."""
     rng = turn.get("crank_range_deg")
-    if rng:
-        a, b = rng
+    for a, b in turn.get("crank_ranges_deg") or ([rng] if rng else []):
         shifted = a + (deg - a) % 360.0
         if shifted <= b + 1e-9:
             return float(shifted if not a <= deg <= b else deg)
     dead = ", ".join(f"{x:.4f}" for x in turn["dead_points_deg"])
-    where = f"its crank moves only between {rng[0]:.4f} and {rng[1]:.4f} deg" if rng else "it assembles nowhere"
+    arcs = turn.get("crank_ranges_deg") or ([rng] if rng else [])
+    where = ("its crank moves only between " + " or between ".join(f"{a:.4f} and {b:.4f} deg" for a, b in arcs)
+             if arcs else "it assembles nowhere")
     raise InputError(f"--at = {deg:g} deg: {name} does not assemble there ({where}; limit positions at "
                      f"the dead points {dead} deg)")
 
