@@ -285,8 +285,22 @@ def malloc_trim(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def bad_inputs(rec: dict) -> str:
+    lines = head(rec, "Issue 24's examples: what rigfem prints and how long it takes to fail")
+    lines += ["Each example is its own process in an empty folder with an empty cache; the time is the wall "
+              "time of the process (Ctrl-C: from the signal to its end).", "",
+              "| example | command | exit | time (s) | files left | what rigfem prints (last line on stderr) |",
+              "|---|---|---:|---:|---|---|"]
+    for name, (r,) in rec["samples"].items():
+        cmd, msg = (t.replace("|", r"\|") for t in (r["command"], r["prints"]))
+        left = ", ".join(r["files_left"]) or "none"
+        lines.append(f"| {name} | `{cmd}` | {r['exit']} | {r['wall_s']:.2f} | {left} | {msg} |")
+    lines += ["", f"Slowest to fail: {rec['derived']['slowest_s']:.1f} s."]
+    return "\n".join(lines) + "\n"
+
+
 #: record name -> its table renderer (results/benchmarks/<name>.md)
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
-    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim}
+    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "bad_inputs": bad_inputs}

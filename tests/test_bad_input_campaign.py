@@ -91,3 +91,34 @@ def test_slider_crank_at_any_angle_computes_or_names_its_range(capsys, b2, b3, o
     err = capsys.readouterr().err
     assert rc in (0, 2) and "internal error" not in err, err
     assert rc == 0 or err.count("\n") == 1
+
+
+def test_sweep_scheduler_address_that_answers_but_is_not_dask(tmp_path, monkeypatch, capsys):
+    """A port that accepts TCP and answers garbage (a proxy, a web server) is not a scheduler:
+    exit 3 in seconds, before any work and before the output folder is made."""
+    import socket
+    import threading
+    import time
+
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def answer() -> None:
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n" * 4)
+            conn.close()
+
+    threading.Thread(target=answer, daemon=True).start()
+    monkeypatch.chdir(tmp_path)
+    t0 = time.monotonic()
+    try:
+        assert main(["sweep", "--scheduler", f"tcp://127.0.0.1:{port}", "--quiet", "--out", "sw"]) == 3
+    finally:
+        server.close()
+    err = capsys.readouterr().err
+    assert "answers, but not as a Dask scheduler" in err and time.monotonic() - t0 < 30
+    assert os.listdir(tmp_path) == []

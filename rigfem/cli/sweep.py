@@ -60,6 +60,10 @@ def run(args: argparse.Namespace) -> int:
 
         configs = enumerate_configs(p)
         check_cost(sweep_cost(p, configs, args.workers), MACHINE_GIB)  # before the folder is made
+        if args.scheduler is not None:
+            from rigfem.studies.sweep import reach_scheduler
+
+            reach_scheduler(args.scheduler)  # a Dask scheduler answers there, in seconds
     from rigfem.studies.sweep import run_sweep
     from rigfem.studies.sweep_report import write_report
 

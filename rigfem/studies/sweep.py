@@ -262,6 +262,28 @@ def reach_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         why = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or type(exc).__name__)
         raise ComputeError(f"cannot reach the Dask scheduler at {address}: {why} (waited at most "
                            f"{timeout:g} s); start it or fix --scheduler") from None
+    if not _is_scheduler(address, timeout):  # something answers TCP there (e.g. a proxy): not Dask
+        raise ComputeError(f"{address} answers, but not as a Dask scheduler (its identity call failed within "
+                           f"{timeout:g} s); start the scheduler there or fix --scheduler")
+
+
+def _is_scheduler(address: str, timeout: float) -> bool:
+    """True if a Dask scheduler answers its identity call at ``address`` within ``timeout`` s."""
+    import asyncio
+
+    from distributed.core import rpc
+
+    async def identity() -> dict:
+        r = rpc(address, timeout=timeout)
+        try:
+            return await asyncio.wait_for(r.identity(), timeout)
+        finally:
+            await r.close_rpc()
+
+    try:
+        return asyncio.run(identity()).get("type") == "Scheduler"
+    except Exception:  # garbage, a closed stream, a timeout: whatever answers is not a scheduler
+        return False
 
 
 class _Mapped(np.memmap):
