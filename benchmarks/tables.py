@@ -289,10 +289,10 @@ def bad_inputs(rec: dict) -> str:
     lines = head(rec, "Issue 24's examples: what rigfem prints and how long it takes to fail")
     lines += ["Each example is its own process in an empty folder with an empty cache; the time is the wall "
               "time of the process (Ctrl-C: from the signal to its end).", "",
-              "| example | command | exit | time (s) | files left | what rigfem prints (last line on stderr) |",
+              "| example | command | exit | time (s) | files left | what rigfem prints (last line on stderr, else first on stdout) |",
               "|---|---|---:|---:|---|---|"]
     for name, (r,) in rec["samples"].items():
-        cmd, msg = (t.replace("|", r"\|") for t in (r["command"], r["prints"]))
+        name, cmd, msg = (t.replace("|", r"\|") for t in (name, r["command"], r["prints"]))
         left = ", ".join(r["files_left"]) or "none"
         lines.append(f"| {name} | `{cmd}` | {r['exit']} | {r['wall_s']:.2f} | {left} | {msg} |")
     lines += ["", f"Slowest to fail: {rec['derived']['slowest_s']:.1f} s."]
