@@ -285,6 +285,20 @@ def malloc_trim(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def bad_inputs(rec: dict) -> str:
+    lines = head(rec, "Issue 24's examples: what rigfem prints and how long it takes to fail")
+    lines += ["Each example is its own process in an empty folder with an empty cache; the time is the wall "
+              "time of the process (Ctrl-C: from the signal to its end).", "",
+              "| example | command | exit | time (s) | files left | what rigfem prints (last line on stderr, else first on stdout) |",
+              "|---|---|---:|---:|---|---|"]
+    for name, (r,) in rec["samples"].items():
+        name, cmd, msg = (t.replace("|", r"\|") for t in (name, r["command"], r["prints"]))
+        left = ", ".join(r["files_left"]) or "none"
+        lines.append(f"| {name} | `{cmd}` | {r['exit']} | {r['wall_s']:.2f} | {left} | {msg} |")
+    lines += ["", f"Slowest to fail: {rec['derived']['slowest_s']:.1f} s."]
+    return "\n".join(lines) + "\n"
+
+
 #: record name -> its table renderer (results/benchmarks/<name>.md)
 def perf_rows(rec: dict) -> list[str]:
     """Issue 26's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals)."""
@@ -329,4 +343,5 @@ def perf(rec: dict) -> str:
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
-    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf}
+    "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
+    "bad_inputs": bad_inputs}

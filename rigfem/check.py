@@ -250,10 +250,13 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
     return files, fields
 
 
-def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
+def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None
                 ) -> tuple[ReactionHistory, list[CaseResult]]:
     """The scene's reaction history (its dynamics, or an imported CSV) and every part case
-    solved; no cases at a toggle, where the reactions are unbounded."""
+    solved; no cases at a toggle, where the reactions are unbounded.  ``on_stage(text)`` hears
+    each stage as it begins (dynamics, meshing part X, solving part X)."""
+    if on_stage:
+        on_stage("reactions from the CSV" if cs.reactions_csv else "dynamics")
     h = (imported_history(cs) if cs.reactions_csv else
          simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
     if h.meta.get("singular"):
@@ -268,30 +271,31 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True
                          f"check would pass at 0 %; for its motion alone use rigfem kinematics")
     bar, step = _progress(len(cases), quiet)
     with bar:
-        return h, solve_cases(cases, cs.settings, solver=solver, progress=step)
+        return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage)
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
               overrides: dict | None = None, quiet: bool = False, solver: str = "auto",
-              export_inp: bool = False, allow_rule_violations: bool = False) -> dict:
+              export_inp: bool = False, allow_rule_violations: bool = False, on_stage=None) -> dict:
     """Check a scene; write the report folder ``out`` (default results/<scene>); return the report.
 
     ``export_inp`` also writes each part case's model at its critical crank angle as a
     CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
     Everything checkable is checked before the computation (scene, options, rig rules unless
     ``allow_rule_violations``, reactions CSV, output folder); the folder is locked while the
-    check runs (a second run on it is refused).
+    check runs (a second run on it is refused).  ``on_stage(text)`` hears each stage as it begins.
     """
     cs = load_check_scene(name, overrides, allow_rule_violations)
     out = Path(out) if out is not None else Path("results") / cs.scene.name
     check_writable(out, force)
     with folder_lock(out):
-        return _check(cs, out, force, quiet, solver, export_inp)
+        return _check(cs, out, force, quiet, solver, export_inp, on_stage)
 
 
-def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool) -> dict:
+def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool,
+           on_stage=None) -> dict:
     s = cs.settings
-    h, results = solve_scene(cs, solver, quiet)
+    h, results = solve_scene(cs, solver, quiet, on_stage)
     reactions = summary(h)
     limit = allowable_stress(s.material.sigma_u, s.limit_factor)
     if h.meta.get("singular"):
@@ -320,6 +324,8 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
     allowable = allowable_label(s.limit_factor, limit)
+    if on_stage:
+        on_stage("report")
     with atomic_dir(out, force) as d:
         reactions_plot(h, d / "reactions.png")
         files, fields = ["report.json", "report.md", "reactions.png"], []

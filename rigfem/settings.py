@@ -44,6 +44,10 @@ def allow_large() -> bool:
     """True when the user lifted the cost limits (memory and size estimates refuse nothing)."""
     return os.environ.get(ALLOW_LARGE_ENV, "") not in ("", "0")
 
+
+#: the longest job (estimated wall time, hours) rigfem starts without ``rigfem --allow-large``
+MAX_JOB_HOURS = 24.0
+
 #: the scene every command that takes a configuration runs by default (check, reactions, kinematics, ...)
 REFERENCE_SCENE = "final-cm"
 

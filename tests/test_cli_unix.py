@@ -4,6 +4,7 @@ traceback, no user file overwritten, nothing half-written."""
 
 from __future__ import annotations
 
+import re
 import os
 import subprocess
 import sys
@@ -387,8 +388,25 @@ def test_progress_lines_when_not_a_terminal():
     with heartbeat("verify", stream=buf, after_s=0.05, every_s=0.1, terminal=False):
         time.sleep(0.4)
     lines = buf.getvalue().splitlines()
-    assert len(lines) >= 2 and all(x.startswith("rigfem verify: running, ") and x.endswith("s elapsed")
-                                   for x in lines)
+    assert len(lines) >= 2 and all(re.fullmatch(r"rigfem verify: running … \d+ s", x) for x in lines)
+
+
+def test_progress_lines_name_each_stage_once_the_command_is_long():
+    import io
+    import time
+
+    from rigfem.cli.progress import heartbeat, stage
+
+    buf = io.StringIO()
+    with heartbeat("check", stream=buf, after_s=0.1, every_s=10, terminal=False):
+        stage("dynamics")              # before after_s: quick commands print nothing
+        time.sleep(1.0)
+        stage("meshing part crank")    # after: a line as the stage begins
+        stage("solving part crank")
+    stage("report")                    # no command running: nothing
+    lines = [re.sub(r"… \d+ s$", "… N s", x) for x in buf.getvalue().splitlines()]
+    assert lines == ["rigfem check: dynamics … N s", "rigfem check: meshing part crank … N s",
+                     "rigfem check: solving part crank … N s"]
 
 
 def test_every_command_says_where_its_outputs_are(tmp_path, capsys):

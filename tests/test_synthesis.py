@@ -78,6 +78,9 @@ def test_cli_json_and_plot(capsys, tmp_path):
     (["x", "--x", "3", "1"], "X1 must be greater"),
     (["x*log(x)", "--x", "1", "3", "--points", "4"], "--points"),
     (["cos(2*pi*x)", "--x", "0", "1"], "output range would be zero"),
+    (["x**2", "--x", "1", "1.000001"], "--x X0 X1 = 1 1.000001: over this range"),   # f is linear there
+    (["x*log(x)", "--x", "1e6", "1.000001e6"], "allowed ≤ 1000 ×"),
+    (["x", "--x", "1", "2"], "--x X0 X1 = 1 2"),
 ])
 def test_cli_bad_input(capsys, argv, needle):
     base = {"--input": ["20", "90"], "--output": ["80", "90"], "--ground": ["2"]}

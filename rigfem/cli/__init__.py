@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import signal
 import sys
 import traceback
@@ -55,12 +56,17 @@ class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+#: what a negative number looks like on the command line (argparse's own misses -1e-05 and -inf)
+_NEGATIVE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with exit code 2, a one-line message and every default in ``--help``."""
 
     def __init__(self, *args, **kwargs) -> None:
         kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE  # -1e-05, -inf: values, not options
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse API
         self.exit(2, f"rigfem: error: {message}\n")

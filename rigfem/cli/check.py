@@ -12,7 +12,9 @@ import tomllib
 from pathlib import Path
 
 from rigfem.cli.exitcodes import EXIT
+from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import check_place, wrote
+from rigfem.cli.progress import stage
 from rigfem.errors import plain
 from rigfem.settings import REFERENCE_SCENE
 
@@ -26,8 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", help="result folder (default results/<scene>)")
     p.add_argument("--force", action="store_true",
                    help="replace an existing result folder (only one rigfem wrote: it holds .rigfem-result)")
-    p.add_argument("--allow-rule-violations", action="store_true",
-                   help="check a rig scene that breaks a rig rule (refused by default); the report says so at the top")
+    add_rule_argument(p)
     p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene)")
     p.add_argument("--order", type=int, help="element order 1 | 2")
     p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
@@ -72,7 +73,7 @@ def _summary(r: dict) -> str:
         lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:9.1f} {p['crank_deg']:7.1f} "
                      f"{p['error_pct']:6.1f}% {p['utilisation_pct']:6.1f}%  {p['verdict'].upper():7s}  "
                      f"{p['surface']}{why}")
-    lines[1:1] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
+    lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
     lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa)")
     return "\n".join(lines)
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         check_place("--out", args.out, folder=True)
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
-                       allow_rule_violations=args.allow_rule_violations)
+                       allow_rule_violations=args.allow_rule_violations, on_stage=stage)
     print(json.dumps(report, indent=2) if args.json else _summary(report))
     out = Path(args.out) if args.out is not None else Path("results") / report["scene"]
     wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")

@@ -11,11 +11,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 from pathlib import Path
 
+from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
-from rigfem.errors import InputError, check_range
+from rigfem.cli.progress import stage
+from rigfem.errors import InputError, check_range, plain
 from rigfem import studies  # lazy (lazy_loader): the FE stack loads when a study runs, not for --help
 from rigfem.settings import FIDELITY, MODES, PARTS, REFERENCE_SCENE
 
@@ -37,6 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="results/convergence",
                    help="folder: a new one, or with --force one rigfem wrote (studies accumulate there)")
     p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
+    add_rule_argument(p)
     p.add_argument("--render", action="store_true",
                    help="no computing: re-analyse the study JSONs in --out and rewrite tables, plots, summary")
 
@@ -275,19 +277,25 @@ def run(args: argparse.Namespace) -> int:
                 _write(studies.analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        settings, by_part = studies.scene_cases(scene, parts)
+        from rigfem.check import load_check_scene
+
+        broken = load_check_scene(scene, None, args.allow_rule_violations).rule_violations
+        for v in broken:
+            print(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)", flush=True)
+        settings, by_part = studies.scene_cases(scene, parts, allow_rule_violations=True)
         mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
-            extra = {"scene": scene, "command": _command(args)}
+            extra = {"scene": scene, "command": _command(args), "rule_violations": broken}
 
             def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
                 write_text(out / f"{stem}.json", studies.to_json({**partial, **extra, "partial": True}))
 
             res = studies.study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
                         max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
-                        progress=lambda part, step: print(f"  {part}: {step}", file=sys.stderr, flush=True))
+                        progress=lambda part, step: stage(f"part {part}: step {step}"))
             print(_write({**res, **extra}, out, stem))
+    stage("summary")
     done = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     write_text(out / "summary.md", summary([s for s in done if "steps" in s]))
     wrote(out / "summary.md")

@@ -24,5 +24,12 @@ def table(success: str | None = None) -> str:
             "130 Ctrl-C, 143 SIGTERM, 141 output pipe closed")
 
 
+#: the one rule for a rig configuration that breaks a rig rule, by kind of command (README "Exit codes")
+RULES_REFUSED = ("a rig configuration that breaks a rig rule is refused (exit 2, naming the rule) unless "
+                 "--allow-rule-violations; then 'WARNING: breaks rig rule …' is the first line, every report "
+                 "lists rule_violations and a check's verdict is FAIL")
+RULES_SHOWN = ("a rig configuration that breaks a rig rule is computed (no verdict: exit 0) with 'WARNING: breaks "
+               "rig rule …' as the first line and rule_violations in --json; rigfem check refuses it (exit 2)")
+
 #: the table printed by ``rigfem --help`` and README
 TABLE = table()

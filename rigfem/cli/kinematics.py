@@ -18,6 +18,7 @@ from pathlib import Path
 import lazy_loader
 
 from rigfem import linkage, rig  # lazy (lazy_loader): numpy and the solvers load when a linkage moves
+from rigfem.cli.exitcodes import RULES_SHOWN
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.errors import InputError, check_range
@@ -27,7 +28,7 @@ np = lazy_loader.load("numpy")
 
 HELP = "motion of a linkage: angles, velocities, accelerations, transmission angle, dead points, pictures"
 #: the meaning of exit code 0 (the command has no verdict)
-SUCCESS = "motion printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
+SUCCESS = f"motion printed; {RULES_SHOWN}"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -67,13 +68,13 @@ def _build(args):
     elif args.slider_crank:
         L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
-        lk = linkage.slider_crank(*L, off, masses=None)
+        lk = linkage.slider_crank(*L, off, masses=None, whole_turn=False)
         name = "slider-crank " + " ".join(args.slider_crank)
     else:
         from rigfem.scene import load_scene
 
         sc = load_scene(args.scene or REFERENCE_SCENE)
-        lk, name = linkage.build(sc), sc.name
+        lk, name = linkage.build(sc, whole_turn=False), sc.name
         omega, alpha, instant, textbook = 2 * math.pi * sc.speed_hz, sc.alpha_rad_s2, sc.instant_deg, sc.textbook
     if args.omega is not None:
         omega = check_range("--omega", args.omega, -1e4, 1e4, "rad/s")
@@ -103,13 +104,14 @@ def _assembles(name: str, turn: dict, deg: float) -> float:
     """``deg`` moved into the crank's range of motion (by whole turns); InputError naming the
     range and the limit positions where the linkage does not assemble at ``deg``."""
     rng = turn.get("crank_range_deg")
-    if rng:
-        a, b = rng
+    for a, b in turn.get("crank_ranges_deg") or ([rng] if rng else []):
         shifted = a + (deg - a) % 360.0
         if shifted <= b + 1e-9:
             return float(shifted if not a <= deg <= b else deg)
     dead = ", ".join(f"{x:.4f}" for x in turn["dead_points_deg"])
-    where = f"its crank moves only between {rng[0]:.4f} and {rng[1]:.4f} deg" if rng else "it assembles nowhere"
+    arcs = turn.get("crank_ranges_deg") or ([rng] if rng else [])
+    where = ("its crank moves only between " + " or between ".join(f"{a:.4f} and {b:.4f} deg" for a, b in arcs)
+             if arcs else "it assembles nowhere")
     raise InputError(f"--at = {deg:g} deg: {name} does not assemble there ({where}; limit positions at "
                      f"the dead points {dead} deg)")
 
@@ -149,6 +151,10 @@ def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None, 
     for k in ("mechanical_advantage", "transmission_angle"):
         if k in m.meta:
             res[f"{k}_definition"] = m.meta[k]
+    mu = res.get("transmission_angle_deg")
+    res["rule_violations"] = ([f"transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, allowed "
+                               f"{MU_LIMITS_DEG[0]:g} < mu < {MU_LIMITS_DEG[1]:g} deg"]
+                              if mu and not mu["within_band"] and not textbook else [])
     res["angles"] = _records(m)
     return res
 
@@ -160,13 +166,10 @@ def _fmt(x, w=11, p=4) -> str:
 def format_table(res: dict, max_rows: int = 24) -> str:
     """Readable summary and a table of the motion (at most ``max_rows`` evenly chosen angles)."""
     L = res["lengths_mm"] or {}
-    out = [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
+    out = [f"WARNING: breaks rig rule {v}" for v in res["rule_violations"]]   # first, whatever follows
+    out += [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
            + (f"  branch={res['branch']}" if res.get("branch") else "")
            + f"   crank omega={res['omega_rad_s']:g} rad/s alpha={res['alpha_rad_s2']:g} rad/s²  ({res['method']})"]
-    mu = res.get("transmission_angle_deg")
-    if mu and not mu["within_band"] and not res["textbook"]:
-        out.append(f"WARNING: breaks rig rule transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, "
-                   f"allowed {mu['rig_band'][0]:g} < mu < {mu['rig_band'][1]:g} deg")
     if res["textbook"]:
         out.append("textbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     t = res["turn"]

@@ -1,9 +1,11 @@
-"""The options that name a linkage, shared by the commands that take one (reactions, kinematics)."""
+"""The options that name a linkage, shared by the commands that take one (reactions, kinematics),
+and the one --allow-rule-violations of the commands that judge a rig configuration's strength."""
 
 from __future__ import annotations
 
 import argparse
 
+from rigfem.cli.exitcodes import RULES_REFUSED
 from rigfem.settings import REFERENCE_SCENE
 
 
@@ -17,3 +19,8 @@ def add_linkage_arguments(p: argparse.ArgumentParser) -> None:
                    help="four-bar crank, coupler, rocker, ground lengths (mm)")
     g.add_argument("--slider-crank", nargs=2, metavar=("B2", "B3"), help="slider-crank crank and rod (mm)")
     p.add_argument("--offset", metavar="E", help="slider-crank slide-line offset (mm, default 0)")
+
+
+def add_rule_argument(p: argparse.ArgumentParser) -> None:
+    """--allow-rule-violations, with the one rule (:data:`rigfem.cli.exitcodes.RULES_REFUSED`)."""
+    p.add_argument("--allow-rule-violations", action="store_true", help=RULES_REFUSED)

@@ -21,7 +21,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from rigfem.errors import InputError, plain
-from rigfem.files import file_sha256
+from rigfem.files import file_sha256, whole_file
 from rigfem.report.folder import MARKER
 
 __all__ = ["LEDGER", "MIN_FREE_BYTES", "check_place", "new_output", "new_folder", "written", "write_text",
@@ -134,12 +134,8 @@ def _record(path: Path) -> None:
         return
     ledger = _ledger(folder)
     ledger[path.name] = file_sha256(path)
-    tmp = folder / f".{LEDGER}.{os.getpid()}.tmp"
-    try:
+    with whole_file(folder / LEDGER) as tmp:
         tmp.write_text(json.dumps(ledger, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-        tmp.replace(folder / LEDGER)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
@@ -147,17 +143,14 @@ def written(path: str | Path, record: bool = True) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same suffix, so writers pick the format); rename it
     into place when the block completes, remove it if not.  An OSError becomes one line."""
     path = Path(path)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        yield tmp
-        tmp.replace(path)
+        with whole_file(path) as tmp:
+            yield tmp
         if record:
             _record(path)
     except OSError as exc:
         raise InputError(f"cannot write {plain(path, 120)}: {exc.strerror or exc}") from None
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def write_file(path: str | Path, writer: Callable[[Path], object]) -> None:

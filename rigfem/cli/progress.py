@@ -1,6 +1,8 @@
-"""Progress of a long command: after :data:`AFTER_S` seconds without a result, a line on stderr
-every :data:`EVERY_S` seconds — redrawn in place on a terminal, plain log lines (command,
-stage and elapsed time) otherwise, so CI logs and files show that the run is alive."""
+"""Progress of a long command, by stage: after :data:`AFTER_S` seconds a line on stderr naming
+the command, its stage and the elapsed time — redrawn in place on a terminal; plain log lines
+otherwise (CI logs, files): one when each stage begins and one every :data:`EVERY_S` seconds,
+``rigfem <command>: <stage> … <elapsed> s``.  Library code never prints: it takes an
+``on_stage`` callback, and the CLI passes :func:`stage`."""
 
 from __future__ import annotations
 
@@ -10,17 +12,49 @@ import threading
 import time
 from collections.abc import Iterator
 
-__all__ = ["AFTER_S", "EVERY_S", "heartbeat"]
+__all__ = ["AFTER_S", "EVERY_S", "heartbeat", "stage"]
 
 AFTER_S, EVERY_S = 2.0, 10.0
 _SPIN = "|/-\\"
+_LIVE: list[_Beat] = []   # the running command's reporter (main installs one per command)
+
+
+class _Beat:
+    """What one command reports: its name, current stage, start time and where lines go."""
+
+    def __init__(self, what: str, stream, tty: bool) -> None:
+        self.what, self.stream, self.tty = what, stream, tty
+        self.stage, self.t0, self.lines = "running", time.monotonic(), 0
+        self.lock = threading.Lock()
+
+    def line(self) -> None:
+        """Write the current line (the caller decides when)."""
+        text = f"rigfem {self.what}: {self.stage} … {time.monotonic() - self.t0:.0f} s"
+        with self.lock, contextlib.suppress(OSError, ValueError):
+            self.stream.write(f"\r\x1b[K{text} {_SPIN[self.lines % 4]}" if self.tty else text + "\n")
+            self.stream.flush()
+            self.lines += 1
+
+
+def stage(name: str) -> None:
+    """The running command entered stage ``name`` (e.g. 'meshing part crank'); a plain line at
+    once once the command has run :data:`AFTER_S` seconds (quick commands stay quiet)."""
+    if not _LIVE:
+        return
+    beat = _LIVE[-1]
+    beat.stage = name
+    if not beat.tty and beat.lines:
+        beat.line()
 
 
 @contextlib.contextmanager
-def heartbeat(what: str, stream=None, after_s: float = AFTER_S, every_s: float = EVERY_S,
+def heartbeat(what: str, stream=None, after_s: float | None = None, every_s: float | None = None,
               terminal: bool | None = None, on_terminal: bool = True) -> Iterator[None]:
-    """Report ``what`` (the command and its stage) with the elapsed time while the block runs;
+    """Report ``what`` (the command) with its stage and the elapsed time while the block runs
+    (first after ``after_s``, default :data:`AFTER_S`, then every ``every_s``, default :data:`EVERY_S`);
     ``on_terminal`` False: nothing on a terminal (the command draws its own bar there)."""
+    after_s = AFTER_S if after_s is None else after_s
+    every_s = EVERY_S if every_s is None else every_s
     stream = stream or sys.stderr
     try:
         tty = stream.isatty() if terminal is None else terminal
@@ -29,32 +63,27 @@ def heartbeat(what: str, stream=None, after_s: float = AFTER_S, every_s: float =
     if tty and not on_terminal:
         yield
         return
+    beat = _Beat(what, stream, tty)
     stop = threading.Event()
-    t0 = time.monotonic()
-    drew = []
 
-    def beat() -> None:
+    def run() -> None:
         if stop.wait(after_s):
             return
         while not stop.is_set():
-            line = f"rigfem {what}: running, {time.monotonic() - t0:.0f} s elapsed"
-            try:
-                stream.write(f"\r{line} {_SPIN[len(drew) % 4]}" if tty else line + "\n")
-                stream.flush()
-            except (OSError, ValueError):
-                return
-            drew.append(1)
+            beat.line()
             if stop.wait(1.0 if tty else every_s):
                 return
 
-    thread = threading.Thread(target=beat, daemon=True)
+    thread = threading.Thread(target=run, daemon=True)
+    _LIVE.append(beat)
     thread.start()
     try:
         yield
     finally:
         stop.set()
         thread.join()
-        if drew and tty:
+        _LIVE.remove(beat)
+        if beat.lines and tty:
             with contextlib.suppress(OSError, ValueError):
                 stream.write("\r\x1b[K")
                 stream.flush()

@@ -10,13 +10,14 @@ import json
 import math
 
 from rigfem.settings import MODELS, REFERENCE_SCENE
+from rigfem.cli.exitcodes import RULES_SHOWN
 from rigfem.cli.linkage_args import add_linkage_arguments
 from rigfem.errors import InputError, check_range
 from rigfem.cli.outputs import new_output, write_file, wrote
 
 HELP = "peak pin reactions, driver torque and rig rules of a linkage over one crank turn"
 #: the meaning of exit code 0 (the command has no verdict)
-SUCCESS = "table printed (a broken rig rule is shown first as 'WARNING: breaks rig rule …'; rigfem check refuses it with exit 2)"
+SUCCESS = f"table printed; {RULES_SHOWN}"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -71,13 +72,10 @@ def massless_note(lk, scene: str) -> str | None:
 
 def format_table(res: dict) -> str:
     """Readable table of a result dict."""
-    out = []
     L = res["lengths_mm"] or {}
+    out = [f"WARNING: breaks rig rule {v}" for v in res["rule_violations"]]   # first, whatever follows
     out.append(f"{res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
                f"   model={res['model']}  speed={res['speed_hz']:g} Hz  samples={res['samples']}")
-    if not res.get("textbook"):
-        out += [f"WARNING: breaks rig rule {r['name']}: {r['value']:.4g} {r['relation']} {r['limit']:.4g}"
-                for r in res["rules"] if not r["ok"]]
     if res.get("textbook"):
         out.append("\ntextbook linkage (not a rig configuration): the rig's mounting rules do not apply")
     elif res["rules"]:
@@ -135,6 +133,8 @@ def run(args) -> int:
         return 0
     h = simulate(lk, samples=int(samples), speed_hz=speed, model=args.model)
     res = summary(h)
+    res["rule_violations"] = [] if res.get("textbook") else [
+        f"{r['name']}: {r['value']:.6g} must be {r['relation']} {r['limit']:.6g}" for r in res["rules"] if not r["ok"]]
     if csv_path:
         write_file(csv_path, lambda tmp: write_csv(h, tmp))
     if png:

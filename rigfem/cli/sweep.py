@@ -40,7 +40,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rigfem.cli.outputs import mark_folder, new_folder, wrote
-    from rigfem.errors import InputError
+    from rigfem.cli.progress import stage
+    from rigfem.errors import InputError, check_range
     from rigfem.studies.sweep_configs import SweepParams
 
     if args.scheduler is not None:
@@ -50,6 +51,19 @@ def run(args: argparse.Namespace) -> int:
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
                     fidelity=args.fidelity, samples=args.samples)
     out = new_folder("--out", args.out, args.force)   # before the heavy imports and any computation
+    check_range("--workers", args.workers, 1, 256)
+    check_range("--chunk-size", args.chunk_size, 1, 100_000)
+    if not args.report_only:
+        from rigfem.mesh.mesher import MACHINE_GIB
+        from rigfem.studies.cost import check_cost, sweep_cost
+        from rigfem.studies.sweep_configs import enumerate_configs
+
+        configs = enumerate_configs(p)
+        check_cost(sweep_cost(p, configs, args.workers), MACHINE_GIB)  # before the folder is made
+        if args.scheduler is not None:
+            from rigfem.studies.sweep import reach_scheduler
+
+            reach_scheduler(args.scheduler)  # a Dask scheduler answers there, in seconds
     from rigfem.studies.sweep import run_sweep
     from rigfem.studies.sweep_report import write_report
 
@@ -64,8 +78,9 @@ def run(args: argparse.Namespace) -> int:
         wrote(out)
         return 0
     mark_folder(out)
-    table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers,
-                      scheduler=args.scheduler, progress=not args.quiet)
+    table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers, configs=configs,
+                      scheduler=args.scheduler, progress=not args.quiet, on_stage=stage)
+    stage("report")
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
     ok = table[table["status"] == "ok"]
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "

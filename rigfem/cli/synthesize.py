@@ -15,6 +15,7 @@ import json
 import re
 
 from rigfem.cli.outputs import new_output, write_file, write_text, wrote
+from rigfem.cli.progress import stage
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.settings import FIDELITY
 
@@ -227,6 +228,11 @@ def _rig_options(args, motion: bool) -> dict | None:
     fidelity = args.fidelity or "draft"
     if fidelity not in FIDELITY:
         raise InputError(f"--fidelity = {fidelity!r} must be one of {', '.join(FIDELITY)}")
+    from rigfem.mesh.mesher import MACHINE_GIB
+    from rigfem.studies.cost import check_cost, synthesis_cost
+    from rigfem.studies.sweep_configs import SweepParams
+
+    check_cost(synthesis_cost(SweepParams(fidelity=fidelity), int(top), not args.no_stress), MACHINE_GIB)
     return dict(top=int(top), fidelity=fidelity, stress=not args.no_stress,
                 scale=None if scale is None else check_range("--scale", scale, 0.0, 1e4, lo_open=True),
                 scene=new_output("--scene-out", args.scene_out, ".toml", args.force))
@@ -238,9 +244,10 @@ def _snap(r: dict, opts: dict, task: str) -> int:
 
     if r.get("branch") is None:
         raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")
+    stage("ranking the rig four-bars")
     cands = snap_function(r, opts["top"]) if task == "function" else snap_motion(r, opts["top"], opts["scale"])
     if opts["stress"]:
-        stress_verdicts(cands, opts["fidelity"])
+        stress_verdicts(cands, opts["fidelity"], on_stage=stage)
     r["rig"] = {"candidates": cands, "stress_fidelity": opts["fidelity"] if opts["stress"] else None}
     if opts["scene"] is not None:
         write_text(opts["scene"], _scene_toml(cands[0], task))

@@ -14,8 +14,10 @@ import shutil
 import time
 from pathlib import Path
 
+from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
-from rigfem.errors import InputError, check_range
+from rigfem.cli.progress import stage
+from rigfem.errors import InputError, check_range, plain
 from rigfem.settings import REFERENCE_SCENE
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
@@ -34,6 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", help="also write calculix_verify_<scene>.md/.json into DIR (a new folder, "
                                                 "or with --force one rigfem wrote)")
     p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
+    add_rule_argument(p)
 
 
 def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
@@ -62,21 +65,24 @@ def run(args: argparse.Namespace) -> int:
     peak_tol = check_range("--peak-tol", args.peak_tol, 0.0, 100.0, "%")
     disp_tol = check_range("--disp-tol", args.disp_tol, 0.0, 100.0, "%")
     out = new_folder("--out", args.out, args.force) if args.out else None
-    cs = load_check_scene(args.scene, {"fidelity": args.fidelity, "frames": 0})
+    cs = load_check_scene(args.scene, {"fidelity": args.fidelity, "frames": 0}, args.allow_rule_violations)
     if shutil.which("ccx") is None:
         raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
     t0 = time.perf_counter()
-    rows = verify_scene(cs, threads=threads)
+    rows = verify_scene(cs, threads=threads, on_stage=stage)
     name = Path(str(args.scene)).stem
     command = f"rigfem verify --against calculix {args.scene} --fidelity {args.fidelity} --threads {threads}"
     text = table(rows, f"rigfem vs CalculiX 2.20: scene {name} ({args.fidelity})", command,
                  time.perf_counter() - t0)
+    text = "".join(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)\n" for v in cs.rule_violations) + text
     print(text, end="")
     if out is not None:
+        stage("report")
         mark_folder(out)
         write_text(out / f"calculix_verify_{name}.md", text)
         write_text(out / f"calculix_verify_{name}.json", json.dumps(
             {"scene": name, "fidelity": args.fidelity, "ccx_threads": threads, "command": command,
+             "rule_violations": cs.rule_violations,
              "cases": rows}, indent=2) + "\n")
         wrote(out / f"calculix_verify_{name}.md", out / f"calculix_verify_{name}.json")
     ok = all(abs(r["peak_rel_diff"]) * 100 <= peak_tol and r["displacement_rel_diff"] * 100 <= disp_tol

@@ -147,9 +147,10 @@ def _key(case: PartCase) -> tuple:
 
 
 def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto",
-                progress=None) -> list[CaseResult]:
+                progress=None, on_stage=None) -> list[CaseResult]:
     """Solve every (mode, case); cases of one part geometry share mesh and stiffness, cases
-    with the same supports share one factorisation, identical unit loads are solved once."""
+    with the same supports share one factorisation, identical unit loads are solved once.
+    ``on_stage(text)`` hears 'meshing part X' and 'solving part X' as each begins."""
     geo: dict[tuple, list[tuple[str, PartCase]]] = {}
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
@@ -158,9 +159,13 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
         t0 = time.perf_counter()
         refine = tuple(sorted({g for _, c in group for g in c.refine}))
         first = group[0][1]
+        if on_stage:
+            on_stage(f"meshing part {first.name}")
         pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
         model = build_model(pm, settings.material, settings.order)
         t_model = time.perf_counter() - t0
+        if on_stage:
+            on_stage(f"solving part {first.name}")
         by_support: dict[tuple, list[tuple[str, PartCase]]] = {}
         for mode, case in group:
             by_support.setdefault(tuple(case.supports), []).append((mode, case))

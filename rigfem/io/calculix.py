@@ -29,7 +29,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError, check_range
-from rigfem.mesh.partmesh import face_owners, whole_file
+from rigfem.files import whole_file
+from rigfem.mesh.partmesh import face_owners
 
 #: renumbering of a C3D10/C3D4 element that swaps vertices 1 and 2 (flips orientation)
 _FLIP = {10: np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8]), 4: np.array([0, 2, 1, 3])}

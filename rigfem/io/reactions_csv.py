@@ -9,7 +9,7 @@ import numpy as np
 
 from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
 from rigfem.errors import InputError, decode_text
-from rigfem.mesh.partmesh import whole_file
+from rigfem.files import whole_file
 
 # ----------------------------------------------------------------------------- CSV
 _TORQUE_COLS = ("torque_Nm", "torque", "M2", "driver")

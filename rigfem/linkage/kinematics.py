@@ -223,6 +223,13 @@ def _crank_range(b2, b3, b4, d, dead: list[float]) -> list[float] | None:
     return [b, a + 360.0]
 
 
+def _arcs(dead: list[float], closes) -> list[list[float]]:
+    """The crank-angle arcs [start, end] (deg, counter-clockwise; end may pass 360) between
+    consecutive dead points over which the loop closes (``closes(deg)`` at the arc's middle)."""
+    d = sorted({x % 360.0 for x in dead})
+    return [[a, b] for a, b in zip(d, d[1:] + d[:1]) for b in [b + 360.0 * (b <= a)] if closes((a + b) / 2)]
+
+
 def _strokes(start_deg: float, end_deg: float) -> dict:
     """Crank angles of the two strokes between limit positions and their ratio (>= 1)."""
     fwd = (end_deg - start_deg) % 360.0
@@ -285,8 +292,10 @@ def slider_crank_turn(b2: float, b3: float, offset: float = 0.0) -> dict:
         if abs(s) <= 1.0:
             a = float(np.degrees(np.arcsin(s)))
             dead += sorted({a % 360.0, (180.0 - a) % 360.0})
+    arcs = [] if full else _arcs(dead, lambda deg: abs(offset - b2 * np.sin(np.radians(deg))) <= b3)
     out = dict(branch="open", crank_turns_fully=bool(full), dead_points_deg=dead, limits=[], stroke_mm=None,
-               stroke_crank_deg=None, time_ratio=None)
+               stroke_crank_deg=None, time_ratio=None, crank_range_deg=arcs[0] if arcs else None,
+               crank_ranges_deg=arcs)
     if full:
         xo, xi = np.sqrt((b3 + b2) ** 2 - offset**2), np.sqrt((b3 - b2) ** 2 - offset**2)
         outer = float(np.degrees(np.arctan2(offset, xo)) % 360.0)
@@ -401,4 +410,22 @@ def linkage_turn(lk) -> dict | None:
         return fourbar_turn(L["b2"], L["b3"], L["b4"], L["d"], m.get("branch", "open"))
     if m.get("type") == "slider-crank":
         return slider_crank_turn(L["b2"], L["b3"], L.get("offset", 0.0))
+    if m.get("type") == "inverted-slider-crank":
+        return inverted_slider_crank_turn(L["d"], L["b2"], L["arm"])
     return None
+
+
+def inverted_slider_crank_turn(d: float, b2: float, arm: float) -> dict | None:
+    """Dead points and range of motion of an inverted slider-crank whose crank cannot turn fully
+    (the crank pin comes nearer O4 than ``arm``: |A − O4|² = b2² + d² − 2·b2·d·cos θ < arm²);
+    None if it turns fully (the general solver traces it; no closed form here)."""
+    c = (b2 * b2 + d * d - arm * arm) / (2 * b2 * d)
+    if c < -1.0 or c >= 1.0:
+        return None if c >= 1.0 else dict(branch="open", crank_turns_fully=False, dead_points_deg=[], limits=[],
+                                          stroke_mm=None, stroke_crank_deg=None, time_ratio=None,
+                                          crank_range_deg=None, crank_ranges_deg=[])
+    a = float(np.degrees(np.arccos(c)))
+    arcs = _arcs([a, 360.0 - a], lambda deg: b2 * b2 + d * d - 2 * b2 * d * np.cos(np.radians(deg)) >= arm * arm)
+    return dict(branch="open", crank_turns_fully=False, dead_points_deg=[a, 360.0 - a], limits=[], stroke_mm=None,
+                stroke_crank_deg=None, time_ratio=None, crank_range_deg=arcs[0] if arcs else None,
+                crank_ranges_deg=arcs)

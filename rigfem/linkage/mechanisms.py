@@ -15,6 +15,8 @@ they cause are computed by :mod:`rigfem.dynamics`.
 
 from __future__ import annotations
 
+import inspect
+
 from dataclasses import asdict
 from typing import Any
 
@@ -158,14 +160,17 @@ def coupler_point_path(h) -> np.ndarray:
 def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | None = "rig",
                  rails_mm: tuple[float, float] = RIG_RAILS_MM[:2], body_masses: dict | None = None,
                  slider_force: Any = None, start_deg: float = 0.0, catalogue: RigMasses = RIG_MASSES,
-                 gravity_mm_s2: tuple[float, float] = (0.0, 0.0)) -> Linkage:
+                 gravity_mm_s2: tuple[float, float] = (0.0, 0.0), whole_turn: bool = True) -> Linkage:
     """Slider-crank: crank b2 (O2->A), rod b3 (A->B), slider B on the line y = ``offset`` (mm), +x side.
 
     Bodies ``crank``, ``rod``, ``slider``; joints O2, A, B (revolute) and ``slide``
     (prismatic, ground -> slider).  Rig masses (an assumption, the study never analysed
     this case): crank rail with plate+carriage at A; rod rail with coupling at A and a
     plate at B; the slider is a carriage on the ground rail plus a coupling.
-    ``slider_force(state) -> (n, 2)`` N is an external force on the slider (e.g. gas).
+    ``slider_force(state) -> (n, 2)`` N is an external force on the slider (e.g. gas).  Raises
+    ClosureError naming the crank-angle range where the rod cannot reach the slide line, unless
+    ``whole_turn`` is False (a kinematics run over the crank's range of motion): then it is built
+    at an angle where it closes.
     """
     _check_lengths(b2=b2, b3=b3)
     if masses == "rig":
@@ -174,9 +179,11 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
         raise InputError(f"offset = {offset!r} mm is outside the allowed range [-10000, 10000] mm")
     grid = np.linspace(0.0, 360.0, 3601)
     ok = np.abs(offset - b2 * np.sin(np.radians(grid))) <= b3
-    if not ok.all():
+    if not ok.all() and (whole_turn or not ok.any()):
         raise ClosureError(f"slider-crank b2={b2:g} b3={b3:g} offset={offset:g} mm cannot be assembled "
                             f"for crank angles {_ranges_text(grid, ~ok)}")
+    if not abs(offset - b2 * np.sin(np.radians(start_deg))) <= b3:
+        start_deg = float(grid[np.flatnonzero(ok)[0]])
     th = np.radians(start_deg)
     ax, ay = b2 * np.cos(th), b2 * np.sin(th)
     bx = ax + np.sqrt(b3**2 - (offset - ay) ** 2)
@@ -210,7 +217,7 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
 def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None = "rig",
                           rails_mm: tuple[float, float] = (RIG_RAILS_MM[0], RIG_RAILS_MM[2]),
                           body_masses: dict | None = None, start_deg: float = 0.0,
-                          catalogue: RigMasses = RIG_MASSES) -> Linkage:
+                          catalogue: RigMasses = RIG_MASSES, whole_turn: bool = True) -> Linkage:
     """Inverted slider-crank: crank b2 at O2 = (0, 0); link 4 pivoted at O4 = (d, 0) carries a
     slide line at distance ``arm`` from O4, perpendicular to the arm; block 3 pinned at the
     crank pin A slides on it.  Bodies ``crank``, ``block``, ``rocker`` (frame x along the arm,
@@ -218,7 +225,8 @@ def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None
 
     Rig masses (assumption): crank rail with a plate at A; the block is a carriage with a
     coupling; link 4 is a rail of length rails_mm[1] along the slide line, centred at the foot
-    of the arm, plus a plate at O4.
+    of the arm, plus a plate at O4.  ``whole_turn`` False: built at an angle where it closes
+    even if the crank cannot turn fully (as :func:`four_bar`).
     """
     _check_lengths(d=d, b2=b2)
     if not np.isfinite(arm) or arm < 0 or arm > 10000:
@@ -226,9 +234,11 @@ def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None
     grid = np.linspace(0.0, 360.0, 3601)
     f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(np.radians(grid)))
     ok = f >= arm
-    if not ok.all():
+    if not ok.all() and (whole_turn or not ok.any()):
         raise ClosureError(f"inverted slider-crank d={d:g} b2={b2:g} arm={arm:g} mm cannot be assembled "
                             f"for crank angles {_ranges_text(grid, ~ok)}")
+    if not np.hypot(b2 * np.cos(np.radians(start_deg)) - d, b2 * np.sin(np.radians(start_deg))) >= arm:
+        start_deg = float(grid[np.flatnonzero(ok)[0]])
     th = np.radians(start_deg)
     A = np.array([b2 * np.cos(th), b2 * np.sin(th)])
     D = A - np.array([d, 0.0])
@@ -309,12 +319,15 @@ BUILDERS = {"four-bar": four_bar, "slider-crank": slider_crank,
             "inverted-slider-crank": inverted_slider_crank, "quick-return": quick_return}
 
 
-def build(scene, slider_force: Any = None) -> Linkage:
+def build(scene, slider_force: Any = None, whole_turn: bool = True) -> Linkage:
     """The linkage a scene (:class:`rigfem.scene.Scene`: type, builder arguments) describes:
-    geometry, driver and masses; ``slider_force`` an external force on a slider-crank's slider."""
+    geometry, driver and masses; ``slider_force`` an external force on a slider-crank's slider;
+    ``whole_turn`` False: a linkage whose crank cannot turn fully is built where it closes."""
     kwargs = dict(scene.params)
     if slider_force is not None:
         kwargs["slider_force"] = slider_force
+    if not whole_turn and "whole_turn" in inspect.signature(BUILDERS[scene.linkage_type]).parameters:
+        kwargs["whole_turn"] = False
     lk = BUILDERS[scene.linkage_type](**kwargs)
     lk.meta["scene"] = scene.name
     lk.meta["textbook"] = scene.textbook

@@ -19,6 +19,9 @@ from rigfem.linkage.expression import check_interval, parse_function
 
 #: a structural error above this share of the output range (%) is flagged as a defect
 USEFUL_ERROR_PCT = 10.0
+#: longest link the synthesis accepts, in ground lengths: beyond it the precision points are (nearly)
+#: those of a linear map, which only a four-bar with infinite links generates
+MAX_LINK_RATIO = 1000.0
 
 def chebyshev_points(x0: float, x1: float, n: int) -> np.ndarray:
     """Chebyshev spacing of ``n`` precision points on [x0, x1]: x_j = m − h cos((2j − 1)π/(2n))."""
@@ -67,17 +70,22 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
     yp = f(xp)
     t2, t4 = np.radians(th2(xp)), np.radians(th4(yp))
     M = np.stack([np.cos(t4), -np.cos(t2), np.ones(3)], -1)
+    linear = (f"--x X0 X1 = {x0:.10g} {x1:.10g}: over this range the precision points ask for a linear map of "
+              f"the input angle to the output angle, which needs links longer than {MAX_LINK_RATIO:g} × --ground "
+              f"(allowed ≤ {MAX_LINK_RATIO:g} ×); widen --x where f is not linear, or change --input/--output RANGE")
     try:
         K1, K2, K3 = np.linalg.solve(M, np.cos(t2 - t4))
     except np.linalg.LinAlgError:
-        raise ComputeError("Freudenstein's equations are singular at these precision points") from None
-    if K1 == 0 or K2 == 0:
-        raise ComputeError("Freudenstein's solution puts a link at infinite length (K1 or K2 = 0)")
+        raise InputError(linear) from None
+    if not (abs(K1) * MAX_LINK_RATIO > 1 and abs(K2) * MAX_LINK_RATIO > 1):
+        raise InputError(linear)
     a, c = d / K1, d / K2
     b2_sq = a * a + c * c + d * d - 2 * a * c * K3
     if not b2_sq > 0:
         raise ComputeError(f"Freudenstein's solution has no real coupler (b² = {b2_sq:.4g})")
     b = float(np.sqrt(b2_sq))
+    if b > MAX_LINK_RATIO * d:
+        raise InputError(linear)
     off_in, off_out = (180.0 if a < 0 else 0.0), (180.0 if c < 0 else 0.0)
     a, c = abs(a), abs(c)
     res = dict(expression=expr, x_range=[x0, x1], y_range=[y0, y1], ground=d,

@@ -24,16 +24,14 @@ tetra10).
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from rigfem.errors import InputError
+from rigfem.files import whole_file
 
 
 @dataclass(frozen=True)
@@ -66,20 +64,6 @@ def quality_summary(q: np.ndarray) -> dict[str, float]:
     """Minimum, 1st and 5th percentile and median of per-tet quality values."""
     return {"min": float(q.min()), "p01": float(np.percentile(q, 1)),
             "p05": float(np.percentile(q, 5)), "median": float(np.median(q))}
-
-
-@contextlib.contextmanager
-def whole_file(path: str | Path) -> Iterator[Path]:
-    """A temporary name beside ``path`` (same suffix, so writers pick the format from it) that is
-    renamed to ``path`` when the block completes and removed if it fails or is interrupted:
-    every file rigfem writes is whole or absent, never half-written."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def save_npz(pm: PartMesh, path: Path) -> None:

@@ -9,8 +9,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
+from rigfem.files import whole_file
 from rigfem.linkage.kinematics import Motion
-from rigfem.mesh.partmesh import whole_file
 from rigfem.rig.rules import MU_LIMITS_DEG
 
 matplotlib.use("Agg")
@@ -113,8 +113,11 @@ def motion_gif(m: Motion, path: str | Path, title: str, dead_deg: list[float] | 
         return [*lines.values(), *bar_names.values(), *pin_names.values(), text]
 
     anim = FuncAnimation(fig, draw, frames=m.crank_deg.size, blit=True)
-    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=GIF_DPI)
-    plt.close(fig)
+    try:
+        with whole_file(path) as tmp:
+            anim.save(str(tmp), writer=PillowWriter(fps=fps), dpi=GIF_DPI)
+    finally:
+        plt.close(fig)
     return Path(path)
 
 

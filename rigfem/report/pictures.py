@@ -12,7 +12,8 @@ import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from rigfem.fe.partcase import CaseResult
-from rigfem.mesh.partmesh import boundary_faces, whole_file
+from rigfem.files import whole_file
+from rigfem.mesh.partmesh import boundary_faces
 
 matplotlib.use("Agg")
 

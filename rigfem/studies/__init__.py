@@ -9,6 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "band_coverage": ["CALIBRATION_SIZES", "CLOSED_FORMS", "PARTS", "PRESETS", "PART_CALIBRATION_STEPS", "preset_mesh", "closed_form_case", "part_cases", "required_factor", "inside", "calibrate", "run", "coverage", "markdown"],
+        "cost": ["SECONDS_PER_ANGLE", "BYTES_PER_ANGLE", "JobCost", "turning", "bases_cost", "sweep_cost", "synthesis_cost", "check_cost"],
         "closed_form": ["kt_plate_hole", "plate_hole_peak_mpa"],
         "convergence": ["RATIO", "H_DIRECTIONS", "TARGETS", "NOISE", "AWAY_MM", "EXTEND", "Extrapolation", "richardson", "StepSpec", "away_from_singular_edges", "run_step", "h_levels", "preset_steps", "study", "needs_finer", "fine_step", "analyse", "scene_cases", "to_json"],
         "le10": ["INNER", "OUTER", "HALF_THICKNESS", "PRESSURE", "POINT_D", "TARGET_SYY", "STEEL", "SURFACES", "supports", "load", "le10_mesh", "node_at", "solve_le10"],

@@ -405,10 +405,11 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
     return res
 
 
-def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict | None = None
-                ) -> tuple[object, dict[str, Callable[[int], list]]]:
+def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict | None = None,
+                allow_rule_violations: bool = False) -> tuple[object, dict[str, Callable[[int], list]]]:
     """Check settings and {part: cases_for} of a scene, ``cases_for(n_dir)`` giving the part's
-    [(mode, PartCase)] with ``n_dir`` bearing directions (the dynamics run once)."""
+    [(mode, PartCase)] with ``n_dir`` bearing directions (the dynamics run once).  A scene that
+    breaks a rig rule is refused unless ``allow_rule_violations`` (as by rigfem check)."""
     from rigfem.check import load_check_scene
     from rigfem.dynamics.cycle import simulate
     from rigfem.dynamics.history import peaks
@@ -417,7 +418,7 @@ def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict 
     o = dict(overrides or {})
     if parts:
         o["parts"] = list(parts)
-    cs = load_check_scene(scene, o)
+    cs = load_check_scene(scene, o, allow_rule_violations)
     h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
     if h.meta.get("singular"):
         raise InputError(f"{scene}: the linkage passes a toggle (singular) position; no part loads")

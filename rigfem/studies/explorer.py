@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from rigfem.files import whole_file
 from rigfem.report.pages import json_script, render_page
 from rigfem.rig.rules import fourbar_rules, slider_crank_rules
 from rigfem.studies.sweep_configs import JOINTS, LENGTHS
@@ -74,7 +75,6 @@ def write_explorer(out: Path, tables: dict[str, pd.DataFrame], name: str = "expl
     """Write the explorer page for the given linkage types' tables into ``out``."""
     data = {kind: explorer_data(kind, t) for kind, t in tables.items()}
     path = Path(out) / name
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(render_page("explorer.html.j2", kinds=list(data), data=json_script(data)), encoding="utf-8")
-    tmp.replace(path)  # nothing half-written
+    with whole_file(path) as tmp:
+        tmp.write_text(render_page("explorer.html.j2", kinds=list(data), data=json_script(data)), encoding="utf-8")
     return path

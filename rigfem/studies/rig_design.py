@@ -218,13 +218,18 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
     return uniq[:top]
 
 
-def stress_verdicts(candidates: list[dict], fidelity: str = "draft", p: SweepParams | None = None) -> None:
+def stress_verdicts(candidates: list[dict], fidelity: str = "draft", p: SweepParams | None = None,
+                    on_stage=None) -> None:
     """Add each candidate's stress check (``stress``: verdict, worst utilisation and part, per-part
     utilisation) from the sweep's unit solutions (built once, cached on disk); ``p`` overrides
-    the sweep parameters (its own fidelity then)."""
+    the sweep parameters (its own fidelity then).  ``on_stage(text)`` hears each stage."""
     p = p or SweepParams(fidelity=fidelity)
+    if on_stage:
+        on_stage(f"unit solutions at {p.fidelity} (cached after the first run)")
     bases = build_bases(p)
-    for c in candidates:
+    for k, c in enumerate(candidates):
+        if on_stage:
+            on_stage(f"stress verdict {k + 1} of {len(candidates)}")
         cfg = dict(c["lengths_mm"], branch=c["branch"])
         row = evaluate(cfg, p, bases)
         if row.get("status") != "ok":

@@ -37,10 +37,13 @@ import numpy as np
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
 from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.files import whole_file
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import part_cases
 from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
 from rigfem.verdict.criterion import half_ultimate, overall
+from rigfem.mesh.mesher import MACHINE_GIB
+from rigfem.studies.cost import check_cost, sweep_cost
 from rigfem.studies.sweep_bases import UnitBasis, case_key, build_bases, case_peak
 from rigfem.studies.sweep_configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
 
@@ -161,7 +164,8 @@ def _write_chunk(work: Path, key: str, i: int, configs: list[dict], rows: list[d
 
 def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 1,
               scheduler: str | None = None, distributed: bool | None = None, configs: list[dict] | None = None,
-              progress: bool = True, bases: dict | None = None, solver: str = "auto"):
+              progress: bool = True, bases: dict | None = None, solver: str = "auto", on_stage=None,
+              machine_gib: float = MACHINE_GIB):
     """Run (or resume) a sweep; return the table (pandas DataFrame, one row per configuration).
 
     ``work_dir``: where finished chunks are stored (a folder per parameter hash is made in it).
@@ -169,6 +173,8 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     given); ``scheduler`` is ``tcp://HOST:PORT`` of an existing cluster, else a LocalCluster
     with ``workers`` processes runs inside this process.  ``configs``: only these configurations
     (default: every mountable one).  ``bases``: unit solutions already built for ``p``.
+    The job's cost is estimated from the counts before any work (:mod:`rigfem.studies.cost`;
+    past ``machine_gib`` or the time limit: InputError).  ``on_stage(text)`` hears each stage.
     """
 
     import pandas as pd
@@ -179,15 +185,19 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     t0 = time.perf_counter()
     check_range("chunk_size", chunk_size, 1, 100_000)
     check_range("workers", workers, 1, 256)
+    configs = enumerate_configs(p) if configs is None else configs
+    cost = sweep_cost(p, configs, workers, bases=bases is None)
+    check_cost(cost, machine_gib)  # from the counts, before anything is built
     if scheduler is not None and distributed is not False:
         reach_scheduler(scheduler)  # in seconds, before the unit solutions are built
-    configs = enumerate_configs(p) if configs is None else configs
     tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
     key = p.key()
     work = Path(work_dir) / f"{key}-{tag}"
     work.mkdir(parents=True, exist_ok=True)
-    (Path(work_dir) / ".gitignore").write_text("*\n")  # stored chunks never enter the repository
-    (work / "params.json").write_text(json.dumps(dataclasses.asdict(p), indent=1, default=str))
+    for path, text in ((Path(work_dir) / ".gitignore", "*\n"),  # stored chunks never enter the repository
+                       (work / "params.json", json.dumps(dataclasses.asdict(p), indent=1, default=str))):
+        with whole_file(path) as tmp:
+            tmp.write_text(text)
     chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
     todo = [i for i in range(len(chunks)) if read_entry(*_chunk(work, key, i, chunks[i])) is None]
     bar = tqdm(total=len(configs), unit="cfg", disable=not progress or None, desc=p.linkage_type,
@@ -195,22 +205,30 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     with bar:
         if todo:
             if bases is None:
+                if on_stage:
+                    on_stage(f"unit solutions (estimate for the whole sweep: {cost.seconds / 60:.0f} min, "
+                             f"{cost.gib:.2g} GiB)")
                 bar.set_postfix_str("unit solutions")
                 bases = build_bases(p, solver)
                 bar.set_postfix_str("")
             if distributed is None:
                 distributed = workers > 1 or scheduler is not None
             if distributed:
+                if on_stage:
+                    on_stage(f"configurations, {len(todo)} chunks on Dask")
                 _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar)
             else:
-                for i in todo:
+                for k, i in enumerate(todo):
+                    if on_stage:
+                        on_stage(f"configurations, chunk {k + 1} of {len(todo)}")
                     _write_chunk(work, key, i, chunks[i], run_chunk(chunks[i], p, bases))
                     bar.update(len(chunks[i]))
     timing = work / "timing.json"
     spent = json.loads(timing.read_text())["seconds"] if timing.is_file() else 0.0
     if todo:  # compute time over every run that computed chunks of this sweep
         spent += time.perf_counter() - t0
-        timing.write_text(json.dumps({"seconds": spent}))
+        with whole_file(timing) as tmp:
+            tmp.write_text(json.dumps({"seconds": spent}))
     table = pd.concat([pd.read_csv(_chunk(work, key, i, chunks[i])[0] / "rows.csv", keep_default_na=False,
                                    na_values=[""])
                        for i in range(len(chunks))], ignore_index=True)
@@ -244,6 +262,28 @@ def reach_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         why = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or type(exc).__name__)
         raise ComputeError(f"cannot reach the Dask scheduler at {address}: {why} (waited at most "
                            f"{timeout:g} s); start it or fix --scheduler") from None
+    if not _is_scheduler(address, timeout):  # something answers TCP there (e.g. a proxy): not Dask
+        raise ComputeError(f"{address} answers, but not as a Dask scheduler (its identity call failed within "
+                           f"{timeout:g} s); start the scheduler there or fix --scheduler")
+
+
+def _is_scheduler(address: str, timeout: float) -> bool:
+    """True if a Dask scheduler answers its identity call at ``address`` within ``timeout`` s."""
+    import asyncio
+
+    from distributed.core import rpc
+
+    async def identity() -> dict:
+        r = rpc(address, timeout=timeout)
+        try:
+            return await asyncio.wait_for(r.identity(), timeout)
+        finally:
+            await r.close_rpc()
+
+    try:
+        return asyncio.run(identity()).get("type") == "Scheduler"
+    except Exception:  # garbage, a closed stream, a timeout: whatever answers is not a scheduler
+        return False
 
 
 class _Mapped(np.memmap):

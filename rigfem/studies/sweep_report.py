@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from rigfem.files import whole_file
 from rigfem.studies.sweep import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
@@ -92,7 +93,8 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
                          f"grey: cannot assemble or toggle; hatched: breaks a rig rule (not mountable); "
                          f"red outline: fails or undecided; ★ the study's final design", fontsize="small")
             f = f"map_four-bar_{name}.png"
-            fig.savefig(out / f, dpi=90)
+            with whole_file(out / f) as tmp:
+                fig.savefig(tmp, dpi=90)
             plt.close(fig)
             files.append(f)
     else:
@@ -106,7 +108,8 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
         fig.colorbar(im, label="peak utilisation (%)")
         ax.set_title(f"slider-crank: peak part utilisation, {p.speed_hz:g} Hz{note}", fontsize="x-small")
         f = "map_slider-crank_b2_b3.png"
-        fig.savefig(out / f, dpi=90)
+        with whole_file(out / f) as tmp:
+            fig.savefig(tmp, dpi=90)
         plt.close(fig)
         files.append(f)
     return files
@@ -220,12 +223,14 @@ def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float 
     """Write the CSV, the maps and worst_<type>.md into ``out``; returns the file names."""
     out.mkdir(parents=True, exist_ok=True)
     csv = f"sweep_{p.linkage_type}.csv.gz"  # gzip: most rows are configurations that cannot assemble
-    table.to_csv(out / csv, index=False, float_format="%.6g", na_rep="",
-                 compression={"method": "gzip", "mtime": 0})
+    with whole_file(out / csv) as tmp:
+        table.to_csv(tmp, index=False, float_format="%.6g", na_rep="",
+                     compression={"method": "gzip", "mtime": 0})
     maps = write_maps(table, p, out)
     md = f"worst_{p.linkage_type}.md"
     text = worst_markdown(table, p, seconds)
-    (out / md).write_text(text)
+    with whole_file(out / md) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return [csv] + maps + [md] + write_pages(table, p, out, text, maps)
 
 
@@ -234,7 +239,8 @@ def write_pages(table: pd.DataFrame, p: SweepParams, out: Path, markdown: str, m
     from rigfem.studies.explorer import write_explorer
 
     page = f"sweep_{p.linkage_type}.html"
-    (out / page).write_text(summary_html(markdown, maps, out, p), encoding="utf-8")
+    with whole_file(out / page) as tmp:
+        tmp.write_text(summary_html(markdown, maps, out, p), encoding="utf-8")
     write_explorer(out, {t: tab for t, tab in _tables(out, table, p).items()})
     return [page, EXPLORER]
 

@@ -84,19 +84,22 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
 
 
-def verify_scene(cs: CheckScene, threads: int = 1, solver: str = "auto") -> list[dict]:
+def verify_scene(cs: CheckScene, threads: int = 1, solver: str = "auto", on_stage=None) -> list[dict]:
     """``rigfem check``'s part cases of a loaded scene (:func:`rigfem.check.load_check_scene`),
     each critical load combination re-solved by ccx.
 
     The scene is loaded (and so validated) by the caller, before ccx is looked for.  One entry
     per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
-    :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.
+    :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.  ``on_stage(text)``
+    hears each stage as it begins (dynamics, meshing/solving part X, CalculiX part X).
     """
     from rigfem.check import solve_scene
     from rigfem.fe.partcase import supports_of
 
     out = []
-    for r in solve_scene(cs, solver)[1]:
+    for r in solve_scene(cs, solver, on_stage=on_stage)[1]:
+        if on_stage:
+            on_stage(f"CalculiX part {r.case.name} ({r.mode})")
         (c,) = cross_check(r.solution.model, supports_of(r.case), solution=r.solution, coef=r.coef[[r.row]],
                            threads=threads)
         out.append({"part": r.case.name, "mode": r.mode, "dof": int(r.solution.model.mesh.ndof),
