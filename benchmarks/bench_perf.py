@@ -20,7 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from record import OUT, cold_env, commit, summarise, timed_process, write_record
+from record import OUT, cold_env, commit, timed_process, write_record
 
 #: the one home of the goals (issue 26): row -> the work, the goal as written, the limits it sets
 #: (cold_s / warm_s: median wall time; rss_mib: peak tree RSS of every run; ratio: rigfem/ccx;

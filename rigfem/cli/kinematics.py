@@ -153,7 +153,7 @@ def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None, 
             res[f"{k}_definition"] = m.meta[k]
     mu = res.get("transmission_angle_deg")
     res["rule_violations"] = ([f"transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, allowed "
-                               f"{MU_LIMITS_DEG[0]:g} < mu < {MU_LIMITS_DEG[1]:g} deg"]
+                               f"{rig.MU_LIMITS_DEG[0]:g} < mu < {rig.MU_LIMITS_DEG[1]:g} deg"]
                               if mu and not mu["within_band"] and not textbook else [])
     res["angles"] = _records(m)
     return res
