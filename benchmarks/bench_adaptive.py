@@ -87,6 +87,7 @@ def main(argv: list[str] | None = None) -> None:
             if old["settings"]["fidelity"] == fid:
                 committed = samples["committed"] = _committed(args.scene, after)
     derived["every part consistent"] = float(all(r["consistent"] for r in samples["parts"] + samples["committed"]))
+    samples = {k: v for k, v in samples.items() if v}  # no committed comparison at another fidelity
     path = write_record("adaptive", samples, derived, params={"scene": args.scene, "fidelity": args.fidelity})
     print(path)
 
