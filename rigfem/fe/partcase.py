@@ -174,6 +174,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
             done = settled is not None and all(settled(r) for r in out)
             if done or k == len(levels) - 1:
                 break
+            out = None  # free this level's model, matrix and factor before the finer level's
         stopped = ("fixed mesh (no ladder)" if len(levels) == 1 else
                    "decided within the reporting target" if done else "reached the cap")
         for (mode, case), res in zip(group, out):
