@@ -47,7 +47,8 @@ COMMANDS = {
     "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
     "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
-    "bad_inputs": "python benchmarks/bad_inputs.py"}
+    "bad_inputs": "python benchmarks/bad_inputs.py",
+    "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft"}
 
 
 def problems(recs: dict[str, dict]) -> list[str]:
@@ -144,6 +145,11 @@ ROWS = [
      lambda d: f"closed form **{med(d, 'closed form, 5000 angles (simulate)', 'wall_ms'):.1f} ms** vs the general "
                f"solver {med(d, 'general solver, 5000 angles', 'wall_ms'):.1f} ms (same run) — "
                "results/benchmarks/dynamics.md, results/dynamics/"),
+    ("adaptive", "verdict-driven refinement vs fixed preset meshes, final-cm, per part: DOF, s, peak, verdict",
+     lambda a: "wall after / before: " + ", ".join(f"{f} {a['derived'][f + ': wall after / before']:.2f}"
+                                                     for f in a["params"]["fidelity"])
+               + f"; every part consistent: {'yes' if a['derived']['every part consistent'] else '**no**'} — "
+                 "results/benchmarks/adaptive.md"),
     (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm --force` (see "
      "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
     ("band_coverage", "coverage of the peaks' error band (an estimate) per preset, and its calibration",

@@ -340,8 +340,38 @@ def perf(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def adaptive(rec: dict) -> str:
+    """Fixed preset meshes against the verdict-driven ladder, per part case."""
+    p = rec["params"]
+    lines = head(rec, f"`rigfem check {p['scene']}`: fixed preset mesh (before) vs verdict-driven ladder (after)")
+    lines += ["Each check a separate cold process (empty caches).  Seconds: the part's mesh, assembly and solves "
+              "(every level tried, after; shared by its two modes).  Band: peak · error_pct, MPa.  Consistent: same "
+              "verdict and |after − before| ≤ the sum of both bands.", "",
+              "| preset | part | mode | DOF before → after (ladder total) | level, why | s before → after | "
+              "peak ± band before, MPa | after, MPa | verdict | consistent |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rec["samples"]["parts"]:
+        lines.append(f"| {r['fidelity']} | {r['part']} | {r['mode']} | {r['before_dofs']} → {r['after_dofs']} "
+                     f"({r['after_ladder_dofs']}) | {r['after_level']}, {r['after_stopped']} | {r['before_s']:.1f} → "
+                     f"{r['after_s']:.1f} | {r['before_peak_mpa']:.2f} ± {r['before_band_mpa']:.2f} | "
+                     f"{r['after_peak_mpa']:.2f} ± {r['after_band_mpa']:.2f} | {r['before_verdict']} → "
+                     f"{r['after_verdict']} | {'yes' if r['consistent'] else '**no**'} |")
+    if rec["samples"].get("committed"):
+        lines += ["", f"Against the committed report (results/{p['scene']}/report.json):", "",
+                  "| part | mode | committed MPa | after MPa | difference MPa | both bands MPa | consistent |",
+                  "|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['part']} | {r['mode']} | {r['committed_peak_mpa']:.2f} | {r['after_peak_mpa']:.2f} | "
+                  f"{r['difference_mpa']:+.2f} | {r['bands_mpa']:.2f} | {'yes' if r['consistent'] else '**no**'} |"
+                  for r in rec["samples"]["committed"]]
+    lines += ["", "| preset | wall s before → after | peak tree RSS MiB before → after |", "|---|---|---|"]
+    lines += [f"| {f} | {med(rec, f + ' before'):.1f} → {med(rec, f + ' after'):.1f} | "
+              f"{med(rec, f + ' before', 'peak_tree_rss_mib'):.0f} → {med(rec, f + ' after', 'peak_tree_rss_mib'):.0f} |"
+              for f in p["fidelity"]]
+    lines += [""] + [f"{k}: {v:.2f}" + "  " for k, v in rec["derived"].items()]
+    return "\n".join(lines) + "\n"
+
+
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
     "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
-    "bad_inputs": bad_inputs}
+    "bad_inputs": bad_inputs, "adaptive": adaptive}

@@ -62,7 +62,7 @@ from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
 from rigfem.settings import REFERENCE_SCENE, CheckSettings, check_settings
 from rigfem.verdict.criterion import allowable_stress, overall
-from rigfem.verdict.part import verdict_of
+from rigfem.verdict.part import settled, verdict_of
 
 
 #: a reaction history whose joint forces (N) and driver load (N·m or N) all stay below this loads
@@ -271,7 +271,8 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
                          f"check would pass at 0 %; for its motion alone use rigfem kinematics")
     bar, step = _progress(len(cases), quiet)
     with bar:
-        return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage)
+        return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage,
+                              settled=lambda r: settled(r, cs.settings))
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
@@ -317,7 +318,8 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         **{k: reactions[k] for k in ("rules", "transmission_angle_deg", "peaks", "singular", "warnings")},
         "torque_Nm": reactions.get("torque_Nm") or reactions.get("driver_force_N"),
         "settings": {"modes": list(s.modes), "fidelity": s.fidelity, "order": s.order, "size_mm": s.size_mm,
-                     "local_size_mm": s.local_size_mm, "bearing_directions": s.bearing_directions,
+                     "local_size_mm": s.local_size_mm, "adaptive": s.adaptive, "target_pct": s.target_pct,
+                     "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},
         "material": material_table(s.material),

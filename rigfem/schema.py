@@ -154,6 +154,7 @@ class CheckTable(_Table):
     order: Annotated[int, Field(ge=1, le=2)] | None = None
     size_mm: Annotated[float, Field(ge=0.1, le=100.0)] | None = None
     local_size_mm: Annotated[float, Field(ge=0.05, le=100.0)] | None = None
+    adaptive: bool | None = None
     material: Annotated[str, Field(min_length=1, max_length=60)] | MaterialTable | None = None
     load_factor: Annotated[float, Field(gt=0.0, le=100.0)] | None = None
     limit_factor: Annotated[float, Field(gt=0.0, le=1.0)] | None = None

@@ -9,6 +9,8 @@ Every field is optional::
     order = 2                       # element order (1 | 2)
     size_mm = 6.0                   # global mesh size
     local_size_mm = 1.2             # mesh size at the interfaces that carry load
+    adaptive = true                 # refine each part coarse → preset only until decided (see LADDER);
+                                    # size_mm / local_size_mm mesh exactly that (no ladder)
     material = "rig_steel"          # rigfem.material library name, or a table {name, E, nu, sigma_u, density}
     load_factor = 1.4               # the study's factor on peak reactions (original mode)
     limit_factor = 0.5              # limit = limit_factor · σu (the study's σu/2)
@@ -114,9 +116,24 @@ def preset(name: str) -> Preset:
         raise InputError(f"fidelity = {str(name)[:40]!r} must be one of {', '.join(FIDELITY)}")
     return FIDELITY[name]
 
-#: accuracy target of each preset against the extrapolated peak, % (met by every converging
-#: peak: results/convergence/summary.md); the sweep uses it as its error band
+#: reporting target of each preset, % of the allowable: a check refines a part (:data:`LADDER`)
+#: until its band's half-width ``peak·error_pct/100`` is within this share of the allowable and the
+#: band does not straddle it.  Each preset meets it against the extrapolated peak of the reference
+#: parts (results/convergence/summary.md); the sweep, which estimates no band, reports it as its band.
 PRESET_ERROR_PCT: dict[str, float] = {"draft": 10.0, "standard": 3.0, "fine": 1.0}
+
+#: the adaptive ladder's first level, coarser than draft (global, local size mm): parts far below
+#: the limit are decided on it (results/benchmarks/adaptive.md)
+COARSE = Preset(size_mm=12.0, local_size_mm=2.4)
+
+#: the levels a check climbs, coarsest first; a check at preset ``p`` stops at ``p`` at the latest
+LADDER: dict[str, Preset] = {"coarse": COARSE, **FIDELITY}
+
+
+def ladder(fidelity: str) -> list[tuple[str, Preset]]:
+    """The adaptive levels (name, preset) of a check at ``fidelity``: coarse up to that preset."""
+    names = list(LADDER)
+    return [(n, LADDER[n]) for n in names[:names.index(fidelity) + 1]]
 
 
 MODES = ("original", "cycle")
@@ -168,6 +185,20 @@ class CheckSettings(Preset):
     limit_factor: float = 0.5
     fatigue: dict = field(default_factory=lambda: {"surface": "machined", "reliability": 0.9,
                                                    "size_mm": 19.0})
+    adaptive: bool = True  #: climb :func:`ladder` per part until decided (off when sizes are forced)
+
+    @property
+    def target_pct(self) -> float:
+        """The reporting target: the band's half-width, % of the allowable (:data:`PRESET_ERROR_PCT`)."""
+        return PRESET_ERROR_PCT[self.fidelity]
+
+    def levels(self) -> list[tuple[str, "CheckSettings"]]:
+        """The mesh levels to try, coarsest first: the ladder, or only these settings when not adaptive."""
+        if not self.adaptive:
+            fixed = FIDELITY[self.fidelity]
+            same = (self.size_mm, self.near_mm) == (fixed.size_mm, fixed.near_mm)
+            return [(self.fidelity if same else "forced", self)]
+        return [(n, replace(self, size_mm=p.size_mm, local_size_mm=p.local_size_mm)) for n, p in ladder(self.fidelity)]
 
 
 def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None = None) -> CheckSettings:
@@ -214,4 +245,5 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     return CheckSettings(
         **mesh, linkage_type=linkage_type, parts=parts, rig=resolve_parts(parts, PLATE), modes=tuple(table.get("modes", MODES)), fidelity=fid,
         material=material, load_factor=float(table.get("load_factor", 1.4)),
-        limit_factor=float(table.get("limit_factor", 0.5)), fatigue=fatigue)
+        limit_factor=float(table.get("limit_factor", 0.5)), fatigue=fatigue,
+        adaptive=bool(table.get("adaptive", True)) and not ({"size_mm", "local_size_mm"} & set(table)))

@@ -33,6 +33,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--order", type=int, help="element order 1 | 2")
     p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
     p.add_argument("--local-size", type=float, metavar="MM", help="mesh size at loaded interfaces (mm)")
+    p.add_argument("--no-adaptive", dest="adaptive", action="store_false", default=None,
+                   help="mesh every part at the preset (default: refine each part only until its verdict is decided)")
     p.add_argument("--modes", help="comma list: original,cycle")
     p.add_argument("--parts", help="comma list of parts to check (default: all of the linkage)")
     p.add_argument("--samples", type=int, help="crank angles per turn (default 360)")
@@ -55,6 +57,7 @@ def _list(text: str | None) -> list[str] | None:
 
 def _overrides(a: argparse.Namespace) -> dict:
     o = {"fidelity": a.fidelity, "order": a.order, "size_mm": a.size, "local_size_mm": a.local_size,
+         "adaptive": a.adaptive,
          "samples": a.samples, "mass_model": a.model, "frames": a.frames,
          "reactions_csv": str(Path(a.reactions_csv).resolve()) if a.reactions_csv else None,
          "modes": _list(a.modes), "parts": _list(a.parts)}

@@ -122,6 +122,9 @@ class CaseResult:
     mesh: PartMesh
     imbalance: tuple[float, float]  #: largest relative (force, moment) imbalance of a row (free bodies)
     seconds: dict
+    level: str = ""  #: the mesh level the part stopped at (rigfem.settings.LADDER), or "forced"
+    stopped: str = ""  #: why it stopped there
+    ladder: list = dataclasses.field(default_factory=list)  #: per level tried: name, sizes, DOF, seconds
 
 
 def imbalance(model: Model, coef: np.ndarray, R: np.ndarray, scale: np.ndarray) -> tuple[float, float]:
@@ -147,35 +150,65 @@ def _key(case: PartCase) -> tuple:
 
 
 def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto",
-                progress=None, on_stage=None) -> list[CaseResult]:
+                progress=None, settled=None, on_stage=None) -> list[CaseResult]:
     """Solve every (mode, case); cases of one part geometry share mesh and stiffness, cases
     with the same supports share one factorisation, identical unit loads are solved once.
-    ``on_stage(text)`` hears 'meshing part X' and 'solving part X' as each begins."""
+
+    With ``settled`` (a :class:`CaseResult` → bool, the verdict layer's judge) every part geometry
+    climbs ``settings.levels()`` (coarse first) and stops at the first level where all its cases
+    are settled, or at the last level (the cap); without it, it is solved at ``settings`` only.
+    ``on_stage(text)`` hears 'meshing part X' and 'solving part X' (with the level) as each begins.
+    """
     geo: dict[tuple, list[tuple[str, PartCase]]] = {}
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
+    levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
     results = {}
     for group in geo.values():
-        t0 = time.perf_counter()
-        refine = tuple(sorted({g for _, c in group for g in c.refine}))
-        first = group[0][1]
-        if on_stage:
-            on_stage(f"meshing part {first.name}")
-        pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
-        model = build_model(pm, settings.material, settings.order)
-        t_model = time.perf_counter() - t0
-        if on_stage:
-            on_stage(f"solving part {first.name}")
-        by_support: dict[tuple, list[tuple[str, PartCase]]] = {}
-        for mode, case in group:
-            by_support.setdefault(tuple(case.supports), []).append((mode, case))
-        for sup_cases in by_support.values():
-            for (mode, case), res in zip(sup_cases, _solve_shared(model, pm, sup_cases, settings, solver)):
-                res.seconds["mesh+assembly (shared)"] = t_model
-                results[id(case)] = res
-                if progress:
-                    progress(case.name, mode)
+        ladder = []
+        for k, (name, s) in enumerate(levels):
+            t0 = time.perf_counter()
+            out = _solve_group(group, s, solver, on_stage, name)
+            ladder.append({"level": name, "size_mm": s.size_mm, "local_size_mm": s.near_mm,
+                           "dofs": int(out[0].solution.model.mesh.ndof),
+                           "seconds": round(time.perf_counter() - t0, 3)})
+            done = settled is not None and all(settled(r) for r in out)
+            if done or k == len(levels) - 1:
+                break
+            out = None  # free this level's model, matrix and factor before the finer level's
+        stopped = ("fixed mesh (no ladder)" if len(levels) == 1 else
+                   "decided within the reporting target" if done else "reached the cap")
+        for (mode, case), res in zip(group, out):
+            res.level, res.stopped, res.ladder = name, stopped, ladder
+            results[id(case)] = res
+            if progress:
+                progress(case.name, mode)
     return [results[id(case)] for _, case in cases]
+
+
+def _solve_group(group: list[tuple[str, PartCase]], settings, solver: str, on_stage=None,
+                 level: str = "") -> list[CaseResult]:
+    """The cases of one part geometry at ``settings``, in the order of ``group``."""
+    t0 = time.perf_counter()
+    refine = tuple(sorted({g for _, c in group for g in c.refine}))
+    first = group[0][1]
+    at = f" ({level})" if level else ""
+    if on_stage:
+        on_stage(f"meshing part {first.name}{at}")
+    pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
+    model = build_model(pm, settings.material, settings.order)
+    t_model = time.perf_counter() - t0
+    if on_stage:
+        on_stage(f"solving part {first.name}{at}")
+    by_support: dict[tuple, list[tuple[str, PartCase]]] = {}
+    for mode, case in group:
+        by_support.setdefault(tuple(case.supports), []).append((mode, case))
+    results = {}
+    for sup_cases in by_support.values():
+        for (mode, case), res in zip(sup_cases, _solve_shared(model, pm, sup_cases, settings, solver)):
+            res.seconds["mesh+assembly (shared)"] = t_model
+            results[id(case)] = res
+    return [results[id(case)] for _, case in group]
 
 
 def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCase]], settings,

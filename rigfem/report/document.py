@@ -88,11 +88,14 @@ def study_tables(r: dict) -> list[str]:
         lines.append(f"| {m['property']} | {value} | {m['unit']} | {md_text(m['source'])} |")
     parts = [p for p in r["parts"] if p.get("mesh")]
     lines += ["", "## Mesh per part", "", "| part | mode | element | nodes | elements | size at the peak (mm) | "
-              "quality min (SICN, –) |", "|---|---|---|---|---|---|---|"]
+              "quality min (SICN, –) | level | why it stopped | ladder: level DOF (s) |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     for p in parts:
         m = p["mesh"]
+        steps = ", ".join(f"{s['level']} {s['dofs']} ({s['seconds']:.1f})" for s in m.get("ladder", []))
         lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {m.get('element', '')} | {m.get('fe_nodes', m['nodes'])} | "
-                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} |")
+                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | "
+                     f"{m.get('level', '')} | {m.get('stopped', '')} | {steps} |")
     lines += ["", "## Free-body balance per part (critical crank angle; moments about the part frame's origin; "
               "applied = pin loads and body forces, with the inertia relief of a free body)",
               "", "| part | mode | Σ applied F (N) | Σ applied M (N·mm) | Σ support reactions F (N) | "

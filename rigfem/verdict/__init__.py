@@ -10,6 +10,6 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "criterion": ["Verdict", "LIMIT_FACTOR", "IMBALANCE_TOL", "allowable_stress", "half_ultimate", "overall"],
         "fatigue": ["marin_endurance", "goodman"],
-        "part": ["verdict_of"],
+        "part": ["settled", "verdict_of"],
     },
 )

@@ -69,6 +69,19 @@ def balance(sol, c: np.ndarray) -> dict:
             "residual_Nmm": float(np.linalg.norm(app[3:] + tot_s[3:]))}
 
 
+def settled(res: CaseResult, settings) -> bool:
+    """True when a finer mesh cannot change what the report says of a case: its band does not
+    straddle the limit (:func:`half_ultimate`) and its half-width ``peak·error_pct/100`` is within
+    the preset's reporting target, ``settings.target_pct`` % of the allowable (a part nothing loads
+    is settled; a free body out of balance is not a matter of mesh and is judged by the band alone)."""
+    pk = res.peak
+    v = half_ultimate(pk.value, settings.material.sigma_u, pk.error_pct, settings.limit_factor,
+                      loaded=bool(np.any(res.coef != 0)))
+    if v.verdict == "not loaded":
+        return True
+    return v.verdict != "undecided" and pk.value * pk.error_pct <= settings.target_pct * v.limit_mpa
+
+
 def verdict_of(res: CaseResult, settings) -> dict:
     """Report entry of a case result (plain data, MPa, mm, deg)."""
     mat = settings.material
@@ -96,7 +109,8 @@ def verdict_of(res: CaseResult, settings) -> dict:
                  "quality_min": float(res.mesh.quality.get("min", 0.0)),
                  "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
                  "straightened": int(sol.model.mesh.straightened),
-                 "cache": res.mesh.meta.get("cache", "")},
+                 "cache": res.mesh.meta.get("cache", ""),
+                 "level": res.level, "stopped": res.stopped, "ladder": res.ladder},
         "solve": {"method": sol.method, "load_cases": int(sol.U.shape[1]),
                   "rows": int(len(res.case.rows)),
                   "residual_max": float(sol.residuals.max()), "equilibrium_error": eq,

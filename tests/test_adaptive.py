@@ -1,0 +1,76 @@
+"""Verdict-driven refinement: each part climbs the ladder (rigfem.settings.LADDER) only until its
+verdict is decided and its band is within the preset's reporting target."""
+
+import json
+
+import pytest
+
+from rigfem.check import run_check
+from rigfem.cli import main
+from rigfem.settings import FIDELITY, LADDER, PRESET_ERROR_PCT
+
+FINAL_CM = '[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\nmasses = "rig"\n'
+PLATE = {"parts": ["plate_A"], "modes": ["original"], "samples": 72, "frames": 0}
+
+
+@pytest.fixture(scope="module")
+def far(tmp_path_factory):
+    """The plate at the standard preset: at about 2 % of the allowable, decided on the coarse level."""
+    return run_check("final-cm", out=tmp_path_factory.mktemp("a") / "o", quiet=True,
+                     overrides=dict(PLATE, fidelity="standard"))
+
+
+def test_far_below_the_limit_stops_at_the_coarse_level(far):
+    (p,) = far["parts"]
+    m = p["mesh"]
+    assert p["verdict"] == "pass" and m["level"] == "coarse"
+    assert m["stopped"] == "decided within the reporting target"
+    assert [s["level"] for s in m["ladder"]] == ["coarse"] and m["ladder"][0]["dofs"] == m["dofs"]
+    assert m["ladder"][0]["size_mm"] == LADDER["coarse"].size_mm > FIDELITY["standard"].size_mm
+    assert p["peak_mpa"] * p["error_pct"] <= PRESET_ERROR_PCT["standard"] * p["limit_mpa"]
+    assert far["settings"]["adaptive"] is True and far["settings"]["target_pct"] == PRESET_ERROR_PCT["standard"]
+
+
+def test_forced_size_meshes_exactly_that(far, tmp_path):
+    r = run_check("final-cm", out=tmp_path / "o", quiet=True,
+                  overrides=dict(PLATE, size_mm=8.0, local_size_mm=1.7))
+    (p,) = r["parts"]
+    m = p["mesh"]
+    assert r["settings"]["adaptive"] is False
+    assert m["level"] == "forced" and m["stopped"] == "fixed mesh (no ladder)" and len(m["ladder"]) == 1
+    assert m["ladder"][0]["size_mm"] == 8.0 and m["ladder"][0]["local_size_mm"] == 1.7
+    assert far["parts"][0]["mesh"]["dofs"] < m["dofs"]  # the coarse level: fewer DOF than even draft
+
+
+def test_straddling_band_is_refined(tmp_path):
+    """A limit at the coarse level's peak: its band straddles the limit, so the part climbs."""
+    base = tmp_path / "base.toml"  # the reference linkage at the default limit: decided on the coarse level
+    base.write_text(FINAL_CM)
+    args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "draft", "--samples", "72",
+            "--frames", "0", "--quiet"]
+    assert main(["check", str(base), "--out", str(tmp_path / "b"), *args]) == 0
+    low = json.loads((tmp_path / "b" / "report.json").read_text())["parts"][0]
+    assert low["mesh"]["level"] == "coarse"
+    factor = low["peak_mpa"] / (2 * low["limit_mpa"])  # limit = factor·σu sits on the coarse peak
+    scene = tmp_path / "edge.toml"
+    scene.write_text(FINAL_CM + f"[check]\nlimit_factor = {factor!r}\n")
+    code = main(["check", str(scene), "--out", str(tmp_path / "o"), *args])
+    q = json.loads((tmp_path / "o" / "report.json").read_text())["parts"][0]
+    m = q["mesh"]
+    assert [s["level"] for s in m["ladder"]] == ["coarse", "draft"] and m["level"] == "draft"
+    assert m["ladder"][0]["dofs"] < m["ladder"][1]["dofs"] == m["dofs"]
+    if q["verdict"] == "undecided":  # still straddling at the cap: undecided, exit 1, said why
+        assert m["stopped"] == "reached the cap" and code == 1
+    assert "why it stopped" in (tmp_path / "o" / "report.md").read_text()
+
+
+def test_no_adaptive_flag_and_bad_value(tmp_path, capsys):
+    args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "draft", "--samples", "72",
+            "--frames", "0", "--quiet"]
+    assert main(["check", "--out", str(tmp_path / "o"), "--no-adaptive", *args]) == 0
+    m = json.loads((tmp_path / "o" / "report.json").read_text())["parts"][0]["mesh"]
+    assert m["level"] == "draft" and len(m["ladder"]) == 1
+    scene = tmp_path / "bad.toml"
+    scene.write_text(FINAL_CM + '[check]\nadaptive = "yes"\n')
+    assert main(["check", str(scene), "--out", str(tmp_path / "x"), *args]) == 2
+    assert "[check].adaptive" in capsys.readouterr().err
