@@ -80,4 +80,4 @@ def test_check_names_its_stages(monkeypatch, capsys, tmp_path):
     assert main(["check", "final-cm", "--out", str(tmp_path / "o"), *FAST]) == 0
     stages = re.findall(r"^rigfem check: (.+) … \d+ s$", capsys.readouterr().err, re.M)
     assert [s for i, s in enumerate(stages) if s not in stages[:i] and s != "running"] == [
-        "dynamics", "meshing part plate_A", "solving part plate_A", "report"]
+        "dynamics", "meshing part plate_A (coarse)", "solving part plate_A (coarse)", "report"]  # the ladder's first level
