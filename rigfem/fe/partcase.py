@@ -27,6 +27,7 @@ from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
 from rigfem.mesh.mesher import MeshSettings, mesh_part
 from rigfem.mesh.partmesh import PartMesh
+from rigfem.mesh.pool import prefetch
 from rigfem.rig.parts import load_part
 
 #: surface groups that raise stress without carrying load (the I-profile's root fillets, whose
@@ -34,13 +35,24 @@ from rigfem.rig.parts import load_part
 CONCENTRATORS = ("fillets",)
 
 
-def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
-    """The (cached) mesh of a case's part at ``settings`` (a preset or a check's settings), refined
+def mesh_job(case: PartCase, settings: MeshSettings) -> tuple:
+    """The part and mesh settings of a case: ``settings`` (a preset or a check's settings) refined
     at the interfaces that carry its load and, twice as finely, at the refined groups that
     concentrate stress (:data:`CONCENTRATORS`)."""
     part = load_part(case.part, case.params or None)
     conc = tuple(g for g in case.refine if g in CONCENTRATORS)
-    return mesh_part(part, settings.refined(tuple(g for g in case.refine if g not in conc), conc))
+    return part, settings.refined(tuple(g for g in case.refine if g not in conc), conc)
+
+
+def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
+    """The (cached) mesh of a case's part (:func:`mesh_job`)."""
+    return mesh_part(*mesh_job(case, settings))
+
+
+def _merged(group: list[tuple[str, PartCase]]) -> PartCase:
+    """The first case of a part geometry's group, refined where any case of the group is."""
+    refine = tuple(sorted({g for _, c in group for g in c.refine}))
+    return dataclasses.replace(group[0][1], refine=refine)
 
 
 def supports_of(case: PartCase) -> list:
@@ -153,12 +165,11 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     geo: dict[tuple, list[tuple[str, PartCase]]] = {}
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
+    prefetch([mesh_job(_merged(group), settings) for group in geo.values()])  # meshed ahead, 2 at a time
     results = {}
     for group in geo.values():
         t0 = time.perf_counter()
-        refine = tuple(sorted({g for _, c in group for g in c.refine}))
-        first = group[0][1]
-        pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
+        pm = mesh_case(_merged(group), settings)
         model = build_model(pm, settings.material, settings.order)
         t_model = time.perf_counter() - t0
         by_support: dict[tuple, list[tuple[str, PartCase]]] = {}
@@ -170,6 +181,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
                 results[id(case)] = res
                 if progress:
                     progress(case.name, mode)
+        model.release()  # its stiffness and quadrature caches: the results keep mesh and arrays only
     return [results[id(case)] for _, case in cases]
 
 

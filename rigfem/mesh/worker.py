@@ -13,6 +13,7 @@ import functools
 import multiprocessing as mp
 import signal
 import sys
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -57,9 +58,10 @@ def _start(proc) -> None:
             main.__file__ = path
 
 
-def call(fn: Callable, *args: Any) -> Any:
+def call(fn: Callable, *args: Any, cancel: threading.Event | None = None) -> Any:
     """``fn(*args)`` in a child process; its exception is raised here.  KeyboardInterrupt or any
-    exception raised in the parent while it waits (a signal handler's) kills the child first.
+    exception raised in the parent while it waits (a signal handler's) kills the child first,
+    and so does ``cancel`` being set (a caller in another thread: :mod:`rigfem.mesh.pool`).
     In a daemonic process (which may not have children) ``fn`` runs in this process."""
     if mp.current_process().daemon:
         return fn(*args)
@@ -70,6 +72,8 @@ def call(fn: Callable, *args: Any) -> Any:
     send.close()
     try:
         while not recv.poll(POLL_S):
+            if cancel is not None and cancel.is_set():
+                raise ComputeError("meshing cancelled")
             if not proc.is_alive() and not recv.poll(0):
                 raise ComputeError(f"the mesher process ended without a result (exit code {proc.exitcode}; "
                                    f"out of memory?)")
