@@ -46,7 +46,9 @@ COMMANDS = {
     "le10": "python benchmarks/bench_le10.py --sizes 400 283 200 141 100",
     "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
     "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
-    "band_coverage": "python benchmarks/band_coverage.py"}
+    "band_coverage": "python benchmarks/band_coverage.py",
+    "levers": "python benchmarks/bench_levers.py --label before --src /tmp/base; "
+              "python benchmarks/bench_levers.py --label after"}
 
 
 def problems(recs: dict[str, dict]) -> list[str]:

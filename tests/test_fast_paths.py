@@ -80,10 +80,10 @@ def test_prefetched_mesh_is_made_once_and_taken(tmp_path, monkeypatch):
 
     monkeypatch.setattr(mesher, "make_mesh", counting)
     jobs = [(load_part(PLATE), MeshSettings(14.0)), (load_part(RAIL, {"length": 200}), MeshSettings(14.0))]
-    assert pool.prefetch(jobs) == 2
+    assert mesher.prefetch(jobs) == 2
     pms = [mesh_part(p, s) for p, s in jobs]
     assert sorted(made) == sorted([PLATE, RAIL]) and [pm.name for pm in pms] == [PLATE, RAIL]
-    assert pool.prefetch(jobs) == 0  # both now in the cache
+    assert mesher.prefetch(jobs) == 0  # both now in the cache
     again = mesh_part(*jobs[0])
     assert again.meta["cache"] == "hit" and np.array_equal(again.points, pms[0].points)
 
@@ -91,7 +91,7 @@ def test_prefetched_mesh_is_made_once_and_taken(tmp_path, monkeypatch):
 def test_cancelled_prefetch_ends_its_mesher(tmp_path, monkeypatch):
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     job = (load_part(RAIL, {"length": 200}), MeshSettings(9.0))
-    assert pool.prefetch([job]) == 1
+    assert mesher.prefetch([job]) == 1
     key = mesh_inputs(*job)[0]
     fut = pool._jobs[key][0]
     pool.cancel()

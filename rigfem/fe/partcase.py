@@ -25,9 +25,8 @@ from rigfem.fe.model import Model, build_model, load_matrix
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
-from rigfem.mesh.mesher import MeshSettings, mesh_part
+from rigfem.mesh.mesher import MeshSettings, mesh_part, prefetch
 from rigfem.mesh.partmesh import PartMesh
-from rigfem.mesh.pool import prefetch
 from rigfem.rig.parts import load_part
 
 #: surface groups that raise stress without carrying load (the I-profile's root fillets, whose

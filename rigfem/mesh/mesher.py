@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigfem.mesh import pool
 from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
 from rigfem.mesh.partmesh import (
     Hole,
@@ -282,12 +283,31 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
         pm.meta["cache"] = "hit"
         return pm
     if use_cache and machine_gib == MACHINE_GIB:
-        from rigfem.mesh.pool import take
-
-        pm = take(key)
+        pm = pool.take(key)
         if pm is not None:
             return pm
     return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
+
+
+def prefetch(jobs: list[tuple]) -> int:
+    """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
+    processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them
+    made; returns how many were started.  Jobs of an earlier call never taken (a check that
+    stopped early) are cancelled first.  In a daemonic process (a sweep worker, which may not
+    have children) nothing is started."""
+    import multiprocessing as mp
+
+    pool.cancel()
+    if mp.current_process().daemon:
+        return 0
+    started = 0
+    for part, settings in jobs:
+        key, inputs = mesh_inputs(part, settings)
+        if mesh_folder(part, key).exists():  # mesh_part verifies the cached entry
+            continue
+        started += pool.submit(key, lambda stop, p=part, s=settings, k=key, i=inputs: make_mesh(p, s, k, i,
+                                                                                                  cancel=stop))
+    return started
 
 
 def mesh_inputs(part, settings: MeshSettings) -> tuple[str, dict]:

@@ -1,25 +1,22 @@
-"""Meshes made ahead of the FE: a check names every part mesh it will need at its start, two
-mesher processes make them while the FE solves the earlier parts, and :func:`mesh_part` takes a
-finished one instead of meshing it again.
+"""Work started ahead of its use, at most :data:`WORKERS` jobs at a time, each in a thread that
+only waits on a child process (:func:`rigfem.mesh.worker.call`): the parent stays interruptible.
 
-Measured (issue 26): meshing the standard ``final-cm`` parts one after another took 21.4 s,
-with two mesher processes 14.8 s, and the FE of one part overlaps the meshing of the next.
-Each job runs in a thread that only waits on its mesher process (:mod:`rigfem.mesh.worker`),
-so the parent stays interruptible; :func:`cancel` ends every job not yet taken.  In a daemonic
-process (a sweep worker, which may not have children) nothing is prefetched.
+:func:`rigfem.mesh.mesher.prefetch` submits a check's part meshes here so two mesher processes
+make them while the FE solves the earlier parts (measured in issue 26: meshing the standard
+``final-cm`` parts one after another 21.4 s, with two processes 14.8 s); ``mesh_part`` then
+:func:`take` s a finished mesh.  :func:`cancel` ends every job not yet taken.
 """
 
 from __future__ import annotations
 
-import multiprocessing as mp
 import threading
+from collections.abc import Callable
 from concurrent.futures import Future
+from typing import Any
 
-from rigfem.settings import MeshSettings
+__all__ = ["WORKERS", "submit", "pending", "take", "cancel"]
 
-__all__ = ["WORKERS", "prefetch", "take", "cancel"]
-
-#: mesher processes at a time (each holds one gmsh model; the FE runs beside them)
+#: jobs at a time (each a mesher process holding one gmsh model; the FE runs beside them)
 WORKERS = 2
 
 _slots = threading.BoundedSemaphore(WORKERS)
@@ -27,44 +24,37 @@ _jobs: dict[str, tuple[Future, threading.Event]] = {}
 _lock = threading.Lock()
 
 
-def _run(fut: Future, stop: threading.Event, part, settings: MeshSettings, key: str, inputs: dict) -> None:
-    from rigfem.mesh.mesher import make_mesh
-
+def _run(fut: Future, stop: threading.Event, fn: Callable[[threading.Event], Any]) -> None:
     with _slots:
         if stop.is_set() or not fut.set_running_or_notify_cancel():
             return
         try:
-            fut.set_result(make_mesh(part, settings, key, inputs, cancel=stop))
-        except BaseException as exc:  # noqa: BLE001 - raised again where the mesh is taken
+            fut.set_result(fn(stop))
+        except BaseException as exc:  # noqa: BLE001 - raised again where the result is taken
             fut.set_exception(exc)
 
 
-def prefetch(jobs: list[tuple]) -> int:
-    """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache, at most
-    :data:`WORKERS` at a time, in the order given; returns how many were started.  Jobs of an
-    earlier call that were never taken (a check that stopped early) are cancelled first."""
-    from rigfem.mesh.mesher import mesh_folder, mesh_inputs
-
-    cancel()
-    if mp.current_process().daemon:
-        return 0
-    started = 0
-    for part, settings in jobs:
-        key, inputs = mesh_inputs(part, settings)
-        with _lock:
-            if key in _jobs or mesh_folder(part, key).exists():  # mesh_part verifies a cached entry
-                continue
-            fut, stop = Future(), threading.Event()
-            _jobs[key] = (fut, stop)
-        threading.Thread(target=_run, args=(fut, stop, part, settings, key, inputs), daemon=True,
-                         name=f"rigfem-prefetch-{part.name}").start()
-        started += 1
-    return started
+def submit(key: str, fn: Callable[[threading.Event], Any]) -> bool:
+    """Start ``fn(stop)`` under ``key`` unless a job of that key is pending; ``stop`` is set when
+    the job is cancelled (``fn`` must then end its child).  True if it was started."""
+    with _lock:
+        if key in _jobs:
+            return False
+        fut, stop = Future(), threading.Event()
+        _jobs[key] = (fut, stop)
+    threading.Thread(target=_run, args=(fut, stop, fn), daemon=True, name=f"rigfem-pool-{key}").start()
+    return True
 
 
-def take(key: str):
-    """The prefetched mesh of cache key ``key`` (waiting for it), or None if it was not asked
-    for; an interruption while waiting cancels every job."""
+def pending() -> list[str]:
+    """Keys of the jobs not yet taken."""
+    with _lock:
+        return list(_jobs)
+
+
+def take(key: str) -> Any:
+    """The result of the job ``key`` (waiting for it; its exception is raised here), or None if
+    there is no such job.  An interruption while waiting cancels every job."""
     with _lock:
         job = _jobs.pop(key, None)
     if job is None:
@@ -77,7 +67,7 @@ def take(key: str):
 
 
 def cancel() -> None:
-    """End every prefetch job not yet taken (their mesher processes are killed)."""
+    """End every job not yet taken: queued ones never start, running ones see their ``stop`` set."""
     with _lock:
         jobs = list(_jobs.values())
         _jobs.clear()
