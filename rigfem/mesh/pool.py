@@ -14,7 +14,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
-__all__ = ["WORKERS", "submit", "pending", "take", "cancel"]
+__all__ = ["WORKERS", "submit", "take", "cancel"]
 
 #: jobs at a time (each a mesher process holding one gmsh model; the FE runs beside them)
 WORKERS = 2
@@ -44,12 +44,6 @@ def submit(key: str, fn: Callable[[threading.Event], Any]) -> bool:
         _jobs[key] = (fut, stop)
     threading.Thread(target=_run, args=(fut, stop, fn), daemon=True, name=f"rigfem-pool-{key}").start()
     return True
-
-
-def pending() -> list[str]:
-    """Keys of the jobs not yet taken."""
-    with _lock:
-        return list(_jobs)
 
 
 def take(key: str) -> Any:
