@@ -24,6 +24,8 @@ __all__ = ["call"]
 #: how often the parent looks at the child, s: the latency of an interruption
 POLL_S = 0.05
 
+_START = threading.Lock()
+
 
 @functools.lru_cache(maxsize=None)
 def _context() -> mp.context.BaseContext:
@@ -49,13 +51,14 @@ def _start(proc) -> None:
     """Start ``proc`` without running the caller's script again in it: multiprocessing imports
     the main script in a child, and a script calling rigfem without a ``__main__`` guard would
     then run twice."""
-    main = sys.modules["__main__"]
-    path = main.__dict__.pop("__file__", None)
-    try:
-        proc.start()
-    finally:
-        if path is not None:
-            main.__file__ = path
+    with _START:  # two threads (rigfem.mesh.pool) must not interleave the hiding and the restoring
+        main = sys.modules["__main__"]
+        path = main.__dict__.pop("__file__", None)
+        try:
+            proc.start()
+        finally:
+            if path is not None:
+                main.__file__ = path
 
 
 def call(fn: Callable, *args: Any, cancel: threading.Event | None = None) -> Any:
