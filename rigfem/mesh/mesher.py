@@ -42,10 +42,10 @@ CURVATURE_MM = 48.0
 
 
 #: part kinds whose second-order mesh gets gmsh's ``HighOrderElastic`` smoothing.  Measured
-#: (issue 26, standard ``final-cm``): without it the rails' peaks move by up to 6.8 % (the curved
-#: grooves' mid-edge nodes drag thin interior elements), the plates' and posts' by at most 0.10 %
-#: while it costs them 6.3 s of the cold check; a custom part's shape is unknown, so it keeps it.
-#: Elements it would have repaired are straightened by rigfem.fe.assembly.fe_mesh (MIN_JACOBIAN).
+#: (issue 26, standard ``final-cm``): without it the rails' peaks move by up to 6.8 %, the plates'
+#: and posts' by about 0.1 % (results/benchmarks/levers.md), far inside the standard preset's 3 %
+#: band, while it costs them 6.3 s of the cold check; a custom part's shape is unknown, so it keeps
+#: it.  Elements it would have repaired are straightened by rigfem.fe.assembly.fe_mesh (MIN_JACOBIAN).
 SMOOTHED_KINDS = frozenset({"rail", "custom"})
 
 
