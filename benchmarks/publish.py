@@ -48,7 +48,10 @@ COMMANDS = {
     "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
     "bad_inputs": "python benchmarks/bad_inputs.py",
-    "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft"}
+    "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft",
+    "levers": "python benchmarks/bench_levers.py --label before --src /tmp/base; "
+              "python benchmarks/bench_levers.py --label after"}
+
 
 
 def problems(recs: dict[str, dict]) -> list[str]:

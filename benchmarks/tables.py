@@ -370,8 +370,26 @@ def adaptive(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def levers(rec: dict) -> str:
+    lines = head(rec, f"Issue 26's other levers: `rigfem check {rec['params']['scene']}` "
+                      f"({rec['params']['fidelity']}) before and after")
+    lines += ["One process per run (benchmarks/bench_levers.py): cold = fresh rigfem and numba caches, warm = "
+              "the caches it filled.  Peak memory: the peak RSS of the check's process tree.", "",
+              "| run | wall s | peak tree RSS MiB | load average at the start | source |", "|---|---:|---:|---:|---|"]
+    runs = rec["params"]["runs"]
+    for series, rows in rec["samples"].items():
+        label = series.split(" ", 1)[0]
+        lines.append(f"| {series} | {rows[0]['wall_s']:.1f} | {rows[0]['peak_tree_rss_mib']:.0f} | "
+                     f"{rows[0]['load_before'][0]:.1f} | {runs.get(label, {}).get('source', '')} |")
+    for label, change in rec["derived"].get("peak change vs before", {}).items():
+        lines += ["", f"Peak change {label} vs before (relative):", ""]
+        lines += [f"- {k}: {v:.2e}" for k, v in sorted(change.items())]
+    return "\n".join(lines) + "\n"
+
+
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
     "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
-    "bad_inputs": bad_inputs, "adaptive": adaptive}
+    "bad_inputs": bad_inputs, "adaptive": adaptive,
+    "levers": levers}

@@ -210,9 +210,10 @@ def _differences(parts: list[dict]) -> list[str]:
 
 
 def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit: float, allowable: str,
-                   frames: int, export_inp: bool) -> tuple[list[str], list[str]]:
-    """Pictures (kept with the report) and field files (VTU/PVD/INP: ParaView/CalculiX, not kept in
-    the repository's result folders) of every part case; the pictures' scales go into ``parts``."""
+                   frames: int, export_inp: bool, pictures: bool = True) -> tuple[list[str], list[str]]:
+    """Pictures (kept with the report; none without ``pictures``) and field files (VTU/PVD/INP:
+    ParaView/CalculiX, not kept in the repository's result folders) of every part case; the
+    pictures' scales go into ``parts``."""
     files, fields = [], []
     worst = {}
     for r in results:  # one set of pictures per part: its mode with the highest peak
@@ -227,11 +228,11 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
             export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
                          heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
             fields.append(f"{stem}.inp")
-        if worst[r.case.name] is r:
+        if pictures and worst[r.case.name] is r:
             pics = part_pictures(r, c, entry, limit, part_label(entry["name"], entry["part"]), allowable, d)
             entry["pictures"] = pics
             files += list(pics["files"].values())
-        if r.mode == "cycle":
+        if pictures and r.mode == "cycle":
             utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
                              part_label(entry["name"], entry["part"]), allowable)
             files.append(f"{r.case.name}_utilisation.png")
@@ -277,24 +278,27 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
               overrides: dict | None = None, quiet: bool = False, solver: str = "auto",
-              export_inp: bool = False, allow_rule_violations: bool = False, on_stage=None) -> dict:
+              export_inp: bool = False, allow_rule_violations: bool = False, pictures: bool = True,
+              on_verdict=None, on_stage=None) -> dict:
     """Check a scene; write the report folder ``out`` (default results/<scene>); return the report.
 
     ``export_inp`` also writes each part case's model at its critical crank angle as a
     CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
     Everything checkable is checked before the computation (scene, options, rig rules unless
     ``allow_rule_violations``, reactions CSV, output folder); the folder is locked while the
-    check runs (a second run on it is refused).  ``on_stage(text)`` hears each stage as it begins.
+    check runs (a second run on it is refused).  ``on_verdict(report)`` is called once the
+    verdicts are decided, before the pictures and files are written; without ``pictures`` no
+    PNG is rendered and the report says so.  ``on_stage(text)`` hears each stage as it begins.
     """
     cs = load_check_scene(name, overrides, allow_rule_violations)
     out = Path(out) if out is not None else Path("results") / cs.scene.name
     check_writable(out, force)
     with folder_lock(out):
-        return _check(cs, out, force, quiet, solver, export_inp, on_stage)
+        return _check(cs, out, force, quiet, solver, export_inp, pictures, on_verdict, on_stage)
 
 
 def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool,
-           on_stage=None) -> dict:
+           pictures: bool = True, on_verdict=None, on_stage=None) -> dict:
     s = cs.settings
     h, results = solve_scene(cs, solver, quiet, on_stage)
     reactions = summary(h)
@@ -325,16 +329,24 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         "material": material_table(s.material),
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
+    if not pictures:
+        report["pictures"] = "not made (rigfem check --no-pictures)"
+    if on_verdict is not None:
+        on_verdict(report)
     allowable = allowable_label(s.limit_factor, limit)
     if on_stage:
         on_stage("report")
     with atomic_dir(out, force) as d:
-        reactions_plot(h, d / "reactions.png")
-        files, fields = ["report.json", "report.md", "reactions.png"], []
+        files, fields = ["report.json", "report.md"], []
+        if pictures:
+            reactions_plot(h, d / "reactions.png")
+            files.append("reactions.png")
         if results:
-            _plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
-            pics, fields = _write_outputs(d, results, parts, limit, allowable, cs.frames, export_inp)
-            files += ["peak_von_mises.png"] + pics
+            if pictures:
+                _plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
+                files.append("peak_von_mises.png")
+            pics, fields = _write_outputs(d, results, parts, limit, allowable, cs.frames, export_inp, pictures)
+            files += pics
         report["files"] = files + ["report.html"]
         report["field_files"] = fields
         write_json(report, d / "report.json")

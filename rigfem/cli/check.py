@@ -48,6 +48,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also write each part case at its critical crank angle as a CalculiX deck (.inp)")
     p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--no-pictures", action="store_true",
+                   help="skip the PNG pictures (scripted runs, CI); the report says they were not made")
 
 
 def _list(text: str | None) -> list[str] | None:
@@ -93,10 +95,15 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.out is not None:
         check_place("--out", args.out, folder=True)
+    def verdict(r: dict) -> None:  # printed before the pictures and files are written
+        print(_summary(r), flush=True)
+
     report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
                        quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
-                       allow_rule_violations=args.allow_rule_violations, on_stage=stage)
-    print(json.dumps(report, indent=2) if args.json else _summary(report))
+                       allow_rule_violations=args.allow_rule_violations, on_stage=stage,
+                       pictures=not args.no_pictures, on_verdict=None if args.json else verdict)
+    if args.json:
+        print(json.dumps(report, indent=2))
     out = Path(args.out) if args.out is not None else Path("results") / report["scene"]
     wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")
     return EXIT[report["verdict"]]

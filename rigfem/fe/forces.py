@@ -224,6 +224,36 @@ def body_vector(fm: FEMesh, density: float, accel) -> np.ndarray:
     return np.bincount((3 * fm.elements[:, :, None] + np.arange(3)).ravel(), fe.ravel(), minlength=fm.ndof)
 
 
+def body_basis(fm: FEMesh, density: float) -> np.ndarray:
+    """Body-force vectors (3N, 12) of the 12 fields every rigid-body acceleration combines:
+    a constant acceleration along each axis, then the fields ``(x_j − c_j) e_i`` (column
+    3 + 3i + j, c the node centroid).  Built once per mesh and density, so a model's many
+    unit inertia loads cost a matrix product each, not a body-force assembly each."""
+    key = ("body basis", float(density))
+    if key not in fm.cache:
+        c = fm.nodes.mean(0)
+        eye = np.eye(3)
+        cols = [body_vector(fm, density, lambda x, e=e: np.broadcast_to(e, x.shape)) for e in eye]
+        cols += [body_vector(fm, density, lambda x, i=i, j=j: (x[..., j] - c[j])[..., None] * eye[i])
+                 for i in range(3) for j in range(3)]
+        fm.cache[key] = (np.stack(cols, axis=1), c)
+    return fm.cache[key]
+
+
+def body_coefficients(load, centroid: np.ndarray) -> np.ndarray | None:
+    """The 12 weights of :func:`body_basis` that give a Gravity or Inertia load, or None for
+    another load.  A rigid motion's acceleration is a(x) = a0 + M (x − o) with
+    M = [α]× + ωωᵀ − |ω|² I; the applied field is −a(x) = −(a0 + M (c − o)) − M (x − c)."""
+    if isinstance(load, Gravity):
+        return np.r_[_vec("Gravity.g", load.g), np.zeros(9)]
+    if not isinstance(load, Inertia):
+        return None
+    a0, al, om, o = (_vec(f"Inertia.{k}", getattr(load, k)) for k in ("a0", "alpha", "omega", "origin"))
+    cross = np.array([[0.0, -al[2], al[1]], [al[2], 0.0, -al[0]], [-al[1], al[0], 0.0]])
+    M = cross + np.outer(om, om) - (om @ om) * np.eye(3)  # a(x) = a0 + M (x − o)
+    return -np.r_[a0 + M @ (centroid - o), M.ravel()]
+
+
 def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.ndarray:
     """Consistent nodal force vector (3N,) of one load."""
     if isinstance(load, SurfaceForce):

@@ -32,7 +32,7 @@ import scipy.sparse as sp
 
 from rigfem.errors import InputError
 from rigfem.fe.assembly import FEMesh, fe_mesh, stiffness, volume
-from rigfem.fe.forces import load_vector
+from rigfem.fe.forces import body_basis, body_coefficients, load_vector
 from rigfem.fe.solution import Solution
 from rigfem.fe.solver import LinearSolver, default_method
 from rigfem.fe.stress import nodal_stress
@@ -62,6 +62,12 @@ class Model:
             self.assembly_time += time.perf_counter() - t0
         return self._K
 
+    def release(self) -> None:
+        """Drop the stiffness matrix and the mesh's quadrature caches once a part's solutions are
+        taken (a later use assembles them again), so they are not held while later parts solve."""
+        self._K = None
+        self.mesh.cache.clear()
+
 
 #: Poisson's ratio from which linear tetrahedra lock (too stiff in near-incompressible strain)
 LOCKING_NU = 0.45
@@ -83,13 +89,25 @@ def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
 
 
 def load_matrix(model: Model, cases: list) -> np.ndarray:
-    """Load matrix (ndof, ncases); each case is one load or a list of loads (summed)."""
+    """Load matrix (ndof, ncases); each case is one load or a list of loads (summed).
+
+    Body forces (gravity, inertia) are combinations of :func:`body_basis`'s 12 vectors,
+    assembled once per model; other loads are assembled one by one."""
     if not cases:
         raise InputError("loads: at least one load case is required")
-    F = np.zeros((model.mesh.ndof, len(cases)))
+    fm, rho = model.mesh, model.material.density
+    F = np.zeros((fm.ndof, len(cases)))
+    C = np.zeros((12, len(cases)))
+    centroid = fm.nodes.mean(0)
     for k, case in enumerate(cases):
         for load in case if isinstance(case, (list, tuple)) else [case]:
-            F[:, k] += load_vector(model.mesh, model.part.holes, model.material.density, load)
+            w = body_coefficients(load, centroid)
+            if w is None:
+                F[:, k] += load_vector(fm, model.part.holes, rho, load)
+            else:
+                C[:, k] += w
+    if C.any():
+        F += body_basis(fm, rho)[0] @ C
     return F
 
 

@@ -25,7 +25,7 @@ from rigfem.fe.model import Model, build_model, load_matrix
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
-from rigfem.mesh.mesher import MeshSettings, mesh_part
+from rigfem.mesh.mesher import MeshSettings, mesh_part, prefetch
 from rigfem.mesh.partmesh import PartMesh
 from rigfem.rig.parts import load_part
 
@@ -34,13 +34,24 @@ from rigfem.rig.parts import load_part
 CONCENTRATORS = ("fillets",)
 
 
-def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
-    """The (cached) mesh of a case's part at ``settings`` (a preset or a check's settings), refined
+def mesh_job(case: PartCase, settings: MeshSettings) -> tuple:
+    """The part and mesh settings of a case: ``settings`` (a preset or a check's settings) refined
     at the interfaces that carry its load and, twice as finely, at the refined groups that
     concentrate stress (:data:`CONCENTRATORS`)."""
     part = load_part(case.part, case.params or None)
     conc = tuple(g for g in case.refine if g in CONCENTRATORS)
-    return mesh_part(part, settings.refined(tuple(g for g in case.refine if g not in conc), conc))
+    return part, settings.refined(tuple(g for g in case.refine if g not in conc), conc)
+
+
+def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
+    """The (cached) mesh of a case's part (:func:`mesh_job`)."""
+    return mesh_part(*mesh_job(case, settings))
+
+
+def _merged(group: list[tuple[str, PartCase]]) -> PartCase:
+    """The first case of a part geometry's group, refined where any case of the group is."""
+    refine = tuple(sorted({g for _, c in group for g in c.refine}))
+    return dataclasses.replace(group[0][1], refine=refine)
 
 
 def supports_of(case: PartCase) -> list:
@@ -163,6 +174,8 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
     levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
+    # every part's first level meshed ahead, 2 at a time, while the FE works on the first part
+    prefetch([mesh_job(_merged(group), levels[0][1]) for group in geo.values()])
     results = {}
     for group in geo.values():
         ladder = []
@@ -190,12 +203,11 @@ def _solve_group(group: list[tuple[str, PartCase]], settings, solver: str, on_st
                  level: str = "") -> list[CaseResult]:
     """The cases of one part geometry at ``settings``, in the order of ``group``."""
     t0 = time.perf_counter()
-    refine = tuple(sorted({g for _, c in group for g in c.refine}))
-    first = group[0][1]
+    first = _merged(group)
     at = f" ({level})" if level else ""
     if on_stage:
         on_stage(f"meshing part {first.name}{at}")
-    pm = mesh_case(dataclasses.replace(first, refine=refine), settings)
+    pm = mesh_case(first, settings)
     model = build_model(pm, settings.material, settings.order)
     t_model = time.perf_counter() - t0
     if on_stage:
@@ -208,6 +220,7 @@ def _solve_group(group: list[tuple[str, PartCase]], settings, solver: str, on_st
         for (mode, case), res in zip(sup_cases, _solve_shared(model, pm, sup_cases, settings, solver)):
             res.seconds["mesh+assembly (shared)"] = t_model
             results[id(case)] = res
+    model.release()  # its stiffness and quadrature caches: the results keep mesh and arrays only
     return [results[id(case)] for _, case in group]
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigfem.mesh import pool
 from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
 from rigfem.mesh.partmesh import (
     Hole,
@@ -38,6 +39,14 @@ TETS_PER_S = 2000.0
 #: curved surfaces get CURVATURE_MM / size elements per 2*pi (gmsh Mesh.MeshSizeFromCurvature):
 #: 6 at the draft 8 mm, 8 at the standard 6 mm, 12 at the fine 4 mm
 CURVATURE_MM = 48.0
+
+
+#: part kinds whose second-order mesh gets gmsh's ``HighOrderElastic`` smoothing.  Measured
+#: (issue 26, standard ``final-cm``): without it the rails' peaks move by up to 6.8 %, the plates'
+#: and posts' by about 0.1 % (results/benchmarks/levers.md), far inside the standard preset's 3 %
+#: band, while it costs them 6.3 s of the cold check; a custom part's shape is unknown, so it keeps
+#: it.  Elements it would have repaired are straightened by rigfem.fe.assembly.fe_mesh (MIN_JACOBIAN).
+SMOOTHED_KINDS = frozenset({"rail", "custom"})
 
 
 def curvature_n(s: MeshSettings) -> int:
@@ -146,7 +155,7 @@ def _quality() -> np.ndarray:
     return np.asarray(gmsh.model.mesh.getElementQualities(gmsh.model.mesh.getElementsByType(4)[0], "minSICN"))
 
 
-def second_order(groups: dict[str, list[int]], rtol: float = 1e-3):
+def second_order(groups: dict[str, list[int]], rtol: float = 1e-3, smooth: bool = True):
     """Make gmsh's current linear tet mesh second order and read it back.
 
     gmsh puts every boundary mid-edge node on the geometry (grooves, holes, fillets) and then
@@ -155,12 +164,14 @@ def second_order(groups: dict[str, list[int]], rtol: float = 1e-3):
     again.  ``groups`` maps surface names to gmsh surface tags.  Returns points (N, 3),
     positively oriented tets (M, 4), the groups' triangles, and the curved edges: vertex pairs
     (E, 2) and mid-edge points (E, 3) of the edges whose node is off the straight midpoint by
-    more than ``rtol`` times the edge length.
+    more than ``rtol`` times the edge length.  ``smooth=False`` skips the elastic smoothing
+    (:data:`SMOOTHED_KINDS` says for which parts it changes the peak).
     """
     import gmsh
 
     gmsh.model.mesh.setOrder(2)
-    gmsh.model.mesh.optimize("HighOrderElastic")
+    if smooth:
+        gmsh.model.mesh.optimize("HighOrderElastic")
     tags, coords, _ = gmsh.model.mesh.getNodes()
     xyz = np.zeros((int(tags.max()) + 1, 3))
     xyz[tags.astype(np.int64)] = coords.reshape(-1, 3)
@@ -257,11 +268,7 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.  gmsh runs
     in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once.
     """
-    import gmsh
-
     from rigfem.errors import check_range
-    from rigfem.mesh.worker import call
-    from rigfem.settings import allow_large
 
     check_range("size_mm", settings.size_mm, 0.0, None, "mm", lo_open=True)
     check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
@@ -270,18 +277,64 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     first = estimate_part(part, settings)
     if first is not None:
         check_estimate(first, settings, machine_gib, "would give at least")
-    inputs = {"part": part.name, "geometry": part.content_hash(), "settings": settings.key(),
-              "gmsh": gmsh.__version__, "code": code_hash(*MESH_CODE)}
-    key = entry_key(inputs)
-    folder = cache_dir() / "meshes" / f"{part.name}-{key}"
-    if use_cache and read_entry(folder, inputs):
-        pm = load_npz(folder / "mesh.npz")
+    key, inputs = mesh_inputs(part, settings)
+    if use_cache and read_entry(mesh_folder(part, key), inputs):
+        pm = load_npz(mesh_folder(part, key) / "mesh.npz")
         pm.meta["cache"] = "hit"
         return pm
+    if use_cache and machine_gib == MACHINE_GIB:
+        pm = pool.take(key)
+        if pm is not None:
+            return pm
+    return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
+
+
+def prefetch(jobs: list[tuple]) -> int:
+    """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
+    processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them
+    made; returns how many were started.  Jobs of an earlier call never taken (a check that
+    stopped early) are cancelled first.  In a daemonic process (a sweep worker, which may not
+    have children) nothing is started."""
+    import multiprocessing as mp
+
+    pool.cancel()
+    if mp.current_process().daemon:
+        return 0
+    started = 0
+    for part, settings in jobs:
+        key, inputs = mesh_inputs(part, settings)
+        if mesh_folder(part, key).exists():  # mesh_part verifies the cached entry
+            continue
+        started += pool.submit(key, lambda stop, p=part, s=settings, k=key, i=inputs: make_mesh(p, s, k, i,
+                                                                                                  cancel=stop))
+    return started
+
+
+def mesh_inputs(part, settings: MeshSettings) -> tuple[str, dict]:
+    """The cache key of a part's mesh and the inputs it is made of."""
+    import gmsh
+
+    inputs = {"part": part.name, "geometry": part.content_hash(), "settings": settings.key(),
+              "smooth": part.kind in SMOOTHED_KINDS, "gmsh": gmsh.__version__, "code": code_hash(*MESH_CODE)}
+    return entry_key(inputs), inputs
+
+
+def mesh_folder(part, key: str):
+    """The mesh cache entry's folder of a part and key."""
+    return cache_dir() / "meshes" / f"{part.name}-{key}"
+
+
+def make_mesh(part, settings: MeshSettings, key: str, inputs: dict | None, machine_gib: float = MACHINE_GIB,
+              cancel=None) -> PartMesh:
+    """Mesh in the mesher process (:mod:`rigfem.mesh.worker`) and store the mesh in the cache
+    under ``inputs`` (None: not stored); ``cancel`` (a threading.Event) ends the mesher."""
+    from rigfem.mesh.worker import call
+    from rigfem.settings import allow_large
+
     limit = float("inf") if allow_large() else machine_gib  # the child may not share our environment
-    pm = call(_mesh, part, settings, limit, key)
-    if use_cache:
-        write_entry(folder, inputs, lambda d: save_npz(pm, d / "mesh.npz"))
+    pm = call(_mesh, part, settings, limit, key, cancel=cancel)
+    if inputs is not None:
+        write_entry(mesh_folder(part, key), inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm
 
 
@@ -321,7 +374,8 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
                              f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
                              f"or local_size_mm = {settings.near_mm:g} mm (or check thin walls in the part file)")
         points, tets, surfaces, edges, mids = second_order(
-            {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()})
+            {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()},
+            smooth=part.kind in SMOOTHED_KINDS)
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
@@ -331,6 +385,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
     quality = quality_summary(q)  # of the linear mesh, before gmsh curved it
     meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
             "density": part.density, "settings": settings.key(), "hash": key,
+            "smoothed": part.kind in SMOOTHED_KINDS,
             "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     return pm

@@ -13,6 +13,7 @@ import functools
 import multiprocessing as mp
 import signal
 import sys
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -22,6 +23,8 @@ __all__ = ["call"]
 
 #: how often the parent looks at the child, s: the latency of an interruption
 POLL_S = 0.05
+
+_START = threading.Lock()
 
 
 @functools.lru_cache(maxsize=None)
@@ -48,18 +51,20 @@ def _start(proc) -> None:
     """Start ``proc`` without running the caller's script again in it: multiprocessing imports
     the main script in a child, and a script calling rigfem without a ``__main__`` guard would
     then run twice."""
-    main = sys.modules["__main__"]
-    path = main.__dict__.pop("__file__", None)
-    try:
-        proc.start()
-    finally:
-        if path is not None:
-            main.__file__ = path
+    with _START:  # two threads (rigfem.mesh.pool) must not interleave the hiding and the restoring
+        main = sys.modules["__main__"]
+        path = main.__dict__.pop("__file__", None)
+        try:
+            proc.start()
+        finally:
+            if path is not None:
+                main.__file__ = path
 
 
-def call(fn: Callable, *args: Any) -> Any:
+def call(fn: Callable, *args: Any, cancel: threading.Event | None = None) -> Any:
     """``fn(*args)`` in a child process; its exception is raised here.  KeyboardInterrupt or any
-    exception raised in the parent while it waits (a signal handler's) kills the child first.
+    exception raised in the parent while it waits (a signal handler's) kills the child first,
+    and so does ``cancel`` being set (a caller in another thread: :mod:`rigfem.mesh.pool`).
     In a daemonic process (which may not have children) ``fn`` runs in this process."""
     if mp.current_process().daemon:
         return fn(*args)
@@ -70,6 +75,8 @@ def call(fn: Callable, *args: Any) -> Any:
     send.close()
     try:
         while not recv.poll(POLL_S):
+            if cancel is not None and cancel.is_set():
+                raise ComputeError("meshing cancelled")
             if not proc.is_alive() and not recv.poll(0):
                 raise ComputeError(f"the mesher process ended without a result (exit code {proc.exitcode}; "
                                    f"out of memory?)")

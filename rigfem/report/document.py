@@ -181,6 +181,8 @@ def render_markdown(r: dict) -> str:
         for p in pics:
             label = part_label(p["name"], p["part"])
             lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]
+    if r.get("pictures"):
+        lines += ["", "## Pictures", "", f"Pictures {r['pictures']}."]
     lines += study_tables(r)
     if r.get("differences"):
         lines += ["", "## Original vs cycle mode", ""] + [f"- {d}" for d in r["differences"]]
