@@ -33,6 +33,9 @@ LONG = {
     "rigfem check final-cm --force": ("a full standard check of every part, both modes (~2 min cold)", _CHECK_FAST),
     "rigfem check final-nc --allow-rule-violations --fidelity draft":
         ("every part, both modes, 12 frames (~1 min cold)", _CHECK_FAST),
+    "rigfem check final-cm --force --fidelity draft": ("every part, both modes, 12 frames (~1 min cold)", _CHECK_FAST),
+    "rigfem synthesize motion --points 0,0 -15.12,-9 -29.128,-4 --rig --top 3":
+        ("stress verdicts of the ranked configurations (FE of every part, minutes)", ["--no-stress"]),
     "rigfem check trainer.toml": ("every part of the synthesised configuration (~1 min cold)", _CHECK_FAST),
     "rigfem synthesize function x*log(x) --x 1 3 --input 20 60 --output 80 45 --ground 2 --rig --top 3":
         ("stress verdicts of the ranked configurations (FE of every part, minutes)", ["--no-stress"]),
