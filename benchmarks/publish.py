@@ -49,7 +49,8 @@ COMMANDS = {
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
     "bad_inputs": "python benchmarks/bad_inputs.py",
     "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft",
-    "levers": "python benchmarks/bench_levers.py --label before --src /tmp/base; "
+    "levers": "mkdir -p /tmp/base && git archive e5e90b5 | tar -x -C /tmp/base; "
+              "python benchmarks/bench_levers.py --label before --src /tmp/base; "
               "python benchmarks/bench_levers.py --label after"}
 
 
