@@ -113,6 +113,15 @@ def _fmt(x, nd: int = 1) -> str:
     return "–" if x is None else f"{x:.{nd}f}"
 
 
+def _mesh_sizes(s: dict) -> str:
+    """The preset's sizes, and with the adaptive ladder that they are the ceiling, not every part's mesh."""
+    sizes = f"global size {s['size_mm']:g} mm, {s['local_size_mm']:g} mm at loaded interfaces"
+    if not s.get("adaptive"):
+        return sizes
+    return (f"adaptive: each part refined from coarse up to {sizes}, only until its verdict is decided and its "
+            f"band is within ±{s['target_pct']:g} % of the allowable (each part's level: *Mesh per part*)")
+
+
 def _tolerance(r: dict) -> str:
     tol = {p["solve"]["imbalance"]["tolerance_pct"] for p in r["parts"] if p.get("solve")}
     return ", ".join(f"{t:g} %" for t in sorted(tol)) or "–"
@@ -188,8 +197,7 @@ def render_markdown(r: dict) -> str:
         lines += ["", "## Original vs cycle mode", ""] + [f"- {d}" for d in r["differences"]]
     lines += ["", "## Model", "",
               f"- fidelity `{r['settings']['fidelity']}`: P{r['settings']['order']} tetrahedra, "
-              f"global size {r['settings']['size_mm']:g} mm, {r['settings']['local_size_mm']:g} mm at "
-              f"loaded interfaces",
+              + _mesh_sizes(r['settings']),
               "- error estimate (an estimate, not a bound): recovery-based (difference between the raw and the "
               "recovered stress at the peak) times a per-order factor calibrated so the band covers the converged "
               "peak (results/convergence/band_coverage.md); a peak whose band contains the limit is *undecided*",
