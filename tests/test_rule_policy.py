@@ -53,4 +53,16 @@ def test_allowed_check_shows_the_broken_rule_first_and_fails(tmp_path, capsys):
     out = tmp_path / "ck"
     assert main(["check", BROKEN, "--allow-rule-violations", "--out", str(out), *FAST]) == 1
     assert re.match(r"WARNING: breaks rig rule transmission angle min", capsys.readouterr().out)
-    assert json.loads((out / "report.json").read_text())["rule_violations"]
+    broken = json.loads((out / "report.json").read_text())["rule_violations"]
+    assert broken
+    for command in ("reactions", "kinematics"):   # one message per rule, the same in every command
+        assert main([command, BROKEN, "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["rule_violations"] == broken
+
+
+def test_describing_commands_name_every_broken_rule_not_only_the_transmission_angle(capsys):
+    argv = ["--four-bar", "480", "840", "780", "610"]   # ground below the 660 mm the crank guide needs
+    for command in ("reactions", "kinematics"):
+        assert main([command, *argv, "--json"]) == 0
+        assert any(v.startswith("crank guide clears the rocker pivot")
+                   for v in json.loads(capsys.readouterr().out)["rule_violations"])

@@ -151,10 +151,7 @@ def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None, 
     for k in ("mechanical_advantage", "transmission_angle"):
         if k in m.meta:
             res[f"{k}_definition"] = m.meta[k]
-    mu = res.get("transmission_angle_deg")
-    res["rule_violations"] = ([f"transmission angle: min {mu['min']:.4g}, max {mu['max']:.4g} deg, allowed "
-                               f"{rig.MU_LIMITS_DEG[0]:g} < mu < {rig.MU_LIMITS_DEG[1]:g} deg"]
-                              if mu and not mu["within_band"] and not textbook else [])
+    res["rule_violations"] = [] if textbook else rig.broken_rules(lk.meta)
     res["angles"] = _records(m)
     return res
 

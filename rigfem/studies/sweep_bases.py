@@ -95,31 +95,41 @@ def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase
 
 
 def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
-    """One mesh, one factorisation and the unit solutions of every part geometry and support set."""
+    """One mesh, one factorisation and the unit solutions of every part geometry and support set.
+
+    The geometries are meshed ahead in the mesher processes while the FE works on the first, and
+    each geometry's model is released before the next one's is built: only the float32 unit
+    fields of the parts done are held, not every part's mesh, stiffness and quadrature caches."""
     from rigfem.fe.cache import cached_solve
     from rigfem.fe.model import build_model
-    from rigfem.fe.partcase import fe_load, mesh_case, relieved_cases, supports_of
+    from rigfem.fe.partcase import fe_load, mesh_case, mesh_job, relieved_cases, supports_of
     from rigfem.fe.supports import FreeBody
     from rigfem.fe.tensors import von_mises
+    from rigfem.mesh.mesher import prefetch
 
     s = p.settings()
+    by_geo: dict[tuple, dict[tuple, tuple[PartCase, list[UnitLoad]]]] = {}
+    for key, spec in _basis_specs(p, s).items():
+        by_geo.setdefault(key[:2], {})[key] = spec
+    merged = {geo: dataclasses.replace(next(iter(specs.values()))[0],
+                                       refine=tuple(sorted({g for c, _ in specs.values() for g in c.refine})))
+              for geo, specs in by_geo.items()}
+    prefetch([mesh_job(case, s) for case in merged.values()])
     out = {}
-    models: dict[tuple, tuple] = {}
-    specs = _basis_specs(p, s)
-    for key, (case, loads) in specs.items():
-        geo = key[:2]
-        refine = tuple(sorted({g for k2, (c, _) in specs.items() if k2[:2] == geo for g in c.refine}))
-        if geo not in models:
-            pm = mesh_case(dataclasses.replace(case, refine=refine), s)
-            models[geo] = (pm, build_model(pm, s.material, s.order))
-        pm, model = models[geo]
-        supports = supports_of(case)
-        fe_loads = [fe_load(u) for u in loads]
-        if any(isinstance(x, FreeBody) for x in supports):
-            fe_loads = relieved_cases(model, fe_loads)[0]
-        sol = cached_solve(model, supports, fe_loads, solver=solver)
-        out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
-                           model.volume * s.material.density * 1e3)
+    for geo, specs in by_geo.items():
+        pm = mesh_case(merged[geo], s)
+        model = build_model(pm, s.material, s.order)
+        for key, (case, loads) in specs.items():
+            supports = supports_of(case)
+            fe_loads = [fe_load(u) for u in loads]
+            if any(isinstance(x, FreeBody) for x in supports):
+                fe_loads = relieved_cases(model, fe_loads)[0]
+            sol = cached_solve(model, supports, fe_loads, solver=solver)
+            out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
+                               model.volume * s.material.density * 1e3)
+            del sol
+        model.release()
+        del model, pm
     return out
 
 
