@@ -12,15 +12,16 @@ import numpy as np
 
 from rigfem.dynamics.history import BodyHistory, JointHistory, ReactionHistory, merge_ranges, singular_ranges
 from rigfem.dynamics.original import original_reactions
-from rigfem.dynamics.solver import solve
+from rigfem.dynamics.solver import reactions
 from rigfem.errors import InputError
 from rigfem.linkage.loops import MU_TOGGLE_DEG
 from rigfem.linkage.mechanisms import BUILDERS, crank_angles, transmission_angle
-from rigfem.linkage.model import GROUND, Linkage
+from rigfem.linkage.model import GROUND, Linkage, LinkageState
+from rigfem.linkage.state import linkage_state
 from rigfem.rig.catalogue import RigMasses
 from rigfem.settings import MODELS
 
-__all__ = ["MODELS", "simulate", "simulate_original"]
+__all__ = ["MODELS", "simulate", "cycle_history", "simulate_original"]
 
 
 def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: float = 1.0,
@@ -48,12 +49,19 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
     else:
         lk = linkage_or_config
     deg = crank_angles(int(samples))
+    return cycle_history(lk, linkage_state(lk, deg, speed_hz), deg, speed_hz, model)
+
+
+def cycle_history(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float,
+                  model: str = "rigid-body") -> ReactionHistory:
+    """The reaction history of :func:`simulate` on ``lk``'s ``motion`` at the crank angles ``deg``,
+    as the linkage layer gave it (:func:`rigfem.linkage.state.linkage_state`)."""
     if model == "original":
         if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":
             raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
                              f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
-        return simulate_original(lk, deg, speed_hz)
-    h = solve(lk, deg, speed_hz)
+        return simulate_original(lk, motion, deg, speed_hz)
+    h = reactions(lk, motion, deg, speed_hz)
     h.meta["model"] = "rigid-body"
     if lk.meta.get("type") == "four-bar":
         mu = transmission_angle(h.bodies)
@@ -61,15 +69,15 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
     return h
 
 
-def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
-    """ReactionHistory of the 2013 program (rigfem.dynamics.original) for a four-bar Linkage."""
+def simulate_original(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
+    """ReactionHistory of the 2013 program (rigfem.dynamics.original) for a four-bar Linkage; its
+    bodies' mass data from ``lk``'s ``motion`` at ``deg``."""
     L = lk.meta["lengths_mm"]
     b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]
     sgn = 1 if lk.meta.get("branch", "open") == "open" else -1
-    template = solve(lk, deg[:1] if deg.size else deg, speed_hz, check_closure=False)
-    bodies_tpl = template.bodies
+    bodies_tpl = motion.histories
 
-    def build(angles: np.ndarray) -> ReactionHistory:
+    def build(angles: np.ndarray, full_turn: bool = False) -> ReactionHistory:
         a = np.atleast_1d(np.asarray(angles, float))
         r = original_reactions(b2, b3, b4, d, np.radians(a), speed_hz, RigMasses(**lk.meta["catalogue"]),
                                tuple(lk.meta["rails_mm"]), branch=sgn)
@@ -102,9 +110,9 @@ def simulate_original(lk: Linkage, deg: np.ndarray, speed_hz: float) -> Reaction
         for j in joints.values():
             j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)
         return ReactionHistory(a, joints, np.nan_to_num(r["M2"]), bodies, meta,
-                               singular_mask=bad if bad.any() else None)
+                               singular_mask=bad if bad.any() else None, full_turn=full_turn)
 
-    h = build(deg)
+    h = build(deg, motion.full_turn)
     # toggles between the samples: the closed-form model is cheap on a 0.1 deg grid
     h.meta["singular"] = merge_ranges(h.meta["singular"], build(crank_angles(3600)).meta["singular"])
     h.evaluator = build

@@ -21,6 +21,7 @@ import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.linkage.constraints import Constraints
+from rigfem.linkage.loops import is_full_turn
 from rigfem.linkage.model import (
     AssemblyError,
     BodyHistory,
@@ -34,7 +35,7 @@ from rigfem.linkage.model import (
 )
 
 __all__ = ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "Trace", "trace", "positions",
-           "rates", "is_full_turn", "conditioning", "general_motion", "move"]
+           "rates", "conditioning", "general_motion", "move"]
 
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
 #: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
@@ -242,15 +243,6 @@ def trace(lk: Linkage, crank_deg: np.ndarray, tol_mm: float = 1e-9, check_closur
             warnings.append("the linkage does not return to its starting configuration after one "
                             "turn (branch change at a toggle)")
     return Trace(model, th_c, qc, qdc, qddc, warnings, tol)
-
-
-def is_full_turn(deg: np.ndarray) -> bool:
-    """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
-    if deg.size < 4:
-        return False
-    step = np.diff(deg)
-    return bool(np.allclose(step, step[0], rtol=1e-6, atol=1e-9)
-                and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)
 
 
 def positions(tr: Trace, crank_deg: np.ndarray, speed_hz: float):

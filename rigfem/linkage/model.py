@@ -16,6 +16,7 @@ from typing import Callable
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError
+from rigfem.linkage.loops import is_full_turn
 
 GROUND = "ground"
 
@@ -222,6 +223,8 @@ class LinkageState:
     probe: LinkageState | None = None
     #: the motion at other phases (deg) on the same branch
     at: Callable[[np.ndarray], LinkageState | None] | None = None
+    #: ``theta`` is an evenly spaced full turn (:func:`rigfem.linkage.loops.is_full_turn`)
+    full_turn: bool = False
 
 
 def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: dict[str, np.ndarray],
@@ -245,4 +248,4 @@ def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: d
         qd = np.concatenate([np.column_stack([bodies[b.name].origin_vel, bodies[b.name].omega])
                              for b in lk.bodies], 1)
     return LinkageState(theta, bodies, joints, hist, arms, q if lk.loads else None, qd if lk.loads else None,
-                        kind, general)
+                        kind, general, full_turn=is_full_turn(np.degrees(theta)))
