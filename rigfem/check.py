@@ -158,12 +158,13 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:
         joints = {n: JointHistory(n, j.body_a, j.body_b, sign[n] * f.joints[n].force_N, j.position_mm)
                   for n, j in k.joints.items()}
-        return ReactionHistory(f.crank_deg, joints, f.torque_Nm, k.bodies, meta, evaluator=at, full_turn=f.full_turn)
+        return ReactionHistory(f.crank_deg, joints, f.torque_Nm, k.bodies, meta, evaluator=at,
+                               full_turn=f.full_turn)
 
     def at(deg) -> ReactionHistory:
         d = np.atleast_1d(np.asarray(deg, float))
         order = np.argsort(d)  # the solver wants increasing angles; answer in the order asked
-        k = reactions(cs.linkage, cs.motion.at(d[order]), d[order], cs.scene.speed_hz)
+        k = kin.evaluator(d[order])  # the linkage's motion there, on the same branch
         back = np.argsort(order)
         for j in k.joints.values():
             j.position_mm = j.position_mm[back]

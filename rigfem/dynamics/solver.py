@@ -41,6 +41,10 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
 def reactions(lk: Linkage, motion: LinkageState, crank_deg: np.ndarray, speed_hz: float = 1.0) -> ReactionHistory:
     """The reactions of :func:`solve` on ``lk``'s ``motion`` at ``crank_deg``, as the linkage layer
     gave it; the evaluator re-solves on the same branch (``motion.at``) at any angle."""
+    def evaluator(angles: np.ndarray) -> ReactionHistory:
+        a = np.atleast_1d(np.asarray(angles, float))
+        return reactions(lk, motion.at(a), a, speed_hz)
+
     deg = np.asarray(crank_deg, float)
     loads = body_loads(lk, motion)
     probe = None if motion.probe is None else (motion.probe, body_loads(lk, motion.probe))
@@ -48,10 +52,5 @@ def reactions(lk: Linkage, motion: LinkageState, crank_deg: np.ndarray, speed_hz
         h = closed_reactions(lk, motion, loads, deg, speed_hz)
     else:
         h = general_reactions(lk, motion, loads, deg, speed_hz, probe)
-
-    def evaluator(angles: np.ndarray) -> ReactionHistory:
-        a = np.atleast_1d(np.asarray(angles, float))
-        return reactions(lk, motion.at(a), a, speed_hz)
-
     h.evaluator = evaluator
     return h

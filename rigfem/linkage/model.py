@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError
-from rigfem.linkage.loops import is_full_turn
+from rigfem.linkage.loops import is_full_turn, transmission_angle_deg
 
 GROUND = "ground"
 
@@ -225,6 +225,9 @@ class LinkageState:
     at: Callable[[np.ndarray], LinkageState | None] | None = None
     #: ``theta`` is an evenly spaced full turn (:func:`rigfem.linkage.loops.is_full_turn`)
     full_turn: bool = False
+    #: a four-bar's transmission angle (deg) at ``theta`` (:func:`rigfem.linkage.loops.transmission_angle_deg`);
+    #: None for another linkage
+    mu_deg: np.ndarray | None = None
 
 
 def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: dict[str, np.ndarray],
@@ -248,4 +251,6 @@ def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: d
         qd = np.concatenate([np.column_stack([bodies[b.name].origin_vel, bodies[b.name].omega])
                              for b in lk.bodies], 1)
     return LinkageState(theta, bodies, joints, hist, arms, q if lk.loads else None, qd if lk.loads else None,
-                        kind, general, full_turn=is_full_turn(np.degrees(theta)))
+                        kind, general, full_turn=is_full_turn(np.degrees(theta)),
+                        mu_deg=(transmission_angle_deg(bodies["coupler"].phi, bodies["rocker"].phi)
+                                if lk.meta.get("type") == "four-bar" else None))
