@@ -1,9 +1,10 @@
 """The forces on a linkage's bodies besides the joints': gravity and d'Alembert inertia from
 each body's motion and mass totals, and the external loads (the compressor's gas force).
 
-The one home of the Newton–Euler body terms: the general solver (``rigfem.dynamics.solver``)
-and the closed forms (``rigfem.dynamics.closed``) both balance the joint forces against these,
-on the whole motion the linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
+The one home of the Newton–Euler body terms: :func:`body_loads` sums them per body once, and the
+closed forms (``rigfem.dynamics.closed``) or the general inverse dynamics
+(``rigfem.dynamics.inverse``) balance the joint forces against them, on the whole motion the
+linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
 SI inside (m, rad, N, N·m); a scene's gas force is given in N and mm.
 """
 

@@ -1,6 +1,7 @@
 """Exact reproduction of the 2013 four-bar dynamics program (geometry/RIG.md §3), quirks included.
 
-Closed-form four-bar kinematics at constant crank speed, then per crank angle the
+Closed-form four-bar kinematics at constant crank speed (:func:`fourbar_kinematics`, or the
+linkage's motion as handed over: :func:`program_kinematics`), then per crank angle the
 program's 9 linear equations (force balance of bars 2, 3, 4 and three moment
 equations) for R12 (O2), R23 (A), R34 (B), R41 (O4) and the motor torque M2.
 The quirks (guide mass given the acceleration of the *combined* centre of mass,
