@@ -41,8 +41,8 @@ from rigfem.io.reactions_csv import read_csv
 from rigfem.linkage.mechanisms import crank_angles
 from rigfem.linkage.model import Linkage, LinkageState
 from rigfem.linkage.state import linkage_state
-from rigfem.material import table_material
 from rigfem.loads.cases import part_cases
+from rigfem.material import table_material
 from rigfem.report.document import (
     REPORT_SCHEMA,
     allowable_label,
@@ -102,9 +102,11 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
 
     The file and the merged ``[check]`` table are validated by :mod:`rigfem.schema` before
     anything is built; the reactions CSV (if any) must exist (it is read, and its coverage,
-    sampling, units and columns checked, first thing in :func:`solve_scene`).  A rig scene that breaks a rig rule is refused (InputError naming the
-    rule and its numbers) unless ``allow_rule_violations``; then the violations are kept for
-    the report.
+    sampling, units and columns checked, first thing in :func:`solve_scene`).  A rig scene that
+    breaks a rig rule is refused (InputError naming the rule and its numbers) unless
+    ``allow_rule_violations``; then the violations are kept for the report.  The stage descends:
+    the linkage and its motion over the turn (handed to the dynamics as data), the parts, the
+    rig rules, then the material.
     """
     path = resolve(name)
     sc = load_scene(path)
@@ -270,9 +272,9 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
     h = (imported_history(cs) if cs.reactions_csv else
          cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model))
     pk = peaks(h)
-    reactions = summary(h, pk)
+    digest = summary(h, pk)
     if h.meta.get("singular"):
-        return h, [], reactions
+        return h, [], digest
     force = max(float(np.abs(j.force_N).max()) for j in h.joints.values())
     torque = float(np.abs(h.torque_Nm).max())
     cases = part_cases(h, pk, cs.settings)
@@ -283,7 +285,7 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage,
-                              settled=lambda r: settled(r, cs.settings)), reactions
+                              settled=lambda r: settled(r, cs.settings)), digest
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
@@ -295,10 +297,11 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     ``export_inp`` also writes each part case's model at its critical crank angle as a
     CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
     Everything checkable is checked before the computation (scene, options, rig rules unless
-    ``allow_rule_violations``, reactions CSV, output folder); the folder is locked while the
-    check runs (a second run on it is refused).  ``on_verdict(report)`` is called once the
-    verdicts are decided, before the pictures and files are written; without ``pictures`` no
-    PNG is rendered and the report says so.  ``on_stage(text)`` hears each stage as it begins.
+    ``allow_rule_violations``, reactions CSV (its file; its content first thing in the dynamics
+    stage), output folder); the folder is locked while the check runs (a second run on it is
+    refused).  ``on_verdict(report)`` is called once the verdicts are decided, before the
+    pictures and files are written; without ``pictures`` no PNG is rendered and the report says
+    so.  ``on_stage(text)`` hears each stage as it begins.
     """
     cs = load_check_scene(name, overrides, allow_rule_violations)
     out = Path(out) if out is not None else Path("results") / cs.scene.name
