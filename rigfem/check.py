@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem import __version__
-from rigfem.dynamics.cycle import simulate
+from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.forces import loaded_linkage
 from rigfem.dynamics.history import (
     JointHistory,
@@ -33,13 +33,16 @@ from rigfem.dynamics.history import (
     spline_evaluator,
     summary,
 )
-from rigfem.dynamics.solver import solve
+from rigfem.dynamics.solver import reactions
 from rigfem.errors import InputError, plain
 from rigfem.fe.partcase import CaseResult, solve_cases, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.io.reactions_csv import read_csv
-from rigfem.linkage.model import Linkage
+from rigfem.linkage.mechanisms import crank_angles
+from rigfem.linkage.model import Linkage, LinkageState
+from rigfem.linkage.state import linkage_state
 from rigfem.loads.cases import part_cases
+from rigfem.material import table_material
 from rigfem.report.document import (
     REPORT_SCHEMA,
     allowable_label,
@@ -60,7 +63,7 @@ from rigfem.report.vtu import write_vtu
 from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
-from rigfem.settings import REFERENCE_SCENE, CheckSettings, check_settings
+from rigfem.settings import REFERENCE_SCENE, CheckSettings, part_settings
 from rigfem.verdict.criterion import allowable_stress, overall
 from rigfem.verdict.part import settled, verdict_of
 
@@ -89,6 +92,8 @@ class CheckScene:
     reactions_csv: Path | None  #: external reaction history replacing the dynamics' forces
     rule_violations: list[str] = dataclasses.field(default_factory=list)  #: broken rig rules (allowed explicitly)
     csv_missing: dict | None = None  #: values stated for columns the reactions CSV lacks
+    crank_deg: np.ndarray | None = None  #: the crank angles of the turn (``samples`` of them)
+    motion: LinkageState | None = None  #: the linkage's motion there (rigfem.linkage.state.linkage_state)
 
 
 def load_check_scene(name: str | Path, overrides: dict | None = None,
@@ -96,25 +101,30 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
     """Read a scene file (or built-in name) with its ``[check]`` table; ``overrides`` win.
 
     The file and the merged ``[check]`` table are validated by :mod:`rigfem.schema` before
-    anything is built; the reactions CSV (if any) is read and checked here too, before any
-    long computation.  A rig scene that breaks a rig rule is refused (InputError naming the
-    rule and its numbers) unless ``allow_rule_violations``; then the violations are kept for
-    the report.
+    anything is built; the reactions CSV (if any) must exist (it is read, and its coverage,
+    sampling, units and columns checked, first thing in :func:`solve_scene`).  A rig scene that
+    breaks a rig rule is refused (InputError naming the rule and its numbers) unless
+    ``allow_rule_violations``; then the violations are kept for the report.  The stage descends:
+    the linkage and its motion over the turn (handed to the dynamics as data), the parts, the
+    rig rules, then the material.
     """
     path = resolve(name)
     sc = load_scene(path)
-    lk = loaded_linkage(sc)
     data = sc.raw
     table = {**data.get("check", {}), **(overrides or {})}
     validate_check(table, path.name)
     dyn = {k: table.pop(k, v) for k, v in _DYNAMICS.items()}
-    settings = check_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
+    lk = loaded_linkage(sc)
+    deg = crank_angles(int(dyn["samples"]))
+    motion = linkage_state(lk, deg, sc.speed_hz)
+    settings = part_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
     # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
     broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
     if broken and not allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
                          f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "
                          f"mounted as given; pass --allow-rule-violations to check it anyway")
+    settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
     desc = data.get("description", data["linkage"].get("title", ""))
     csv_path = None
     if dyn["reactions_csv"] is not None:
@@ -122,9 +132,8 @@ def load_check_scene(name: str | Path, overrides: dict | None = None,
         if not csv_path.is_file():
             raise InputError(f"[check].reactions_csv = {plain(str(dyn['reactions_csv']), 80)!r}: no such file "
                              f"next to the scene ({plain(str(csv_path), 120)})")
-        read_csv(csv_path, dyn["reactions_csv_missing"])  # coverage, sampling, units, columns refused now
     return CheckScene(sc, lk, settings, desc, int(dyn["samples"]), dyn["mass_model"], int(dyn["frames"]), csv_path,
-                      broken, dyn["reactions_csv_missing"])
+                      broken, dyn["reactions_csv_missing"], deg, motion)
 
 
 def imported_history(cs: CheckScene) -> ReactionHistory:
@@ -137,7 +146,7 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     moment imbalance of each free part (above the tolerance the part is undecided).
     """
     ext = read_csv(cs.reactions_csv, cs.csv_missing)
-    kin = solve(cs.linkage, ext.crank_deg, cs.scene.speed_hz)
+    kin = reactions(cs.linkage, cs.motion.at(ext.crank_deg), ext.crank_deg, cs.scene.speed_hz)
     missing = [n for n in kin.joints if n not in ext.joints]
     if missing:
         raise InputError(f"reactions CSV {cs.reactions_csv.name} lacks joint(s) {', '.join(missing)}; "
@@ -151,12 +160,13 @@ def imported_history(cs: CheckScene) -> ReactionHistory:
     def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:
         joints = {n: JointHistory(n, j.body_a, j.body_b, sign[n] * f.joints[n].force_N, j.position_mm)
                   for n, j in k.joints.items()}
-        return ReactionHistory(f.crank_deg, joints, f.torque_Nm, k.bodies, meta, evaluator=at)
+        return ReactionHistory(f.crank_deg, joints, f.torque_Nm, k.bodies, meta, evaluator=at,
+                               full_turn=f.full_turn)
 
     def at(deg) -> ReactionHistory:
         d = np.atleast_1d(np.asarray(deg, float))
         order = np.argsort(d)  # the solver wants increasing angles; answer in the order asked
-        k = solve(cs.linkage, d[order], cs.scene.speed_hz, check_closure=False)
+        k = kin.evaluator(d[order])  # the linkage's motion there, on the same branch
         back = np.argsort(order)
         for j in k.joints.values():
             j.position_mm = j.position_mm[back]
@@ -252,19 +262,21 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
 
 
 def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None
-                ) -> tuple[ReactionHistory, list[CaseResult]]:
-    """The scene's reaction history (its dynamics, or an imported CSV) and every part case
-    solved; no cases at a toggle, where the reactions are unbounded.  ``on_stage(text)`` hears
-    each stage as it begins (dynamics, meshing part X, solving part X)."""
+                ) -> tuple[ReactionHistory, list[CaseResult], dict]:
+    """The scene's reaction history (its dynamics, or an imported CSV), its summary (peaks,
+    rules: :func:`rigfem.dynamics.history.summary`) and every part case solved; no cases at a
+    toggle, where the reactions are unbounded.  ``on_stage(text)`` hears each stage as it
+    begins (dynamics, meshing part X, solving part X)."""
     if on_stage:
         on_stage("reactions from the CSV" if cs.reactions_csv else "dynamics")
     h = (imported_history(cs) if cs.reactions_csv else
-         simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model))
+         cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model))
+    pk = peaks(h)
+    digest = summary(h, pk)
     if h.meta.get("singular"):
-        return h, []
+        return h, [], digest
     force = max(float(np.abs(j.force_N).max()) for j in h.joints.values())
     torque = float(np.abs(h.torque_Nm).max())
-    pk = peaks(h)
     cases = part_cases(h, pk, cs.settings)
     if max(force, torque) < UNLOADED or not any(np.any(case.coef) for _, case in cases):
         raise InputError(f"scene {plain(cs.scene.name, 80)!r}: nothing loads its parts (largest joint force "
@@ -273,7 +285,7 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage,
-                              settled=lambda r: settled(r, cs.settings))
+                              settled=lambda r: settled(r, cs.settings)), digest
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
@@ -285,10 +297,11 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
     ``export_inp`` also writes each part case's model at its critical crank angle as a
     CalculiX deck (``<part>_<mode>.inp``: same nodes, C3D10/C3D4 elements, supports, loads).
     Everything checkable is checked before the computation (scene, options, rig rules unless
-    ``allow_rule_violations``, reactions CSV, output folder); the folder is locked while the
-    check runs (a second run on it is refused).  ``on_verdict(report)`` is called once the
-    verdicts are decided, before the pictures and files are written; without ``pictures`` no
-    PNG is rendered and the report says so.  ``on_stage(text)`` hears each stage as it begins.
+    ``allow_rule_violations``, reactions CSV (its file; its content first thing in the dynamics
+    stage), output folder); the folder is locked while the check runs (a second run on it is
+    refused).  ``on_verdict(report)`` is called once the verdicts are decided, before the
+    pictures and files are written; without ``pictures`` no PNG is rendered and the report says
+    so.  ``on_stage(text)`` hears each stage as it begins.
     """
     cs = load_check_scene(name, overrides, allow_rule_violations)
     out = Path(out) if out is not None else Path("results") / cs.scene.name
@@ -300,9 +313,7 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
 def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool,
            pictures: bool = True, on_verdict=None, on_stage=None) -> dict:
     s = cs.settings
-    h, results = solve_scene(cs, solver, quiet, on_stage)
-    reactions = summary(h)
-    limit = allowable_stress(s.material.sigma_u, s.limit_factor)
+    h, results, reactions = solve_scene(cs, solver, quiet, on_stage)
     if h.meta.get("singular"):
         parts = [{"name": p, "part": spec["part"], "mode": m, "verdict": "fail", "peak_mpa": None,
                   "notes": [f"toggle (singular) crank-angle ranges {h.meta['singular']}: reactions grow "
@@ -310,12 +321,14 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
                  for p, spec in s.parts.items() for m in s.modes]
     else:
         parts = [verdict_of(r, s) for r in results]
+    # a configuration that cannot be mounted never passes, whatever its stresses
+    verdict = "fail" if cs.rule_violations else overall(parts)
+    limit = allowable_stress(s.material.sigma_u, s.limit_factor)
     report = {
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
         "rule_violations": cs.rule_violations, "assumed": h.meta.get("assumed", []),
-        # a configuration that cannot be mounted never passes, whatever its stresses
-        "verdict": "fail" if cs.rule_violations else overall(parts), "limit_mpa": limit,
+        "verdict": verdict, "limit_mpa": limit,
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": cs.scene.speed_hz, "model": h.meta["model"],
                           "samples": int(h.crank_deg.size), "branch": cs.linkage.meta.get("branch", "open")},

@@ -115,3 +115,8 @@ def material_from_dict(d: dict) -> Material:
     return Material(str(d["name"]), check_range("material E", d["E"], 1.0, 1e7, "MPa"),
                     check_range("material nu", d["nu"]), check_range("material sigma_u", d["sigma_u"], 0.01, 1e5, "MPa"),
                     check_range("material density", d["density"], 0.0, 1e-7, "t/mm³"))
+
+
+def table_material(spec: str | dict) -> Material:
+    """The material a ``[check].material`` entry names: a library name, or the scene's own table."""
+    return get_material(str(spec)) if not isinstance(spec, dict) else material_from_dict(spec)

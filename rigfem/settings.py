@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING
 
 from rigfem.errors import InputError
-from rigfem.material import Material, get_material, material_from_dict
+from rigfem.material import Material, get_material, table_material
 
 if TYPE_CHECKING:  # rig.layout loads numpy: imported where a scene is resolved, so the CLI starts light
     from rigfem.rig.layout import RigPart
@@ -202,7 +202,16 @@ class CheckSettings(Preset):
 
 
 def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None = None) -> CheckSettings:
-    """Build the settings of a ``[check]`` table (may be empty) for a linkage of ``linkage_type``.
+    """The settings of a ``[check]`` table (:func:`part_settings`) with the material it names
+    (:func:`rigfem.material.table_material`)."""
+    return replace(part_settings(table, linkage_type, rails_mm),
+                   material=table_material(table.get("material", "rig_steel")))
+
+
+def part_settings(table: dict, linkage_type: str, rails_mm: list[float] | None = None) -> CheckSettings:
+    """Build the settings of a ``[check]`` table (may be empty) for a linkage of ``linkage_type``,
+    all but its material (the default until :func:`check_settings` or the check's scene
+    loading resolves the table's: after the rig rules, which need no material).
 
     ``table`` has been validated by ``rigfem.schema.CheckTable`` (keys, types, ranges); here
     only what depends on the linkage is checked: the parts it has.  ``rails_mm``: the
@@ -236,14 +245,12 @@ def check_settings(table: dict, linkage_type: str, rails_mm: list[float] | None 
     size, local = float(chosen_preset.size_mm), float(chosen_preset.near_mm)
     if local > size:
         raise InputError(f"[check].local_size_mm = {local:g} mm must not exceed size_mm = {size:g} mm")
-    mat = table.get("material", "rig_steel")
-    material = get_material(str(mat)) if not isinstance(mat, dict) else material_from_dict(mat)
     fatigue = {"surface": "machined", "reliability": 0.9, "size_mm": 19.0, **table.get("fatigue", {})}
     mesh = {f.name: getattr(chosen_preset, f.name) for f in fields(Preset)}
     mesh.update(size_mm=size, local_size_mm=local, order=int(chosen_preset.order),
                 bearing_directions=int(chosen_preset.bearing_directions))
     return CheckSettings(
         **mesh, linkage_type=linkage_type, parts=parts, rig=resolve_parts(parts, PLATE), modes=tuple(table.get("modes", MODES)), fidelity=fid,
-        material=material, load_factor=float(table.get("load_factor", 1.4)),
+        load_factor=float(table.get("load_factor", 1.4)),
         limit_factor=float(table.get("limit_factor", 0.5)), fatigue=fatigue,
         adaptive=bool(table.get("adaptive", True)) and not ({"size_mm", "local_size_mm"} & set(table)))

@@ -61,3 +61,72 @@ def test_the_dynamics_takes_the_motion_as_data():
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("rigfem.linkage"):
                 found += [f"{f.name}: {a.name}" for a in node.names if a.name in internals]
     assert not found
+
+
+def test_the_motion_carries_its_full_turn_and_transmission_angle():
+    """What the dynamics and peaks used to ask the linkage for mid-work is data of the motion."""
+    from rigfem.linkage import transmission_angle
+
+    lk = four_bar(540, 840, 780, 1020)
+    full = linkage_state(lk, crank_angles(360))
+    part = linkage_state(lk, np.linspace(10.0, 80.0, 15))
+    assert full.full_turn and not part.full_turn
+    assert np.array_equal(full.mu_deg, transmission_angle(full.histories))
+    general = linkage_state(lk, crank_angles(360), general=True)
+    assert general.full_turn and np.allclose(general.mu_deg, full.mu_deg, atol=1e-7)
+    assert linkage_state(slider_crank(300, 840, 50), crank_angles(36)).mu_deg is None
+
+
+@pytest.mark.parametrize("model", ["rigid-body", "original"])
+def test_the_dynamics_on_a_given_motion_never_solves_the_linkage(monkeypatch, model):
+    """rigfem check hands the dynamics the motion the scene stage computed: the reactions (and the
+    2013 program's kinematics) come from it and from its ``at``, never from a new linkage solve."""
+    from rigfem.dynamics import cycle, original, simulate, solver
+    from rigfem.dynamics.cycle import cycle_history
+
+    lk = four_bar(540, 840, 780, 1020)
+    deg = crank_angles(90)
+    ref = simulate(lk, samples=90, model=model)
+    motion = linkage_state(lk, deg)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the dynamics solved the linkage itself")
+
+    for module, name in ((cycle, "linkage_state"), (solver, "linkage_state"), (original, "fourbar_angles")):
+        monkeypatch.setattr(module, name, refuse)
+    h = cycle_history(lk, motion, deg, 1.0, model)
+    assert h.meta["model"] == model and h.full_turn and h.meta["mu_deg"] == ref.meta["mu_deg"]
+    for j in ref.joints:
+        assert np.allclose(h.joints[j].force_N, ref.joints[j].force_N, rtol=1e-12, atol=1e-9)
+    assert np.allclose(h.torque_Nm, ref.torque_Nm, rtol=1e-12, atol=1e-9)
+
+
+def test_the_driver_law_is_geometry_in_the_phase():
+    """Constraints know the driver's law in the phase; the speed scales the rates (constant speed)."""
+    from rigfem.linkage.constraints import Constraints
+    from rigfem.linkage.general import positions, trace
+
+    lk = four_bar(540, 840, 780, 1020)
+    theta = np.radians(crank_angles(8))
+    value, d1, d2 = Constraints(lk).drive(theta)
+    assert np.array_equal(value, theta) and np.all(d1 == 1.0) and np.all(d2 == 0.0)
+    tr = trace(lk, crank_angles(8))
+    _, qd1, qdd1, _, _ = positions(tr, crank_angles(8), 1.0)
+    _, qd3, qdd3, _, _ = positions(tr, crank_angles(8), 3.0)
+    assert np.allclose(qd3, 3 * qd1, rtol=1e-12, atol=0) and np.allclose(qdd3, 9 * qdd1, rtol=1e-12, atol=0)
+
+
+def test_summary_takes_the_peaks_it_is_given():
+    """rigfem check refines the peaks once: the summary reuses them."""
+    from rigfem.dynamics import peaks, simulate, summary
+
+    h = simulate(four_bar(540, 840, 780, 1020), samples=72)
+    pk = peaks(h)
+
+    def refuse(angles):
+        raise AssertionError("peaks refined a second time")
+
+    h.evaluator = refuse
+    s = summary(h, pk)
+    assert s["peaks"] == {k: v for k, v in pk.items() if k != "torque"}
+    assert s["torque_Nm"]["peak"] == pk["torque"]["peak"] and "torque" in pk

@@ -142,3 +142,19 @@ def test_load_cases_use_the_parts_resolved_once(monkeypatch):
     cases = part_cases(h, peaks(h), s)
     assert {c.name: c.supports for _, c in cases} == expected
     assert set(expected) == {"crank_rail", "coupler_rail", "rocker_rail", "plate_A", "plate_B", "post_B"}
+
+
+def test_the_material_is_resolved_after_the_parts():
+    """part_settings checks the parts and mesh of a [check] table; its material is resolved
+    apart (rigfem.material.table_material), after the rig rules in rigfem check; check_settings
+    does both."""
+    from rigfem.material import table_material
+    from rigfem.settings import check_settings, part_settings
+
+    own = {"name": "s355", "E": 210e3, "nu": 0.3, "sigma_u": 470, "density": 7.85e-9}
+    rails = [700.0, 1000.0, 1000.0]
+    assert check_settings({"material": own}, "four-bar", rails).material == table_material(own)
+    assert part_settings({"material": own}, "four-bar", rails).material.name == "rig_steel"
+    assert table_material("rig_steel").name == "rig_steel"
+    with pytest.raises(InputError, match="material E"):
+        table_material(dict(own, E=210e9))

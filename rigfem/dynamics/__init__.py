@@ -11,10 +11,11 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "history": ["JointHistory", "ReactionHistory", "merge_ranges", "spline_evaluator", "peaks", "summary"],
-        "forces": ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"],
-        "cycle": ["MODELS", "simulate", "simulate_original"],
-        "original": ["fourbar_kinematics", "original_reactions", "original_program"],
+        "forces": ["cross", "inertia_load", "applied", "body_loads", "compressor_gas_force", "loaded_linkage"],
+        "cycle": ["MODELS", "simulate", "cycle_history"],
+        "original": ["fourbar_kinematics", "program_kinematics", "original_reactions", "program_reactions", "simulate_original", "original_program"],
         "closed": ["closed_reactions"],
-        "solver": ["solve"],
+        "solver": ["solve", "reactions"],
+        "inverse": ["general_reactions"],
     },
 )

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.forces import applied, cross, inertia_load
+from rigfem.dynamics.forces import cross
 from rigfem.dynamics.history import JointHistory, ReactionHistory
 from rigfem.linkage.model import Linkage, LinkageState, Prismatic
 
@@ -30,17 +30,12 @@ def _two_moments(r1: np.ndarray, m1: np.ndarray, r2: np.ndarray, m2: np.ndarray)
     return (m1[:, None] * r2 - m2[:, None] * r1) / cross(r1, r2)[:, None]
 
 
-def closed_reactions(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
-    """The joint forces and driver torque balancing the bodies' loads on the closed-form
-    ``motion`` (at ``deg``); its evaluator re-solves on the same linkage at any angle."""
-    g = np.asarray(lk.gravity_mm_s2, float) / 1000
-    D, M = {}, {}                       # per body: applied + d'Alembert force, its moment about the origin
-    for b in lk.bodies:
-        D[b.name], M[b.name] = inertia_load(motion.bodies[b.name], g)
-    for ld, arm in zip(lk.loads, motion.load_arms):
-        f, m = applied(ld, arm, motion)
-        D[ld.body] = D[ld.body] + f
-        M[ld.body] = M[ld.body] + m
+def closed_reactions(lk: Linkage, motion: LinkageState, loads: dict, deg: np.ndarray,
+                     speed_hz: float) -> ReactionHistory:
+    """The joint forces and driver torque balancing the bodies' ``loads``
+    (:func:`rigfem.dynamics.forces.body_loads`) on the closed-form ``motion`` (at ``deg``)."""
+    D = {n: f for n, (f, _) in loads.items()}      # per body: applied + d'Alembert force,
+    M = {n: m for n, (_, m) in loads.items()}      # its moment about the body's origin
     pos = motion.joints
     A, B = pos["A"], pos["B"]
     if motion.kind == "four-bar":
@@ -63,11 +58,5 @@ def closed_reactions(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_h
                                       -M["slider"] if prism else None, "prismatic" if prism else "revolute")
     meta = {k: v for k, v in lk.meta.items() if k != "singular_fn"}
     meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=None)
-    h = ReactionHistory(deg, joints, torque, motion.histories, meta, singular_mask=None)
-
-    def evaluator(angles: np.ndarray) -> ReactionHistory:
-        a = np.atleast_1d(np.asarray(angles, float))
-        return closed_reactions(lk, motion.at(a), a, speed_hz)
-
-    h.evaluator = evaluator
-    return h
+    return ReactionHistory(deg, joints, torque, motion.histories, meta, singular_mask=None,
+                           full_turn=motion.full_turn)

@@ -1,9 +1,10 @@
 """The forces on a linkage's bodies besides the joints': gravity and d'Alembert inertia from
 each body's motion and mass totals, and the external loads (the compressor's gas force).
 
-The one home of the Newton–Euler body terms: the general solver (``rigfem.dynamics.solver``)
-and the closed forms (``rigfem.dynamics.closed``) both balance the joint forces against these,
-on the whole motion the linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
+The one home of the Newton–Euler body terms: :func:`body_loads` sums them per body once, and the
+closed forms (``rigfem.dynamics.closed``) or the general inverse dynamics
+(``rigfem.dynamics.inverse``) balance the joint forces against them, on the whole motion the
+linkage hands over (:class:`rigfem.linkage.model.LinkageState`).
 SI inside (m, rad, N, N·m); a scene's gas force is given in N and mm.
 """
 
@@ -14,7 +15,7 @@ import numpy as np
 from rigfem.linkage.mechanisms import build
 from rigfem.linkage.model import BodyState, Linkage, LinkageState, Load
 
-__all__ = ["cross", "inertia_load", "applied", "compressor_gas_force", "loaded_linkage"]
+__all__ = ["cross", "inertia_load", "applied", "body_loads", "compressor_gas_force", "loaded_linkage"]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -36,6 +37,17 @@ def applied(load: Load, arm: np.ndarray, motion: LinkageState) -> tuple[np.ndarr
     f = np.asarray(load.force({"theta_rad": motion.theta, "point_mm": point * 1000, "q": motion.q,
                                "qd": motion.qd}), float).reshape(len(motion.theta), 2)
     return f, cross(arm, f)
+
+
+def body_loads(lk: Linkage, motion: LinkageState) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every body's gravity, d'Alembert and external load on ``motion``: body -> (force N (n, 2),
+    its moment about the body's frame origin N·m (n,)), what the joint forces balance."""
+    g = np.asarray(lk.gravity_mm_s2, float) / 1000
+    out = {b.name: inertia_load(motion.bodies[b.name], g) for b in lk.bodies}
+    for ld, arm in zip(lk.loads, motion.load_arms):
+        f, m = applied(ld, arm, motion)
+        out[ld.body] = (out[ld.body][0] + f, out[ld.body][1] + m)
+    return out
 
 
 def compressor_gas_force(b2: float, b3: float, p_N: float = 2000.0, L_mm: float = 1000.0,

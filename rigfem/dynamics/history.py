@@ -20,7 +20,6 @@ from typing import Callable
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from rigfem.linkage.general import is_full_turn
 from rigfem.linkage.loops import singular_ranges
 from rigfem.linkage.model import BodyHistory
 from rigfem.rig.rules import rules_for
@@ -53,6 +52,9 @@ class ReactionHistory:
     singular_mask: np.ndarray | None = None
     #: re-evaluates the same linkage at arbitrary crank angles (deg); used by ``peaks``
     evaluator: Callable[[np.ndarray], "ReactionHistory"] | None = field(default=None, repr=False)
+    #: ``crank_deg`` is an evenly spaced full turn (:func:`rigfem.linkage.loops.is_full_turn`, said by
+    #: whoever sampled it): peaks and splines wrap round the turn
+    full_turn: bool = False
 
 
 #: refined peaks within this relative distance of the largest count as equal (``equal_peaks_deg``)
@@ -125,7 +127,7 @@ def _series(h: ReactionHistory) -> dict[str, np.ndarray]:
 def spline_evaluator(h: ReactionHistory) -> Callable[[np.ndarray], ReactionHistory]:
     """Periodic (full turn) or not-a-knot cubic spline through an imported history."""
     deg = h.crank_deg
-    periodic = is_full_turn(deg)
+    periodic = h.full_turn
     x = np.r_[deg, deg[-1] + (deg[1] - deg[0])] if periodic else deg
     bc = "periodic" if periodic else "not-a-knot"
 
@@ -159,7 +161,7 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     unbounded: ``force_N``/``peak`` = None, ``singular`` = True.
     """
     deg = np.asarray(h.crank_deg, float)
-    periodic = is_full_turn(deg)
+    periodic = h.full_turn
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(deg.size, bool)
     toggle = h.meta.get("singular")[0][0] if h.meta.get("singular") else None
     if toggle is None and mask.any():
@@ -215,9 +217,10 @@ def peaks(h: ReactionHistory, refine: bool = True) -> dict:
     return out
 
 
-def summary(h: ReactionHistory) -> dict:
-    """The JSON result: rules, transmission angle, peaks, torque, singular ranges (finite only)."""
-    p = peaks(h)
+def summary(h: ReactionHistory, pk: dict | None = None) -> dict:
+    """The JSON result: rules, transmission angle, peaks, torque, singular ranges (finite only);
+    ``pk`` the history's :func:`peaks` where they are known already (they are not refined twice)."""
+    p = dict(pk if pk is not None else peaks(h))
     tq = p.pop("torque")
     mu = h.meta.get("mu_deg")
     unit = h.meta.get("driver_unit", "N·m")

@@ -1,6 +1,7 @@
 """Exact reproduction of the 2013 four-bar dynamics program (geometry/RIG.md §3), quirks included.
 
-Closed-form four-bar kinematics at constant crank speed, then per crank angle the
+Closed-form four-bar kinematics at constant crank speed (:func:`fourbar_kinematics`, or the
+linkage's motion as handed over: :func:`program_kinematics`), then per crank angle the
 program's 9 linear equations (force balance of bars 2, 3, 4 and three moment
 equations) for R12 (O2), R23 (A), R34 (B), R41 (O4) and the motor torque M2.
 The quirks (guide mass given the acceleration of the *combined* centre of mass,
@@ -14,8 +15,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.linkage.loops import fourbar_angles, transmission_angle_deg
+from rigfem.dynamics.history import BodyHistory, JointHistory, ReactionHistory, merge_ranges, singular_ranges
+from rigfem.linkage.loops import MU_TOGGLE_DEG, fourbar_angles, transmission_angle_deg
+from rigfem.linkage.mechanisms import crank_angles
+from rigfem.linkage.model import GROUND, Linkage, LinkageState
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
+
+#: the 0.1 deg grid the 2013 model scans for toggles between the samples
+TOGGLE_SCAN_DEG = crank_angles(3600)
 
 
 def fourbar_kinematics(b2: float, b3: float, b4: float, d: float, theta2: np.ndarray, omega2: float,
@@ -30,13 +37,25 @@ def fourbar_kinematics(b2: float, b3: float, b4: float, d: float, theta2: np.nda
     k = fourbar_angles(b2, b3, b4, d, th2, omega2, 0.0, branch)
     if np.any(np.isnan(k["theta3"])):
         raise ValueError("four-bar loop cannot close at some crank angles")
-    th3, th4, w3, w4, a3, a4 = (k[n] for n in ("theta3", "theta4", "omega3", "omega4", "alpha3", "alpha4"))
-    w2 = omega2
+    th3, th4 = k["theta3"], k["theta4"]
+    return _layout(b2, b3, th2, omega2, th3, th4, k["omega3"], k["omega4"], k["alpha3"], k["alpha4"],
+                   transmission_angle_deg(th3, th4))
+
+
+def program_kinematics(motion: LinkageState, b2: float, b3: float, omega2: float) -> dict[str, np.ndarray]:
+    """:func:`fourbar_kinematics`' dict (SI) of a four-bar's ``motion`` as the linkage layer gave it
+    (:class:`~rigfem.linkage.model.LinkageState`: the same closed-form loop, or the general solver's
+    motion near a toggle); ``b2``, ``b3`` in m."""
+    c, r = motion.bodies["coupler"], motion.bodies["rocker"]
+    return _layout(b2, b3, motion.theta, omega2, c.phi, r.phi, c.omega, r.omega, c.alpha, r.alpha, motion.mu_deg)
+
+
+def _layout(b2, b3, th2, w2, th3, th4, w3, w4, a3, a4, mu_deg) -> dict[str, np.ndarray]:
+    """The 2013 program's kinematics dict: angles, rates, mu (rad), A and B (O2 at 0)."""
     ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
     bx, by = ax + b3 * np.cos(th3), ay + b3 * np.sin(th3)
-    mu = np.radians(transmission_angle_deg(th3, th4))
     return dict(theta2=th2, theta3=th3, theta4=th4, omega2=np.full_like(th2, w2), omega3=w3, omega4=w4,
-                alpha2=np.zeros_like(th2), alpha3=a3, alpha4=a4, mu=mu,
+                alpha2=np.zeros_like(th2), alpha3=a3, alpha4=a4, mu=np.radians(mu_deg),
                 A=np.stack([ax, ay], -1), B=np.stack([bx, by], -1))
 
 
@@ -56,9 +75,18 @@ def original_reactions(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, th
     on the crank in N·m; plus the kinematics (``kin``) and transmission angle.
     """
     b2, b3, b4, d = (x / 1000.0 for x in (b2_mm, b3_mm, b4_mm, d_mm))
+    k = fourbar_kinematics(b2, b3, b4, d, theta2, 2 * np.pi * speed_hz, branch)
+    return program_reactions(k, b2_mm, b3_mm, b4_mm, speed_hz, masses, rails_mm)
+
+
+def program_reactions(k: dict[str, np.ndarray], b2_mm: float, b3_mm: float, b4_mm: float,
+                      speed_hz: float = 1.0, masses: RigMasses = RIG_MASSES,
+                      rails_mm: tuple[float, float, float] = RIG_RAILS_MM) -> dict[str, np.ndarray]:
+    """:func:`original_reactions` on the program's kinematics ``k`` (:func:`fourbar_kinematics`,
+    :func:`program_kinematics`): the 9 equations per crank angle, quirks included."""
+    b2, b3, b4 = (x / 1000.0 for x in (b2_mm, b3_mm, b4_mm))
     L2, L3, L4 = (x / 1000.0 for x in rails_mm)
     w2 = 2 * np.pi * speed_hz
-    k = fourbar_kinematics(b2, b3, b4, d, theta2, w2, branch)
     mr = masses.study_rail_kg_m
     m2, m3, m4 = mr * L2, mr * L3, mr * L4
     mp2 = masses.plate + masses.carriage        # at A on bar 2
@@ -117,6 +145,59 @@ def original_reactions(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, th
     x = np.linalg.solve(K, rhs[..., None])[..., 0]
     return dict(R12=x[:, 0:2], R23=x[:, 2:4], R34=x[:, 4:6], R14=x[:, 6:8], M2=x[:, 8],
                 mu_deg=np.degrees(k["mu"]), kin=k)
+
+
+def simulate_original(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: float) -> ReactionHistory:
+    """ReactionHistory of the 2013 program (rigfem.dynamics.original) for a four-bar Linkage on
+    its ``motion`` at ``deg`` (the program's closed-form kinematics; the bodies' mass data);
+    the evaluator and the toggle scan take the motion on the same branch (``motion.at``)."""
+    L = lk.meta["lengths_mm"]
+    b2, b3, b4, d = L["b2"], L["b3"], L["b4"], L["d"]
+    bodies_tpl = motion.histories
+    w2 = 2 * np.pi * speed_hz
+
+    def build(m: LinkageState, a: np.ndarray, full_turn: bool = False) -> ReactionHistory:
+        r = program_reactions(program_kinematics(m, b2 / 1000, b3 / 1000, w2), b2, b3, b4, speed_hz,
+                              RigMasses(**lk.meta["catalogue"]), tuple(lk.meta["rails_mm"]))
+        k = r["kin"]
+        pos = {"O2": np.zeros((a.size, 2)), "A": k["A"] * 1000, "B": k["B"] * 1000,
+               "O4": np.tile([d, 0.0], (a.size, 1))}
+        joints = {"O2": JointHistory("O2", GROUND, "crank", r["R12"], pos["O2"]),
+                  "A": JointHistory("A", "crank", "coupler", r["R23"], pos["A"]),
+                  "B": JointHistory("B", "coupler", "rocker", r["R34"], pos["B"]),
+                  "O4": JointHistory("O4", GROUND, "rocker", r["R14"], pos["O4"])}
+        zero = np.zeros(a.size)
+        aA = -(w2**2) * k["A"] * 1000
+        bodies = {}
+        for name, th, om, al, org, acc in (
+                ("crank", k["theta2"], k["omega2"], zero, pos["O2"], np.zeros((a.size, 2))),
+                ("coupler", k["theta3"], k["omega3"], k["alpha3"], pos["A"], aA),
+                ("rocker", k["theta4"], k["omega4"], k["alpha4"], pos["O4"], np.zeros((a.size, 2)))):
+            t = bodies_tpl[name]
+            bodies[name] = BodyHistory(name, th, om, al, org, acc, t.mass_kg, t.com_local_mm,
+                                       t.inertia_com_kg_mm2, t.point_masses, t.joint_local_mm)
+        mu = r["mu_deg"]
+        bad = np.sin(np.radians(mu)) < np.sin(np.radians(MU_TOGGLE_DEG))
+        bad |= ~np.all(np.isfinite(np.c_[r["R12"], r["R23"], r["R34"], r["R14"], r["M2"]]), axis=1)
+        meta = dict(lk.meta)
+        meta.pop("singular_fn", None)
+        meta.update(model="original", speed_hz=speed_hz, driver_unit="N·m",
+                    mu_deg=dict(min=float(mu.min()), max=float(mu.max())),
+                    singular=singular_ranges(a, bad))
+        for j in joints.values():
+            j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)
+        return ReactionHistory(a, joints, np.nan_to_num(r["M2"]), bodies, meta,
+                               singular_mask=bad if bad.any() else None, full_turn=full_turn)
+
+    def at(angles: np.ndarray) -> ReactionHistory:
+        a = np.atleast_1d(np.asarray(angles, float))
+        return build(motion.at(a), a)
+
+    h = build(motion, deg, motion.full_turn)
+    # toggles between the samples: the closed-form model is cheap on a 0.1 deg grid
+    h.meta["singular"] = merge_ranges(h.meta["singular"], at(TOGGLE_SCAN_DEG).meta["singular"])
+    h.evaluator = at
+    return h
 
 
 def original_program(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, speed_hz: float = 1.0,

@@ -10,6 +10,7 @@ import numpy as np
 from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
 from rigfem.errors import InputError, decode_text
 from rigfem.files import whole_file
+from rigfem.linkage.loops import is_full_turn
 
 # ----------------------------------------------------------------------------- CSV
 _TORQUE_COLS = ("torque_Nm", "torque", "M2", "driver")
@@ -210,6 +211,6 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     if "driver_force_N" in head:
         meta["driver_unit"] = "N"
     h = ReactionHistory(deg, joints, np.where(np.isfinite(torque), torque, 0.0), None, meta,
-                        singular_mask=sing if sing.any() else None)
+                        singular_mask=sing if sing.any() else None, full_turn=is_full_turn(deg))
     h.meta["singular"] = singular_ranges(deg, h.singular_mask)
     return h

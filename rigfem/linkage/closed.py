@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
-from rigfem.linkage.model import GROUND, CrankDriver, Linkage, LinkageState, Prismatic, Revolute, rotate, state_of
+from rigfem.linkage.model import GROUND, CrankDriver, Linkage, LinkageState, Prismatic, Revolute, state_of
 
 __all__ = ["closed_motion"]
 
@@ -62,6 +62,9 @@ def _toggle_free(L: dict, kind: str) -> bool:
 def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> LinkageState | None:
     """The motion of ``lk`` at crank angles ``theta`` (rad) and crank speed ``w2`` (rad/s), or
     None where no closed form applies (another topology, or a toggle anywhere in the turn)."""
+    def at(deg: np.ndarray) -> LinkageState | None:
+        return closed_motion(lk, np.radians(np.atleast_1d(np.asarray(deg, float))), w2)
+
     kind = _kind(lk)
     if kind is None or not _toggle_free(lk.meta["lengths_mm"], kind):
         return None
@@ -79,14 +82,11 @@ def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> LinkageState | N
         O4[:, 0] = L["d"]
         out["coupler"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
         out["rocker"] = (k["theta4"], k["omega4"], k["alpha4"], O4, zeros2, zeros2)
-        B = O4 + rotate(k["theta4"], (L["b4"], 0.0))
-        joints = {"O2": zeros2, "A": A, "B": B, "O4": O4}
     else:
         k = slider_crank_angles(L["b2"], L["b3"], L.get("offset", 0.0), theta, w2)
         out["rod"] = (k["theta3"], k["omega3"], k["alpha3"], A, vA, aA)
         B = np.stack([k["x"], np.full(n, L.get("offset", 0.0))], -1)
         out["slider"] = (zero, zero, zero, B, np.stack([k["v"], zero], -1), np.stack([k["acc"], zero], -1))
-        joints = {"O2": zeros2, "A": A, "B": B, "slide": B}
-    st = state_of(lk, theta, out, joints, kind)
-    st.at = lambda deg: closed_motion(lk, np.radians(np.atleast_1d(np.asarray(deg, float))), w2)
+    st = state_of(lk, theta, out, None, kind)  # every joint at its point on its body_b
+    st.at = at
     return st

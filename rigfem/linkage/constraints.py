@@ -70,14 +70,14 @@ class Constraints:
         return None if body == GROUND else 3 * self.index[body]
 
     # -- driver target
-    def drive(self, theta: np.ndarray, omega: float):
-        """Driver value, rate and second rate at phase theta (rad; SI)."""
+    def drive(self, theta: np.ndarray):
+        """Driver value and its first and second derivatives by the phase at phase theta (rad;
+        SI): the driver's law, which knows no speed (rates: times omega and omega²)."""
         d = self.lk.driver
         if isinstance(d, CrankDriver):
-            return theta + d.offset_rad, np.full_like(theta, omega), np.zeros_like(theta)
+            return theta + d.offset_rad, np.ones_like(theta), np.zeros_like(theta)
         a = d.amplitude_mm / 1000
-        return (d.mean_mm / 1000 + a * np.sin(theta), a * omega * np.cos(theta),
-                -a * omega**2 * np.sin(theta))
+        return d.mean_mm / 1000 + a * np.sin(theta), a * np.cos(theta), -a * np.sin(theta)
 
     def frame(self, q: np.ndarray) -> dict:
         """Per-joint rotated local vectors (and prismatic axis, normal, gap) at positions q."""
@@ -122,7 +122,7 @@ class Constraints:
                 _, _, _, n, d = fr[j.name]
                 res[:, r] = dot(n, d)
                 res[:, r + 1] = pb - pa - j.rel_angle_rad
-        target = self.drive(theta, 0.0)[0]
+        target = self.drive(theta)[0]
         dv = self.lk.driver
         if isinstance(dv, CrankDriver):
             res[:, self.drow] = self.pose(q, dv.body)[1] - target

@@ -21,6 +21,7 @@ import numpy as np
 
 from rigfem.errors import InputError
 from rigfem.linkage.constraints import Constraints
+from rigfem.linkage.loops import is_full_turn
 from rigfem.linkage.model import (
     AssemblyError,
     BodyHistory,
@@ -34,7 +35,7 @@ from rigfem.linkage.model import (
 )
 
 __all__ = ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "Trace", "trace", "positions",
-           "rates", "is_full_turn", "conditioning", "general_motion", "move"]
+           "rates", "conditioning", "general_motion", "move"]
 
 #: 1-norm reciprocal condition number of the length-scaled Jacobian below which a sample is
 #: flagged as a toggle (for the rig four-bar about mu within 0.6 deg of 0 or 180; the four-bar
@@ -73,15 +74,17 @@ def rates(model: Constraints, q: np.ndarray, theta: np.ndarray, omega: float):
     """Velocities, accelerations and the inverse constraint Jacobian at solved positions."""
     fr = model.frame(q)
     J = model.jacobian(q, fr)
-    _, sd, sdd = model.drive(theta, omega)
+    _, d1, d2 = model.drive(theta)
     with np.errstate(all="ignore"):
         try:
             Jinv = np.linalg.inv(J)
         except np.linalg.LinAlgError:       # an exactly singular sample: solve one by one
             Jinv = np.stack([np.linalg.pinv(x) for x in J])
-    qd = Jinv[:, :, model.drow] * sd[:, None]
-    qdd = np.einsum("nij,nj->ni", Jinv, model.gamma(q, qd, sdd, fr))
-    return qd, qdd, J, Jinv
+    # the rates by the phase (dq/dtheta, d2q/dtheta2: the linkage's geometry), then by time at a
+    # constant ``omega`` (gamma is quadratic in the rates: d2q/dt2 = omega² d2q/dtheta2)
+    q1 = Jinv[:, :, model.drow] * d1[:, None]
+    q2 = np.einsum("nij,nj->ni", Jinv, model.gamma(q, q1, d2, fr))
+    return omega * q1, omega**2 * q2, J, Jinv
 
 
 def _guess_vector(model: Constraints) -> np.ndarray:
@@ -244,15 +247,6 @@ def trace(lk: Linkage, crank_deg: np.ndarray, tol_mm: float = 1e-9, check_closur
     return Trace(model, th_c, qc, qdc, qddc, warnings, tol)
 
 
-def is_full_turn(deg: np.ndarray) -> bool:
-    """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
-    if deg.size < 4:
-        return False
-    step = np.diff(deg)
-    return bool(np.allclose(step, step[0], rtol=1e-6, atol=1e-9)
-                and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)
-
-
 def positions(tr: Trace, crank_deg: np.ndarray, speed_hz: float):
     """(q, qd, qdd, J, Jinv) at ``crank_deg`` on the traced branch, the driver at ``speed_hz``."""
     model, nodes, qc, qdc, qddc = tr.model, tr.theta, tr.q, tr.qd, tr.qdd
@@ -297,8 +291,10 @@ def conditioning(model: Constraints, J: np.ndarray, Jinv: np.ndarray) -> np.ndar
     return np.where(np.isfinite(rcond), rcond, 0.0)
 
 
-def _state(tr: Trace, deg: np.ndarray, q, qd, qdd, J, Jinv) -> LinkageState:
-    """The whole motion at solved coordinates: bodies, joints' geometry, conditioning."""
+def _state(tr: Trace, deg: np.ndarray, q, qd, qdd, J, Jinv, probe: tuple | None = None) -> LinkageState:
+    """The whole motion at solved coordinates: bodies, joints' geometry, conditioning; ``probe``
+    (deg, q, qd, qdd, J, Jinv) the coordinates at the continuation points (the state's ``probe``)."""
+    sub = None if probe is None else _state(tr, *probe)
     model, lk = tr.model, tr.model.lk
     fr = model.frame(q)
     frames = {}
@@ -313,12 +309,20 @@ def _state(tr: Trace, deg: np.ndarray, q, qd, qdd, J, Jinv) -> LinkageState:
         motion[b.name] = (q[:, i + 2], qd[:, i + 2], qdd[:, i + 2], q[:, i:i + 2], qd[:, i:i + 2], qdd[:, i:i + 2])
     gen = GeneralState(model.m, dict(model.index), list(model.rows), model.drow, Jinv,
                        conditioning(model, J, Jinv), frames, list(tr.warnings))
-    return state_of(lk, np.radians(deg), motion, {n: f[0] for n, f in frames.items()}, "general", gen, q, qd)
+    st = state_of(lk, np.radians(deg), motion, {n: f[0] for n, f in frames.items()}, "general", gen, q, qd)
+    st.probe = sub
+    return st
 
 
-def _on_branch(tr: Trace, deg: np.ndarray, speed_hz: float) -> LinkageState:
-    st = _state(tr, deg, *positions(tr, deg, speed_hz))
-    st.at = lambda angles: _on_branch(tr, np.atleast_1d(np.asarray(angles, float)), speed_hz)
+def _on_branch(tr: Trace, deg: np.ndarray, speed_hz: float, probe: tuple | None = None) -> LinkageState:
+    """The motion at ``deg`` on the traced branch; ``probe``: (deg, q, qd, qdd, J, Jinv) at the
+    continuation points, whose motion becomes the state's ``probe``."""
+    def at(angles: np.ndarray) -> LinkageState:
+        return _on_branch(tr, np.atleast_1d(np.asarray(angles, float)), speed_hz)
+
+    q, qd, qdd, J, Jinv = positions(tr, deg, speed_hz)
+    st = _state(tr, deg, q, qd, qdd, J, Jinv, probe)
+    st.at = at
     return st
 
 
@@ -329,11 +333,11 @@ def general_motion(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, to
     they are denser than the samples (a toggle narrower than the sampling shows there)."""
     deg = np.asarray(crank_deg, float)
     tr = trace(lk, deg, tol_mm, check_closure)
-    st = _on_branch(tr, deg, speed_hz)
     theta = np.radians(deg)
+    probe = None
     if tr.theta.size > 1 and deg.size > 1 and np.min(np.abs(np.diff(tr.theta))) < abs(theta[1] - theta[0]):
-        st.probe = _state(tr, np.degrees(tr.theta), tr.q, *rates(tr.model, tr.q, tr.theta, 2 * np.pi * speed_hz))
-    return st
+        probe = (np.degrees(tr.theta), tr.q, *rates(tr.model, tr.q, tr.theta, 2 * np.pi * speed_hz))
+    return _on_branch(tr, deg, speed_hz, probe)
 
 
 def move(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0) -> dict[str, BodyHistory]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles",
-           "slider_crank_angles", "singular_ranges"]
+           "slider_crank_angles", "singular_ranges", "is_full_turn"]
 
 #: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.linkage.original)
 BRANCHES = {"open": 1, "crossed": -1}
@@ -88,3 +88,12 @@ def singular_ranges(crank_deg: np.ndarray, mask: np.ndarray | None) -> list[list
     breaks = np.flatnonzero(np.diff(idx) != 1)
     starts, ends = np.r_[idx[0], idx[breaks + 1]], np.r_[idx[breaks], idx[-1]]
     return [[float(crank_deg[a]), float(crank_deg[b])] for a, b in zip(starts, ends)]
+
+
+def is_full_turn(deg: np.ndarray) -> bool:
+    """True if ``deg`` is an evenly spaced full turn (360 deg excluded)."""
+    if deg.size < 4:
+        return False
+    step = np.diff(deg)
+    return bool(np.allclose(step, step[0], rtol=1e-6, atol=1e-9)
+                and abs(abs(step[0]) * deg.size - 360.0) < 1e-6 * 360)

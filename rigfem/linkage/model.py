@@ -16,6 +16,7 @@ from typing import Callable
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError
+from rigfem.linkage.loops import is_full_turn, transmission_angle_deg
 
 GROUND = "ground"
 
@@ -222,14 +223,19 @@ class LinkageState:
     probe: LinkageState | None = None
     #: the motion at other phases (deg) on the same branch
     at: Callable[[np.ndarray], LinkageState | None] | None = None
+    #: ``theta`` is an evenly spaced full turn (:func:`rigfem.linkage.loops.is_full_turn`)
+    full_turn: bool = False
+    #: a four-bar's transmission angle (deg) at ``theta`` (:func:`rigfem.linkage.loops.transmission_angle_deg`);
+    #: None for another linkage
+    mu_deg: np.ndarray | None = None
 
 
-def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: dict[str, np.ndarray],
+def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: dict[str, np.ndarray] | None,
                   kind: str = "general", general: GeneralState | None = None,
                   q: np.ndarray | None = None, qd: np.ndarray | None = None) -> LinkageState:
     """Assemble a :class:`LinkageState` from every body's (phi, omega, alpha, origin, origin velocity,
-    origin acceleration) in ``motion`` and the joints' positions (SI); ``q``, ``qd`` the general
-    solver's coordinates where it gave them."""
+    origin acceleration) in ``motion`` and the joints' positions (SI; None: each at its point on
+    its ``body_b``); ``q``, ``qd`` the general solver's coordinates where it gave them."""
     bodies, hist = {}, {}
     for b in lk.bodies:
         phi, w, al, r, v, a = motion[b.name]
@@ -239,10 +245,15 @@ def state_of(lk: Linkage, theta: np.ndarray, motion: dict[str, tuple], joints: d
                                    a + perp(rc) * al[:, None] - rc * (w**2)[:, None])
         hist[b.name] = b.history(phi, w, al, r, v, a)
     lk.record_joint_points(hist)
+    if joints is None:
+        joints = {j.name: bodies[j.body_b].origin + rotate(bodies[j.body_b].phi, np.asarray(j.local_b_mm, float) / 1000)
+                  for j in lk.joints}
     arms = [rotate(bodies[ld.body].phi, np.asarray(ld.local_mm, float) / 1000) for ld in lk.loads]
     if lk.loads and q is None:  # the loads see the general solver's coordinates
         q = np.concatenate([np.column_stack([bodies[b.name].origin, bodies[b.name].phi]) for b in lk.bodies], 1)
         qd = np.concatenate([np.column_stack([bodies[b.name].origin_vel, bodies[b.name].omega])
                              for b in lk.bodies], 1)
     return LinkageState(theta, bodies, joints, hist, arms, q if lk.loads else None, qd if lk.loads else None,
-                        kind, general)
+                        kind, general, full_turn=is_full_turn(np.degrees(theta)),
+                        mu_deg=(transmission_angle_deg(bodies["coupler"].phi, bodies["rocker"].phi)
+                                if lk.meta.get("type") == "four-bar" else None))

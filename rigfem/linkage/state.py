@@ -1,7 +1,8 @@
 """A linkage's whole motion at given driver phases in one call: the closed forms where they
 apply (:mod:`rigfem.linkage.closed`, the rig's toggle-free four-bar and slider-crank), the
-general planar solver otherwise (:mod:`rigfem.linkage.general`).  The dynamics asks here
-once and balances its forces on the :class:`~rigfem.linkage.model.LinkageState` it gets.
+general planar solver otherwise (:mod:`rigfem.linkage.general`).  ``rigfem check`` asks here
+once, in its scene stage, and hands the :class:`~rigfem.linkage.model.LinkageState` to the
+dynamics, which balances its forces on it (and on its ``at`` for other phases).
 """
 
 from __future__ import annotations
