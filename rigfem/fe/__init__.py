@@ -9,7 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "assembly": ["TET_EDGES", "TRI_EDGES", "NODE_BARY", "MIN_JACOBIAN", "FEMesh", "fe_mesh", "tet_quadrature", "tri_quadrature", "shape_values", "shape_dL", "bary_gradients", "geometry", "points_at", "volume", "element_dofs", "stiffness", "block_pattern"],
-        "cache": ["SOLUTION_CODE", "solution_inputs", "check_energy", "load_solution", "save_solution", "cached_solve"],
+        "cache": ["SOLUTION_CODE", "solution_inputs", "check_energy", "peak_sweep", "load_solution", "save_solution", "cached_solve"],
         "forces": ["SurfaceForce", "Traction", "Pressure", "BearingLoad", "Torque", "BoltCircleTorque", "Gravity", "Inertia", "Load", "outward_normals", "bearing_vector", "torque_vector", "body_vector", "body_basis", "body_coefficients", "load_vector"],
         "model": ["Model", "LOCKING_NU", "build_model", "load_matrix", "ExportData", "export_data", "StaticProblem", "solve"],
         "partcase": ["CONCENTRATORS", "mesh_job", "mesh_case", "supports_of", "fe_load", "relieved_cases", "imbalance", "CaseResult", "solve_cases"],

@@ -111,8 +111,9 @@ def _straighten_distorted(fm: FEMesh) -> int:
     for _ in range(10):
         fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
         idx = np.flatnonzero(fm.curved)
-        _, det0 = bary_gradients(_subset(fm, idx))
-        bad = idx[(_curved_J(fm, L, idx)[1].min(1) < MIN_JACOBIAN * det0)]
+        x = fm.nodes[fm.elements[idx, :4]]
+        det0 = _det3(np.swapaxes(x[:, 1:] - x[:, :1], 1, 2))
+        bad = idx[(_det3(_curved_jacobian(fm, L, idx)).min(1) < MIN_JACOBIAN * det0)]
         if not len(bad):
             return done
         el = fm.elements[bad]
@@ -171,10 +172,24 @@ def _ref_grads(L: np.ndarray) -> np.ndarray:
     return dL[..., 1:] - dL[..., :1]
 
 
+def _curved_jacobian(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> np.ndarray:
+    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) of P2 elements."""
+    return np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
+
+
 def _curved_J(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) and det J (m, nq) of P2 elements."""
-    J = np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
+    """Isoparametric Jacobians (m, nq, 3, 3) and det J (m, nq) of P2 elements (LAPACK's det: assembly)."""
+    J = _curved_jacobian(fm, L, elems)
     return J, np.linalg.det(J)
+
+
+def _det3(J: np.ndarray) -> np.ndarray:
+    """Determinants (...) of 3 × 3 matrices (..., 3, 3) by the rule of Sarrus: a tenth of LAPACK's
+    time on millions of small matrices (the distortion test of every curved element)."""
+    a, b, c = J[..., 0, :], J[..., 1, :], J[..., 2, :]
+    return (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
+            - a[..., 1] * (b[..., 0] * c[..., 2] - b[..., 2] * c[..., 0])
+            + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
 
 
 def geometry(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None),

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from rigfem.fe.cache import cached_solve
+from rigfem.fe.cache import cached_solve, peak_sweep
 from rigfem.fe.forces import BearingLoad, Inertia
 from rigfem.fe.model import Model, build_model, load_matrix
 from rigfem.fe.solution import Solution
@@ -248,7 +248,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
             ratio = case.mass_kg / fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
             coef[:, unique[u]] += ratio * case.coef[:, j]
         unbalanced = imbalance(model, coef, R, scale) if free else (0.0, 0.0)
-        vm_rows, peak_nodes = sol.peak_sweep(coef)
+        vm_rows, peak_nodes = peak_sweep(sol, coef)
         row = int(np.argmax(vm_rows))
         nodes = hist = None
         # the stress cycle at every node that peaks at some angle (an original-mode case's rows are
