@@ -55,8 +55,8 @@ from rigfem.report.picture_cache import (  # drawn once, then copied from the ca
     plot_peaks,
     reactions_plot,
     utilisation_plot,
+    write_vtu,
 )
-from rigfem.report.vtu import write_vtu
 from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check

@@ -33,6 +33,17 @@ from skfem.refdom import RefTet, RefTri
 
 from rigfem.errors import InputError
 from rigfem.material import lame
+from rigfem.mesh.cache import (
+    array_digest,
+    cache_dir,
+    code_hash,
+    discard,
+    entry_key,
+    load_arrays,
+    read_entry,
+    save_arrays,
+    write_entry,
+)
 from rigfem.mesh.partmesh import PartMesh, quadratic
 
 TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
@@ -89,8 +100,26 @@ def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
         return FEMesh(p, t, surfaces, 1, len(p))
     nodes, elements, surf2 = quadratic(dataclasses.replace(mesh, points=p, tets=t, surfaces=surfaces))
     fm = FEMesh(nodes, elements, surf2, 2, len(p))
-    fm.straightened = _straighten_distorted(fm)
+    fm.straightened = _straighten_cached(fm)
     return fm
+
+
+def _straighten_cached(fm: FEMesh) -> int:
+    """:func:`_straighten_distorted` through a verified cache entry keyed by the P2 mesh: the
+    elements it straightened (a mid-node goes to its chord's midpoint, which depends on the corners
+    only), so a warm check skips the Jacobian test of every curved element."""
+    inputs = {"mesh": array_digest(fm.nodes, fm.elements), "code": code_hash("fe/assembly.py")}
+    folder = cache_dir() / "straightened" / entry_key(inputs)
+    if read_entry(folder, inputs) is not None:
+        bad = load_arrays(folder, ("elements",))["elements"]
+        if bad.ndim == 1 and bad.dtype.kind == "i" and np.all((bad >= 0) & (bad < len(fm.elements))):
+            _to_chords(fm, bad)
+            fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+            return len(bad)
+        discard(folder, "element numbers out of range")
+    bad = _straighten_distorted(fm)
+    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"elements": bad}))
+    return len(bad)
 
 
 def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
@@ -100,14 +129,21 @@ def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
     return x[el[:, 4:]] - 0.5 * (x[el[:, TET_EDGES[:, 0]]] + x[el[:, TET_EDGES[:, 1]]])
 
 
-def _straighten_distorted(fm: FEMesh) -> int:
+def _to_chords(fm: FEMesh, elems: np.ndarray) -> None:
+    """Move the mid-edge nodes of ``elems`` to the midpoints of their edges."""
+    el = fm.elements[elems]
+    fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
+
+
+def _straighten_distorted(fm: FEMesh) -> np.ndarray:
     """Mark curved elements; move the mid-nodes of distorted ones back to their chords.
 
     Checks det J at the 10 nodes and the 11 points of the degree-4 rule against the straight
-    element's; repeats while straightening an edge distorts a neighbour.  Returns the count.
+    element's; repeats while straightening an edge distorts a neighbour.  Returns the elements
+    straightened.
     """
     L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
-    done = 0
+    done = [np.zeros(0, np.int64)]
     for _ in range(10):
         fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
         idx = np.flatnonzero(fm.curved)
@@ -115,12 +151,11 @@ def _straighten_distorted(fm: FEMesh) -> int:
         det0 = _det3(np.swapaxes(x[:, 1:] - x[:, :1], 1, 2))
         bad = idx[(_det3(_curved_jacobian(fm, L, idx)).min(1) < MIN_JACOBIAN * det0)]
         if not len(bad):
-            return done
-        el = fm.elements[bad]
-        fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
-        done += len(bad)
+            return np.concatenate(done)
+        _to_chords(fm, bad)
+        done.append(bad)
     fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
-    return done
+    return np.concatenate(done)
 
 
 def tet_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:

@@ -121,11 +121,13 @@ class Solution:
 
     def resultants(self, dofs: np.ndarray, vec: np.ndarray) -> np.ndarray:
         """Force and moment about the origin (k, 6) of nodal vectors ``vec`` (3N, k) over ``dofs``."""
-        dofs = np.asarray(dofs)
+        x, dofs = self.model.mesh.nodes, np.asarray(dofs)
+        if len(dofs) == len(vec) and np.array_equal(dofs, np.arange(len(vec))):  # every DOF: no gather
+            return _force_moment(x, vec.reshape(len(x), 3, -1))
         nodes, where = np.unique(dofs // 3, return_inverse=True)
         v = np.zeros((len(nodes), 3, vec.shape[1]))
         v[where, dofs % 3] = vec[dofs]
-        return _force_moment(self.model.mesh.nodes[nodes], v)
+        return _force_moment(x[nodes], v)
 
     @property
     def support_reactions(self) -> dict[str, np.ndarray]:
@@ -145,6 +147,6 @@ class Solution:
 
 def _force_moment(x: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Σ f and Σ x × f about the origin (k, 6) of nodal forces ``v`` (n, 3, k) at points ``x`` (n, 3)."""
-    m = [x[:, 1] @ v[:, 2] - x[:, 2] @ v[:, 1], x[:, 2] @ v[:, 0] - x[:, 0] @ v[:, 2],
-         x[:, 0] @ v[:, 1] - x[:, 1] @ v[:, 0]]
-    return np.concatenate([v.sum(0), np.stack(m)]).T
+    A = (np.column_stack([x, np.ones(len(x))]).T @ v.reshape(len(x), -1)).reshape(4, 3, -1)  # one product
+    m = [A[1, 2] - A[2, 1], A[2, 0] - A[0, 2], A[0, 1] - A[1, 0]]  # Σ x_j f_l, antisymmetrised
+    return np.concatenate([A[3], np.stack(m)]).T

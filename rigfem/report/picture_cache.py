@@ -1,4 +1,4 @@
-"""Pictures through the cache: a picture is a pure function of what it is drawn from.
+"""Pictures and field files through the cache: each is a pure function of what it is drawn from.
 
 Rendering a part's pictures costs seconds (pyvista and matplotlib); a warm check draws the same
 pictures again from the same cached solution.  Each call below hashes everything its picture is
@@ -7,7 +7,9 @@ and the plotting libraries' versions) into the key of a verified cache entry
 (:mod:`rigfem.mesh.cache`: a SHA-256 per file, a corrupt entry is discarded and drawn again) under
 ``$RIGFEM_CACHE/pictures``, and a hit copies the stored PNG files: byte for byte the pictures a
 cold run drew, with neither pyvista nor matplotlib imported.  A fallback picture (matplotlib,
-where no OpenGL runs) is not stored: a machine that gains OpenGL draws the real one.
+where no OpenGL runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU
+field files of a cached solution (:func:`write_vtu`) are stored the same way, keyed by the
+solution's entry and the load combination.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ def _versions() -> dict[str, str]:
     from importlib.metadata import PackageNotFoundError, version
 
     out = {}
-    for lib in ("matplotlib", "pyvista", "vtk", "numpy"):
+    for lib in ("matplotlib", "pyvista", "vtk", "numpy", "meshio"):
         try:
             out[lib] = version(lib)
         except PackageNotFoundError:
@@ -137,3 +139,22 @@ def plot_peaks(results: list, limit: float, path: Path, allowable: str) -> None:
         return {}, [Path(path).name]
 
     cached("peaks", inputs, Path(path).parent, draw)
+
+
+def write_vtu(path: str | Path, sol, c=None, allowable: float | None = None, compact: bool = False) -> Path:
+    """:func:`rigfem.report.vtu.write_vtu` through the cache when ``sol`` is a cached solution
+    (its entry's key names its mesh, loads and code); written directly otherwise."""
+    from rigfem.report.vtu import write_vtu as write
+
+    path = Path(path)
+    if not sol.key:
+        return write(path, sol, c, allowable, compact)
+    inputs = {"solution": sol.key, "c": array_digest(np.asarray(c, dtype=float)), "allowable": allowable,
+              "compact": compact, "name": path.name}
+
+    def draw(d: Path) -> tuple[dict, list[str]]:
+        write(d / path.name, sol, c, allowable, compact)
+        return {}, [path.name]
+
+    cached("vtu", inputs, path.parent, draw)
+    return path
