@@ -14,7 +14,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "model": ["Model", "LOCKING_NU", "build_model", "load_matrix", "ExportData", "export_data", "StaticProblem", "solve"],
         "partcase": ["CONCENTRATORS", "mesh_job", "mesh_case", "supports_of", "fe_load", "relieved_cases", "imbalance", "CaseResult", "solve_cases"],
         "solution": ["Peak", "Solution"],
-        "solver": ["DIRECT_MAX_DOF", "METHODS", "SolverError", "default_method", "LinearSolver"],
+        "solver": ["DIRECT_MAX_DOF", "METHODS", "SolverError", "default_method", "pardiso", "LinearSolver"],
         "stress": ["quadrature_stress", "element_node_stress", "nodal_stress", "BAND_FACTOR", "error_band_pct", "zz_error"],
         "supports": ["Fixed", "FixedComponents", "Symmetry", "ShaftInHole", "FreeBody", "Support", "surface_quadrature", "surface_nodes", "component_dofs", "rigid_modes", "shaft_terms", "shaft_springs", "three_two_one", "constraints"],
         "tensors": ["von_mises", "principal", "peak_von_mises"],

@@ -36,7 +36,7 @@ from rigfem.mesh.mesher import MESH_CODE
 
 #: the source files that compute a solution (with the mesh's): an edit invalidates the entries
 SOLUTION_CODE = (*MESH_CODE, "material.py", "fe/assembly.py", "fe/forces.py", "fe/supports.py", "fe/solver.py",
-                 "fe/model.py", "fe/stress.py", "fe/solution.py", "fe/cache.py")
+                 "fe/kernels.py", "fe/model.py", "fe/stress.py", "fe/solution.py", "fe/cache.py")
 _ARRAYS = ("F", "U", "reactions", "nodal_stress", "residuals", "backward_errors")
 
 
