@@ -64,15 +64,17 @@ def test_fallback_picture_is_not_stored(tmp_path, monkeypatch):
 @pytest.fixture(scope="module")
 def warm(tmp_path_factory):
     """A small check run twice on one cache: the second run may draw nothing."""
-    import rigfem.report.pictures as pictures
+    import matplotlib.figure
+
+    import rigfem.report.views as views
 
     root = tmp_path_factory.mktemp("warm")
     mp = pytest.MonkeyPatch()
     mp.setenv("RIGFEM_CACHE", str(root / "cache"))
     run_check("final-cm", out=root / "cold", overrides=FAST, quiet=True)
-    drawn = []
-    for name in ("part_pictures", "utilisation_plot", "reactions_plot", "_plot_peaks"):
-        mp.setattr(pictures, name, lambda *a, _n=name, **k: drawn.append(_n))
+    drawn = []  # every 3-D render and every matplotlib picture saved
+    mp.setattr(views, "render", lambda *a, **k: drawn.append("render"))
+    mp.setattr(matplotlib.figure.Figure, "savefig", lambda *a, **k: drawn.append("savefig"))
     run_check("final-cm", out=root / "warm", overrides=FAST, quiet=True)
     yield root, drawn
     mp.undo()
