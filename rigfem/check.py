@@ -53,13 +53,13 @@ from rigfem.report.document import (
 )
 from rigfem.report.folder import atomic_dir, check_writable, folder_lock
 from rigfem.report.html import write_html
-from rigfem.report.pictures import (
-    _plot_peaks,
+from rigfem.report.picture_cache import (  # drawn once, then copied from the cache
     part_pictures,
+    plot_peaks,
     reactions_plot,
     utilisation_plot,
+    write_vtu,
 )
-from rigfem.report.vtu import write_vtu
 from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
@@ -356,7 +356,7 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
             files.append("reactions.png")
         if results:
             if pictures:
-                _plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
+                plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
                 files.append("peak_von_mises.png")
             pics, fields = _write_outputs(d, results, parts, limit, allowable, cs.frames, export_inp, pictures)
             files += pics

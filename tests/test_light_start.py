@@ -42,3 +42,15 @@ def test_parts_computes_volumes_once(tmp_path, monkeypatch):
     heavy = sorted(m for m in mods if m.split(".")[0] in HEAVY)
     assert not heavy, f"rigfem parts (cached volumes) imported {heavy[:8]}"
     assert (tmp_path / "volumes").is_dir()
+
+
+def test_a_command_imports_only_its_own_module():
+    """``rigfem parts`` builds the parser of its own subcommand only, and reads the installed
+    version (importlib.metadata) only for ``--version``."""
+    code = ("import sys\nfrom rigfem.cli import main\nmain(['parts'])\n"
+            "print(sorted(m for m in sys.modules if m.startswith('rigfem.cli.')), 'importlib.metadata' in sys.modules)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-500:]
+    assert r.stdout.splitlines()[-1] == "['rigfem.cli.exitcodes', 'rigfem.cli.parts', 'rigfem.cli.progress'] False"
+    r = subprocess.run([sys.executable, "-m", "rigfem", "--version"], capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout.startswith("rigfem 0.") and r.stderr == ""

@@ -39,10 +39,12 @@ COMMANDS: dict[str, str] = {
 }
 
 
-def _available() -> dict[str, object]:
+def _available(only: str | None = None) -> dict[str, object]:
     """Every subcommand module, for the command list: each is light at import (its heavy imports
-    are inside ``run``), so ``rigfem --help`` loads no FE, mesh or plotting code."""
-    return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in COMMANDS}
+    are inside ``run``), so ``rigfem --help`` loads no FE, mesh or plotting code.  With ``only``
+    (the command given) just that one: the others' help is never printed then."""
+    names = [only] if only in COMMANDS else COMMANDS
+    return {name: importlib.import_module(f"rigfem.cli.{COMMANDS[name]}") for name in names}
 
 
 class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -81,16 +83,27 @@ def _version() -> str:
         return "unknown (not installed)"
 
 
+class _Version(argparse.Action):
+    """``--version``: the installed version, read (importlib.metadata, ~0.1 s) only when asked."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        print(f"rigfem {_version()}")
+        parser.exit()
+
+
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     parser = _Parser(prog="rigfem", description="Stress checker for the configurable-bar linkage rig.",
                      epilog=TABLE)
     parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     parser.add_argument("--allow-large", action="store_true",
                         help="run jobs whose cost estimate exceeds the machine's memory or a documented limit")
-    parser.add_argument("--version", action="version", version=f"rigfem {_version()}")
+    parser.add_argument("--version", action=_Version, nargs=0, help="show program's version number and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
-    for name, mod in _available().items():
+    chosen = _available(words[0] if words else None)
+    for name in (n for n in COMMANDS if n not in chosen):  # a name only: its module is not imported
+        sub.add_parser(name)
+    for name, mod in chosen.items():
         p = sub.add_parser(name, help=mod.HELP, description=mod.HELP, epilog=table(getattr(mod, "SUCCESS", None)))
         if words and words[0] == name:  # only the chosen command's options (they may load its defaults)
             mod.add_arguments(p)

@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 from skfem.quadrature import get_quadrature
@@ -33,6 +32,17 @@ from skfem.refdom import RefTet, RefTri
 
 from rigfem.errors import InputError
 from rigfem.material import lame
+from rigfem.mesh.cache import (
+    array_digest,
+    cache_dir,
+    code_hash,
+    discard,
+    entry_key,
+    load_arrays,
+    read_entry,
+    save_arrays,
+    write_entry,
+)
 from rigfem.mesh.partmesh import PartMesh, quadratic
 
 TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
@@ -89,8 +99,26 @@ def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
         return FEMesh(p, t, surfaces, 1, len(p))
     nodes, elements, surf2 = quadratic(dataclasses.replace(mesh, points=p, tets=t, surfaces=surfaces))
     fm = FEMesh(nodes, elements, surf2, 2, len(p))
-    fm.straightened = _straighten_distorted(fm)
+    fm.straightened = _straighten_cached(fm)
     return fm
+
+
+def _straighten_cached(fm: FEMesh) -> int:
+    """:func:`_straighten_distorted` through a verified cache entry keyed by the P2 mesh: the
+    elements it straightened (a mid-node goes to its chord's midpoint, which depends on the corners
+    only), so a warm check skips the Jacobian test of every curved element."""
+    inputs = {"mesh": array_digest(fm.nodes, fm.elements), "code": code_hash("fe/assembly.py")}
+    folder = cache_dir() / "straightened" / entry_key(inputs)
+    if read_entry(folder, inputs) is not None:
+        bad = load_arrays(folder, ("elements",))["elements"]
+        if bad.ndim == 1 and bad.dtype.kind == "i" and np.all((bad >= 0) & (bad < len(fm.elements))):
+            _to_chords(fm, bad)
+            fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+            return len(bad)
+        discard(folder, "element numbers out of range")
+    bad = _straighten_distorted(fm)
+    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"elements": bad}))
+    return len(bad)
 
 
 def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
@@ -100,26 +128,33 @@ def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
     return x[el[:, 4:]] - 0.5 * (x[el[:, TET_EDGES[:, 0]]] + x[el[:, TET_EDGES[:, 1]]])
 
 
-def _straighten_distorted(fm: FEMesh) -> int:
+def _to_chords(fm: FEMesh, elems: np.ndarray) -> None:
+    """Move the mid-edge nodes of ``elems`` to the midpoints of their edges."""
+    el = fm.elements[elems]
+    fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
+
+
+def _straighten_distorted(fm: FEMesh) -> np.ndarray:
     """Mark curved elements; move the mid-nodes of distorted ones back to their chords.
 
     Checks det J at the 10 nodes and the 11 points of the degree-4 rule against the straight
-    element's; repeats while straightening an edge distorts a neighbour.  Returns the count.
+    element's; repeats while straightening an edge distorts a neighbour.  Returns the elements
+    straightened.
     """
     L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
-    done = 0
+    done = [np.zeros(0, np.int64)]
     for _ in range(10):
         fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
         idx = np.flatnonzero(fm.curved)
-        _, det0 = bary_gradients(_subset(fm, idx))
-        bad = idx[(_curved_J(fm, L, idx)[1].min(1) < MIN_JACOBIAN * det0)]
+        x = fm.nodes[fm.elements[idx, :4]]
+        det0 = _det3(np.swapaxes(x[:, 1:] - x[:, :1], 1, 2))
+        bad = idx[(_det3(_curved_jacobian(fm, L, idx)).min(1) < MIN_JACOBIAN * det0)]
         if not len(bad):
-            return done
-        el = fm.elements[bad]
-        fm.nodes[el[:, 4:]] = 0.5 * (fm.nodes[el[:, TET_EDGES[:, 0]]] + fm.nodes[el[:, TET_EDGES[:, 1]]])
-        done += len(bad)
+            return np.concatenate(done)
+        _to_chords(fm, bad)
+        done.append(bad)
     fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
-    return done
+    return np.concatenate(done)
 
 
 def tet_quadrature(degree: int) -> tuple[np.ndarray, np.ndarray]:
@@ -171,10 +206,24 @@ def _ref_grads(L: np.ndarray) -> np.ndarray:
     return dL[..., 1:] - dL[..., :1]
 
 
+def _curved_jacobian(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> np.ndarray:
+    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) of P2 elements."""
+    return np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
+
+
 def _curved_J(fm: FEMesh, L: np.ndarray, elems: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Isoparametric Jacobians J[k, d] = ∂x_d/∂ξ_k (m, nq, 3, 3) and det J (m, nq) of P2 elements."""
-    J = np.einsum("qak,mad->mqkd", _ref_grads(L), fm.nodes[fm.elements[elems]], optimize=True)
+    """Isoparametric Jacobians (m, nq, 3, 3) and det J (m, nq) of P2 elements (LAPACK's det: assembly)."""
+    J = _curved_jacobian(fm, L, elems)
     return J, np.linalg.det(J)
+
+
+def _det3(J: np.ndarray) -> np.ndarray:
+    """Determinants (...) of 3 × 3 matrices (..., 3, 3) by the rule of Sarrus: a tenth of LAPACK's
+    time on millions of small matrices (the distortion test of every curved element)."""
+    a, b, c = J[..., 0, :], J[..., 1, :], J[..., 2, :]
+    return (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
+            - a[..., 1] * (b[..., 0] * c[..., 2] - b[..., 2] * c[..., 0])
+            + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
 
 
 def geometry(fm: FEMesh, L: np.ndarray, elems: np.ndarray | slice = slice(None),
@@ -222,6 +271,8 @@ def stiffness(fm: FEMesh, E: float, nu: float, chunk: int = 8192) -> sp.csr_matr
     Element matrices are computed and summed straight into the node-block (3×3)
     sparsity pattern by a compiled kernel; no COO triplets are formed.
     """
+    from rigfem.fe.kernels import add_elastic_blocks  # numba: loaded when a matrix is assembled
+
     lam, mu = lame(E, nu)
     L, W = tet_quadrature(2 * (fm.order - 1))
     indptr, indices, pos = block_pattern(fm.elements, len(fm.nodes))
@@ -229,89 +280,15 @@ def stiffness(fm: FEMesh, E: float, nu: float, chunk: int = 8192) -> sp.csr_matr
     for s in range(0, len(fm.elements), chunk):
         sl = slice(s, s + chunk)
         dN, det = geometry(fm, L, sl)
-        _add_elastic_blocks(dN, det * W[None, :], lam, mu, pos[sl], data)
+        add_elastic_blocks(dN, det * W[None, :], lam, mu, pos[sl], data)
     return sp.bsr_matrix((data, indices, indptr), shape=(fm.ndof, fm.ndof)).tocsr()
 
 
 def block_pattern(elements: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Node-level CSR pattern (indptr, indices) and each element pair's block index (M, nloc, nloc)."""
-    return _block_pattern(np.ascontiguousarray(elements, dtype=np.int64), n)
+    from rigfem.fe.kernels import block_pattern as compiled
 
-
-@numba.njit(cache=True)
-def _block_pattern(el, n):  # pragma: no cover - compiled
-    m, k = el.shape
-    eptr = np.zeros(n + 1, np.int64)  # node -> elements (counting sort)
-    for e in range(m):
-        for a in range(k):
-            eptr[el[e, a] + 1] += 1
-    eptr = np.cumsum(eptr)
-    elist = np.empty(eptr[-1], np.int64)
-    fill = eptr[:-1].copy()
-    for e in range(m):
-        for a in range(k):
-            elist[fill[el[e, a]]] = e
-            fill[el[e, a]] += 1
-    mark = -np.ones(n, np.int64)
-    indptr = np.zeros(n + 1, np.int64)
-    for r in range(n):  # count distinct neighbours
-        c = 0
-        for p in range(eptr[r], eptr[r + 1]):
-            for b in range(k):
-                j = el[elist[p], b]
-                if mark[j] != r:
-                    mark[j] = r
-                    c += 1
-        indptr[r + 1] = indptr[r] + c
-    indices = np.empty(indptr[-1], np.int32)
-    mark[:] = -1
-    for r in range(n):
-        c = indptr[r]
-        for p in range(eptr[r], eptr[r + 1]):
-            for b in range(k):
-                j = el[elist[p], b]
-                if mark[j] != r:
-                    mark[j] = r
-                    indices[c] = j
-                    c += 1
-        indices[indptr[r]:indptr[r + 1]] = np.sort(indices[indptr[r]:indptr[r + 1]])
-    pos = np.empty((m, k, k), np.int64)
-    for e in range(m):
-        for a in range(k):
-            r = el[e, a]
-            row = indices[indptr[r]:indptr[r + 1]]
-            for b in range(k):
-                pos[e, a, b] = indptr[r] + np.searchsorted(row, el[e, b])
-    return indptr, indices, pos
-
-
-@numba.njit(cache=True)
-def _add_elastic_blocks(dN, w, lam, mu, pos, data):  # pragma: no cover - compiled
-    """data[pos[e, a, b]] += ∫ (λ ∇N_a ⊗ ∇N_b + μ ∇N_b ⊗ ∇N_a + μ (∇N_a·∇N_b) I) for every element e."""
-    m, nq, nloc, _ = dN.shape
-    G = np.empty((3, 3))
-    for e in range(m):
-        for a in range(nloc):
-            for b in range(a, nloc):  # block (b, a) is the transpose of block (a, b)
-                G[:, :] = 0.0  # G[i, j] = Σ_q w ∂_i N_a ∂_j N_b
-                for q in range(nq):
-                    wq = w[e, q]
-                    for i in range(3):
-                        gi = wq * dN[e, q, a, i]
-                        for j in range(3):
-                            G[i, j] += gi * dN[e, q, b, j]
-                tr = mu * (G[0, 0] + G[1, 1] + G[2, 2])
-                p = pos[e, a, b]
-                pt = pos[e, b, a]
-                for i in range(3):
-                    for j in range(3):
-                        v = lam * G[i, j] + mu * G[j, i]
-                        data[p, i, j] += v
-                        if b != a:
-                            data[pt, j, i] += v
-                    data[p, i, i] += tr
-                    if b != a:
-                        data[pt, i, i] += tr
+    return compiled(np.ascontiguousarray(elements, dtype=np.int64), n)
 
 
 def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:

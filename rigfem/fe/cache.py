@@ -20,7 +20,9 @@ import numpy as np
 
 from rigfem.errors import ComputeError
 from rigfem.fe.solution import Solution
+from rigfem.fe.tensors import von_mises
 from rigfem.mesh.cache import (
+    array_digest,
     cache_dir,
     code_hash,
     discard,
@@ -34,7 +36,7 @@ from rigfem.mesh.mesher import MESH_CODE
 
 #: the source files that compute a solution (with the mesh's): an edit invalidates the entries
 SOLUTION_CODE = (*MESH_CODE, "material.py", "fe/assembly.py", "fe/forces.py", "fe/supports.py", "fe/solver.py",
-                 "fe/model.py", "fe/stress.py", "fe/solution.py", "fe/cache.py")
+                 "fe/kernels.py", "fe/model.py", "fe/stress.py", "fe/solution.py", "fe/cache.py")
 _ARRAYS = ("F", "U", "reactions", "nodal_stress", "residuals", "backward_errors")
 
 
@@ -69,17 +71,44 @@ def _folder(inputs: dict) -> Path:
 def check_energy(sol: Solution) -> str:
     """Why ``sol`` cannot be right ("" if it can): every array finite, and every load column
     with a force on an unsupported DOF storing positive strain energy ``U·(F + reactions) = UᵀKU``."""
-    bad = [k for k in _ARRAYS if not np.all(np.isfinite(getattr(sol, k)))]
+    # a NaN or an infinity anywhere makes the sum non-finite (one pass, no mask the size of the array)
+    bad = [k for k in _ARRAYS if not np.isfinite(np.sum(getattr(sol, k)))]
     if bad:
         return f"non-finite values in {', '.join(bad)}"
-    free = np.ones(len(sol.F), bool)
-    for d in sol.support_dofs.values():
-        free[d] = False
-    peak = np.abs(sol.F[free]).max(axis=0, initial=0.0)
+    held = np.unique(np.concatenate([np.ravel(d) for d in sol.support_dofs.values()] or [np.zeros(0, int)]))
+    F = np.abs(sol.F)
+    F[held.astype(np.int64)] = 0.0  # the loads on unsupported DOFs
+    peak = F.max(axis=0, initial=0.0)
     loaded = peak > 1e-12 * peak.max(initial=0.0)  # not a column of round-off (a relieved self-balance)
-    energy = np.einsum("ik,ik->k", sol.U, sol.F + sol.reactions)
+    energy = np.einsum("ik,ik->k", sol.U, sol.F) + np.einsum("ik,ik->k", sol.U, sol.reactions)
     zero = np.flatnonzero(loaded & ~(energy > 0))
     return f"load case(s) {zero.tolist()} carry load but store no strain energy" if zero.size else ""
+
+
+def peak_sweep(sol: Solution, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`Solution.peak_sweep` of a cached solution through the cache: the peak von Mises (n,)
+    and its node (n,) of every row of C (n, k).  A stored sweep is used only if every stored peak
+    is the von Mises stress of the combination at the stored node (recomputed here)."""
+    if not sol.key:
+        return sol.peak_sweep(C)
+    C = np.atleast_2d(np.asarray(C, dtype=float))
+    inputs = {"solution": sol.key, "C": array_digest(C), "code": code_hash(*SOLUTION_CODE, "fe/tensors.py")}
+    folder = cache_dir() / "sweeps" / entry_key(inputs)
+    d = read_entry(folder, inputs)
+    if d is not None:
+        try:
+            got = load_arrays(d, ("peak", "node"))
+            vals, nodes = got["peak"], got["node"]
+            at = von_mises(np.einsum("rk,krc->rc", C, sol.nodal_stress[:, nodes])) if len(C) else vals
+            if vals.shape == (len(C),) and np.allclose(at, vals, rtol=1e-9, atol=0.0):
+                return vals, nodes
+            why = "a stored peak is not the stress at its node"
+        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
+            why = f"unreadable: {type(e).__name__}"
+        discard(d, why)
+    vals, nodes = sol.peak_sweep(C)
+    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"peak": vals, "node": nodes}))
+    return vals, nodes
 
 
 def load_solution(model, inputs: dict) -> Solution | None:
@@ -93,7 +122,7 @@ def load_solution(model, inputs: dict) -> Solution | None:
         with np.load(d / "support_dofs.npz", allow_pickle=False) as z:
             dofs = {k: z[k] for k in z.files}
         sol = Solution(model=model, support_dofs=dofs, method=info["method"], free_body=info["free_body"],
-                       times={**info["times"], "cache": 1.0}, **arrays)
+                       times={**info["times"], "cache": 1.0}, key=d.name, **arrays)
         why = "" if sol.U.shape[0] == model.mesh.ndof else "another mesh size"
         why = why or check_energy(sol)
     except (OSError, ValueError, KeyError, TypeError) as e:
@@ -129,4 +158,5 @@ def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol:
         raise ComputeError(f"the solution of part {model.part.name} cannot be right: {why}")
     if inputs is not None:
         save_solution(sol, inputs)
+        sol.key = _folder(inputs).name
     return sol

@@ -19,12 +19,23 @@ import time
 
 import numpy as np
 
-from rigfem.fe.cache import cached_solve
-from rigfem.fe.forces import BearingLoad, Inertia
-from rigfem.fe.model import Model, build_model, load_matrix
+from rigfem.fe.cache import cached_solve, peak_sweep
+from rigfem.fe.forces import BearingLoad, Inertia, body_basis, body_coefficients
+from rigfem.fe.model import Model, build_model
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
+from rigfem.mesh.cache import (
+    array_digest,
+    cache_dir,
+    code_hash,
+    discard,
+    entry_key,
+    load_arrays,
+    read_entry,
+    save_arrays,
+    write_entry,
+)
 from rigfem.mesh.mesher import MeshSettings, mesh_part, prefetch
 from rigfem.mesh.partmesh import PartMesh
 from rigfem.rig.parts import load_part
@@ -89,6 +100,25 @@ def _resultants(x: np.ndarray, F: np.ndarray, about: np.ndarray) -> np.ndarray:
     return np.concatenate([f.sum(0), moment], axis=0)
 
 
+def _basis_resultants(model: Model, c: np.ndarray) -> np.ndarray:
+    """Force and moment about ``c`` (6, 12) of each of the model's body-force basis vectors
+    (:func:`rigfem.fe.forces.body_basis`; a body load's resultant is this times its 12 weights),
+    through a verified cache entry keyed by the mesh: a warm check assembles no body force.  A
+    stored matrix is used only if a unit acceleration's force is the part's mass (ρ × volume)."""
+    fm, rho = model.mesh, float(model.material.density)
+    inputs = {"mesh": array_digest(fm.nodes, fm.elements), "density": rho,
+              "code": code_hash("fe/assembly.py", "fe/forces.py", "fe/partcase.py")}
+    folder = cache_dir() / "body_resultants" / entry_key(inputs)
+    if read_entry(folder, inputs) is not None:
+        RB = load_arrays(folder, ("RB",))["RB"]
+        if RB.shape == (6, 12) and np.allclose(RB[:3, :3], rho * model.volume * np.eye(3), rtol=1e-6, atol=0.0):
+            return RB
+        discard(folder, "a unit acceleration's force is not the part's mass")
+    RB = _resultants(fm.nodes, body_basis(fm, rho)[0], c)
+    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"RB": RB}))
+    return RB
+
+
 def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndarray]:
     """Each load plus the rigid-acceleration inertia field that cancels its resultant.
 
@@ -99,10 +129,11 @@ def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndar
     """
     x = model.mesh.nodes
     c = x.mean(0)
+    RB = _basis_resultants(model, c)
     R = np.zeros((6, len(loads)))
     body = [k for k, ld in enumerate(loads) if isinstance(ld, Inertia)]
     if body:
-        R[:, body] = _resultants(x, load_matrix(model, [loads[k] for k in body]), c)
+        R[:, body] = RB @ np.stack([body_coefficients(loads[k], c) for k in body], axis=1)
     for k, ld in enumerate(loads):
         if isinstance(ld, BearingLoad):
             f = np.asarray(ld.force, float)
@@ -110,7 +141,7 @@ def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndar
             R[3:, k] = np.cross(np.asarray(model.part.holes[ld.hole].center, float) - c, f)
     unit = [Inertia(a0=tuple(e), origin=tuple(c)) for e in np.eye(3)]
     unit += [Inertia(alpha=tuple(e), origin=tuple(c)) for e in np.eye(3)]
-    G = _resultants(x, load_matrix(model, unit), c)  # (6, 6): resultant per unit rigid acceleration
+    G = RB @ np.stack([body_coefficients(u, c) for u in unit], axis=1)  # (6, 6): per unit rigid acceleration
     acc = -np.linalg.solve(G, R)  # (6, k)
     cases = [[ld, Inertia(a0=tuple(a[:3]), alpha=tuple(a[3:]), origin=tuple(c))]
              for ld, a in zip(loads, acc.T)]
@@ -248,7 +279,7 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
             ratio = case.mass_kg / fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
             coef[:, unique[u]] += ratio * case.coef[:, j]
         unbalanced = imbalance(model, coef, R, scale) if free else (0.0, 0.0)
-        vm_rows, peak_nodes = sol.peak_sweep(coef)
+        vm_rows, peak_nodes = peak_sweep(sol, coef)
         row = int(np.argmax(vm_rows))
         nodes = hist = None
         # the stress cycle at every node that peaks at some angle (an original-mode case's rows are

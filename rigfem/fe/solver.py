@@ -24,23 +24,27 @@ True
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 import weakref
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from rigfem.errors import ComputeError, InputError
 
-try:
-    import pypardiso
-except ImportError:  # pragma: no cover - platform without MKL
-    pypardiso = None
-else:
+@functools.lru_cache(maxsize=None)
+def pardiso():
+    """pypardiso, imported on first use (loading MKL takes a tenth of a second a warm check,
+    which solves nothing, does not need), or None on a platform without MKL."""
+    try:
+        import pypardiso
+    except ImportError:  # pragma: no cover - platform without MKL
+        return None
     # pypardiso searches the whole prefix for libmkl_rt on every new solver unless told where it is
     os.environ.setdefault("PYPARDISO_MKL_RT", pypardiso.ps.libmkl._name)
+    return pypardiso
 
 
 DIRECT_MAX_DOF = 600_000
@@ -57,7 +61,7 @@ def default_method(n: int) -> str:
     """The method ``"auto"`` resolves to for ``n`` unknowns."""
     if n > DIRECT_MAX_DOF:
         return "amg"
-    return "pardiso" if pypardiso is not None else "superlu"
+    return "pardiso" if pardiso() is not None else "superlu"
 
 
 class LinearSolver:
@@ -71,7 +75,7 @@ class LinearSolver:
         self.A.sort_indices()
         n = self.A.shape[0]
         self.method = default_method(n) if method == "auto" else method
-        if self.method == "pardiso" and pypardiso is None:
+        if self.method == "pardiso" and pardiso() is None:
             raise InputError("solver = 'pardiso' is not available here (pypardiso does not import)")
         self.rtol = rtol
         self.maxiter = maxiter
@@ -81,7 +85,7 @@ class LinearSolver:
         self._norm_A = float(abs(self.A).sum(1).max()) if self.A.nnz else 0.0
         t0 = time.perf_counter()
         if self.method == "pardiso":
-            self._ps = pypardiso.PyPardisoSolver(mtype=2)  # real SPD, upper triangle
+            self._ps = pardiso().PyPardisoSolver(mtype=2)  # real SPD, upper triangle
             # MKL keeps the factors outside Python: release them with this solver, or a long run
             # (a sweep, a convergence study, the test suite) accumulates every factorisation
             weakref.finalize(self, self._ps.free_memory, True)
@@ -90,6 +94,8 @@ class LinearSolver:
             self._upper.sort_indices()
             self._ps.factorize(self._upper)
         elif self.method == "superlu":
+            import scipy.sparse.linalg as spla
+
             try:
                 self._lu = spla.splu(self.A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                                      options={"SymmetricMode": True})

@@ -146,6 +146,16 @@ def entry_key(inputs: dict) -> str:
     return hashlib.sha256(json.dumps(_canonical(inputs), sort_keys=True).encode()).hexdigest()[:32]
 
 
+def array_digest(*arrays) -> str:
+    """SHA-256 of arrays (dtype, shape and bytes): an input key's stand-in for large arrays."""
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.data)
+    return h.hexdigest()
+
+
 def discard(folder: Path, why: str) -> None:
     """Remove a bad entry and say so once; the caller computes it again."""
     log.warning("cache entry %s discarded (%s); computing it again", folder, why)

@@ -15,6 +15,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "pages": ["render_page", "markdown_html", "png_uri", "json_script"],
         "viewer": ["viewer_data"],
         "motion": ["motion_plot", "motion_gif", "structural_error_plot"],
+        "picture_cache": ["PICTURE_CODE", "cached"],
         "pictures": ["field_picture", "reactions_plot", "utilisation_plot", "part_pictures", "UTILISATION_SCALE_PCT"],
         "views": ["FieldView", "framing", "render"],
         "vtu": ["SAFETY_CAP", "write_vtu"],
