@@ -11,6 +11,7 @@ line and exit 3, the traceback only with ``--debug``.  Ctrl-C and SIGTERM end qu
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import re
@@ -129,7 +130,8 @@ def main(argv: list[str] | None = None) -> int:
         os.environ[ALLOW_LARGE_ENV] = "1"
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        with heartbeat(_what(args), on_terminal=_quiet_bar(args)):
+        with (contextlib.nullcontext() if getattr(args, "quiet", False) else
+              heartbeat(_what(args), on_terminal=_quiet_bar(args))):   # --quiet: no progress of any kind
             code = int(args._run(args) or 0)
         sys.stdout.flush()
         return code
@@ -164,8 +166,8 @@ def _what(args: argparse.Namespace) -> str:
 
 
 def _quiet_bar(args: argparse.Namespace) -> bool:
-    """True if the command draws no bar of its own on a terminal (check and sweep do, unless --quiet)."""
-    return args.command not in ("check", "sweep") or getattr(args, "quiet", False)
+    """True if the command draws no bar of its own on a terminal (check and sweep do)."""
+    return args.command not in ("check", "sweep")
 
 
 if __name__ == "__main__":

@@ -47,7 +47,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--export-inp", action="store_true",
                    help="also write each part case at its critical crank angle as a CalculiX deck (.inp)")
     p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     p.add_argument("--no-pictures", action="store_true",
                    help="skip the PNG pictures (scripted runs, CI); the report says they were not made")
 

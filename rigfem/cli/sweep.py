@@ -33,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="results/sweep", help="output folder: a new one, or with --force one rigfem "
                                                           "wrote (its stored chunks are reused)")
     p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     p.add_argument("--report-only", action="store_true",
                    help="rewrite the maps, worst list, HTML pages and explorer from the folder's table (no sweep)")
 
