@@ -32,17 +32,7 @@ from skfem.refdom import RefTet, RefTri
 
 from rigfem.errors import InputError
 from rigfem.material import lame
-from rigfem.mesh.cache import (
-    array_digest,
-    cache_dir,
-    code_hash,
-    discard,
-    entry_key,
-    load_arrays,
-    read_entry,
-    save_arrays,
-    write_entry,
-)
+from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
 from rigfem.mesh.partmesh import PartMesh, quadratic
 
 TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
@@ -108,17 +98,15 @@ def _straighten_cached(fm: FEMesh) -> int:
     elements it straightened (a mid-node goes to its chord's midpoint, which depends on the corners
     only), so a warm check skips the Jacobian test of every curved element."""
     inputs = {"mesh": array_digest(fm.nodes, fm.elements), "code": code_hash("fe/assembly.py")}
-    folder = cache_dir() / "straightened" / entry_key(inputs)
-    if read_entry(folder, inputs) is not None:
-        bad = load_arrays(folder, ("elements",))["elements"]
-        if bad.ndim == 1 and bad.dtype.kind == "i" and np.all((bad >= 0) & (bad < len(fm.elements))):
-            _to_chords(fm, bad)
-            fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
-            return len(bad)
-        discard(folder, "element numbers out of range")
-    bad = _straighten_distorted(fm)
-    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"elements": bad}))
-    return len(bad)
+    n = len(fm.elements)
+    got, stored = cached_arrays(
+        "straightened", inputs, ("elements",), lambda: {"elements": _straighten_distorted(fm)},
+        lambda a: "" if a["elements"].ndim == 1 and a["elements"].dtype.kind == "i"
+        and np.all((a["elements"] >= 0) & (a["elements"] < n)) else "element numbers out of range")
+    if stored:  # read from the entry: move them (when computed, _straighten_distorted has)
+        _to_chords(fm, got["elements"])
+        fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
+    return len(got["elements"])
 
 
 def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:

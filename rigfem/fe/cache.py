@@ -24,6 +24,7 @@ from rigfem.fe.tensors import von_mises
 from rigfem.mesh.cache import (
     array_digest,
     cache_dir,
+    cached_arrays,
     code_hash,
     discard,
     entry_key,
@@ -93,22 +94,16 @@ def peak_sweep(sol: Solution, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return sol.peak_sweep(C)
     C = np.atleast_2d(np.asarray(C, dtype=float))
     inputs = {"solution": sol.key, "C": array_digest(C), "code": code_hash(*SOLUTION_CODE, "fe/tensors.py")}
-    folder = cache_dir() / "sweeps" / entry_key(inputs)
-    d = read_entry(folder, inputs)
-    if d is not None:
-        try:
-            got = load_arrays(d, ("peak", "node"))
-            vals, nodes = got["peak"], got["node"]
-            at = von_mises(np.einsum("rk,krc->rc", C, sol.nodal_stress[:, nodes])) if len(C) else vals
-            if vals.shape == (len(C),) and np.allclose(at, vals, rtol=1e-9, atol=0.0):
-                return vals, nodes
-            why = "a stored peak is not the stress at its node"
-        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
-            why = f"unreadable: {type(e).__name__}"
-        discard(d, why)
-    vals, nodes = sol.peak_sweep(C)
-    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"peak": vals, "node": nodes}))
-    return vals, nodes
+
+    def at_nodes(a: dict) -> str:
+        vals, nodes = a["peak"], a["node"]
+        at = von_mises(np.einsum("rk,krc->rc", C, sol.nodal_stress[:, nodes])) if len(C) else vals
+        ok = vals.shape == (len(C),) and np.allclose(at, vals, rtol=1e-9, atol=0.0)
+        return "" if ok else "a stored peak is not the stress at its node"
+
+    got, _ = cached_arrays("sweeps", inputs, ("peak", "node"),
+                           lambda: dict(zip(("peak", "node"), sol.peak_sweep(C))), at_nodes)
+    return got["peak"], got["node"]
 
 
 def load_solution(model, inputs: dict) -> Solution | None:

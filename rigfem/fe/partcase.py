@@ -25,17 +25,7 @@ from rigfem.fe.model import Model, build_model
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
-from rigfem.mesh.cache import (
-    array_digest,
-    cache_dir,
-    code_hash,
-    discard,
-    entry_key,
-    load_arrays,
-    read_entry,
-    save_arrays,
-    write_entry,
-)
+from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
 from rigfem.mesh.mesher import MeshSettings, mesh_part, prefetch
 from rigfem.mesh.partmesh import PartMesh
 from rigfem.rig.parts import load_part
@@ -108,15 +98,12 @@ def _basis_resultants(model: Model, c: np.ndarray) -> np.ndarray:
     fm, rho = model.mesh, float(model.material.density)
     inputs = {"mesh": array_digest(fm.nodes, fm.elements), "density": rho,
               "code": code_hash("fe/assembly.py", "fe/forces.py", "fe/partcase.py")}
-    folder = cache_dir() / "body_resultants" / entry_key(inputs)
-    if read_entry(folder, inputs) is not None:
-        RB = load_arrays(folder, ("RB",))["RB"]
-        if RB.shape == (6, 12) and np.allclose(RB[:3, :3], rho * model.volume * np.eye(3), rtol=1e-6, atol=0.0):
-            return RB
-        discard(folder, "a unit acceleration's force is not the part's mass")
-    RB = _resultants(fm.nodes, body_basis(fm, rho)[0], c)
-    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, {"RB": RB}))
-    return RB
+    mass = rho * model.volume * np.eye(3)
+    got, _ = cached_arrays(
+        "body_resultants", inputs, ("RB",), lambda: {"RB": _resultants(fm.nodes, body_basis(fm, rho)[0], c)},
+        lambda a: "" if a["RB"].shape == (6, 12) and np.allclose(a["RB"][:3, :3], mass, rtol=1e-6, atol=0.0)
+        else "a unit acceleration's force is not the part's mass")
+    return got["RB"]
 
 
 def relieved_cases(model: Model, loads: list) -> tuple[list, np.ndarray, np.ndarray]:

@@ -226,3 +226,24 @@ def save_arrays(folder: Path, arrays: dict[str, np.ndarray]) -> None:
 def load_arrays(folder: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     """Read the arrays :func:`save_arrays` wrote (no pickles)."""
     return {n: np.load(folder / f"{n}.npy", allow_pickle=False) for n in names}
+
+
+def cached_arrays(kind: str, inputs: dict, names: tuple[str, ...], compute: Callable[[], dict[str, np.ndarray]],
+                  check: Callable[[dict[str, np.ndarray]], str]) -> tuple[dict[str, np.ndarray], bool]:
+    """The arrays ``names`` that ``compute()`` returns, through the verified entry
+    ``cache_dir()/kind/<key of inputs>``, and whether they were read from it.  A stored entry is
+    used only if ``check(arrays)`` returns "" (else the reason: it is discarded and computed again)."""
+    folder = cache_dir() / kind / entry_key(inputs)
+    if read_entry(folder, inputs) is not None:
+        try:
+            got = load_arrays(folder, names)
+            why = check(got)
+        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
+            why = f"unreadable: {type(e).__name__}"
+        if not why:
+            return got, True
+        discard(folder, why)
+    arrays = compute()
+    write_entry(folder, inputs, lambda tmp: save_arrays(tmp, arrays))
+    return arrays, False
+
