@@ -68,9 +68,12 @@ def command_line() -> str:
 
 
 def cold_env(tmp: str | Path, **extra: str) -> dict:
-    """Environment of a cold run: empty rigfem cache and empty numba cache under ``tmp``."""
+    """Environment of a cold run: empty rigfem cache and empty numba cache under ``tmp``; Python's
+    bytecode as a user has it (written and reused: a regular ``pip install`` compiles it at install),
+    whatever the calling shell says (``PYTHONDONTWRITEBYTECODE`` would recompile rigfem every run)."""
     tmp = Path(tmp)
-    return {**os.environ, "RIGFEM_CACHE": str(tmp / "rigfem-cache"), "NUMBA_CACHE_DIR": str(tmp / "numba-cache"),
+    base = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    return {**base, "RIGFEM_CACHE": str(tmp / "rigfem-cache"), "NUMBA_CACHE_DIR": str(tmp / "numba-cache"),
             **extra}
 
 

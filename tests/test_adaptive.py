@@ -64,6 +64,47 @@ def test_straddling_band_is_refined(tmp_path):
     assert "why it stopped" in (tmp_path / "o" / "report.md").read_text()
 
 
+def test_warm_check_starts_where_the_ladder_stopped(tmp_path, monkeypatch, caplog):
+    """The second check of a part that climbed coarse → draft loads the draft level only (the stored
+    ladder outcome), reports the same ladder and peak; a damaged record is discarded and climbed again."""
+    import logging
+
+    import rigfem.fe.partcase as partcase
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    base = tmp_path / "base.toml"
+    base.write_text(FINAL_CM)
+    args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "draft", "--samples", "72",
+            "--frames", "0", "--quiet"]
+    main(["check", str(base), "--out", str(tmp_path / "b"), *args])
+    low = json.loads((tmp_path / "b" / "report.json").read_text())["parts"][0]
+    scene = tmp_path / "edge.toml"  # the limit on the coarse peak: the plate climbs to draft
+    scene.write_text(FINAL_CM + f"[check]\nlimit_factor = {low['peak_mpa'] / (2 * low['limit_mpa'])!r}\n")
+    solved = []
+    real = partcase._solve_group
+    monkeypatch.setattr(partcase, "_solve_group", lambda g, s, *a: solved.append(a[-1]) or real(g, s, *a))
+
+    def check(out: str) -> dict:
+        solved.clear()
+        main(["check", str(scene), "--out", str(tmp_path / out), *args])
+        return json.loads((tmp_path / out / "report.json").read_text())["parts"][0]
+
+    first = check("o1")
+    assert solved == ["coarse", "draft"]
+    second = check("o2")
+    assert solved == ["draft"]  # the coarse level it discarded is not loaded again
+    assert second["mesh"]["ladder"][0] == first["mesh"]["ladder"][0]
+    assert [s["level"] for s in second["mesh"]["ladder"]] == ["coarse", "draft"]
+    assert (second["peak_mpa"], second["verdict"], second["mesh"]["dofs"]) == \
+        (first["peak_mpa"], first["verdict"], first["mesh"]["dofs"])
+    (rec,) = (tmp_path / "cache" / "ladders").rglob("ladder.json")
+    rec.write_text(rec.read_text().replace('"index": 1', '"index": 0'))  # damaged
+    with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
+        third = check("o3")
+    assert solved == ["coarse", "draft"] and "discarded" in caplog.text
+    assert third["peak_mpa"] == first["peak_mpa"]
+
+
 def test_no_adaptive_flag_and_bad_value(tmp_path, capsys):
     args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "draft", "--samples", "72",
             "--frames", "0", "--quiet"]

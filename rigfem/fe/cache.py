@@ -13,6 +13,7 @@ invariant no stored file can fake: a non-zero load does positive work.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 from pathlib import Path
 
@@ -28,7 +29,7 @@ from rigfem.mesh.cache import (
     code_hash,
     discard,
     entry_key,
-    load_arrays,
+    read_arrays,
     read_entry,
     save_arrays,
     write_entry,
@@ -108,12 +109,12 @@ def peak_sweep(sol: Solution, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def load_solution(model, inputs: dict) -> Solution | None:
     """The cached solution of ``inputs`` for ``model``, or None (missing, or a bad entry: discarded)."""
-    d = read_entry(_folder(inputs), inputs)
-    if d is None:
+    d = _folder(inputs)
+    arrays = read_arrays(d, inputs, _ARRAYS)
+    if arrays is None:
         return None
     try:
         info = json.loads((d / "info.json").read_text())
-        arrays = load_arrays(d, _ARRAYS)
         with np.load(d / "support_dofs.npz", allow_pickle=False) as z:
             dofs = {k: z[k] for k in z.files}
         sol = Solution(model=model, support_dofs=dofs, method=info["method"], free_body=info["free_body"],
@@ -135,6 +136,48 @@ def save_solution(sol: Solution, inputs: dict) -> None:
         (tmp / "info.json").write_text(json.dumps({"method": sol.method, "free_body": sol.free_body,
                                                    "times": sol.times}))
     write_entry(_folder(inputs), inputs, write)
+
+
+def ladder_inputs(group: list[tuple[str, object]], levels: list[tuple[str, object]], solver: str) -> dict:
+    """Everything that decides where a part geometry's mesh ladder stops: its (mode, case) pairs
+    (arrays by digest), every level's settings, the solver, and the code of the whole package
+    (the mesh, the solution and the verdict layer's judge all take part)."""
+    def case(mode: str, c) -> dict:
+        return {"mode": mode, **{f.name: array_digest(v) if isinstance(v, np.ndarray) else _plain(v)
+                                 for f in dataclasses.fields(c) for v in [getattr(c, f.name)]}}
+    return {"cases": [case(m, c) for m, c in group], "levels": [[n, _plain(s)] for n, s in levels],
+            "solver": solver, "code": _package_code()}
+
+
+@functools.lru_cache(maxsize=1)
+def _package_code() -> str:
+    return code_hash("**/*.py")
+
+
+def read_ladder(inputs: dict) -> dict | None:
+    """The stored outcome of a ladder (:func:`save_ladder`), or None (missing or bad: discarded)."""
+    d = read_entry(_ladder_folder(inputs), inputs)
+    if d is None:
+        return None
+    try:
+        rec = json.loads((d / "ladder.json").read_text())
+        names = [n for n, _ in inputs["levels"]]
+        ok = (0 <= rec["index"] < len(names) and rec["level"] == names[rec["index"]]
+              and [s["level"] for s in rec["ladder"]] == names[:rec["index"] + 1])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        return discard(d, f"unreadable: {type(e).__name__}")
+    return rec if ok else discard(d, "its levels are not the ladder's")
+
+
+def save_ladder(inputs: dict, index: int, ladder: list[dict]) -> None:
+    """Store where a ladder stopped (``index`` into its levels) and what each level cost, so a
+    warm check loads that level's solution only, not the coarser ones it discarded."""
+    rec = {"index": index, "level": ladder[index]["level"], "ladder": ladder}
+    write_entry(_ladder_folder(inputs), inputs, lambda tmp: (tmp / "ladder.json").write_text(json.dumps(rec)))
+
+
+def _ladder_folder(inputs: dict) -> Path:
+    return cache_dir() / "ladders" / entry_key(inputs)
 
 
 def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10,

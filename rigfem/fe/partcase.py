@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from rigfem.fe.cache import cached_solve, peak_sweep
+from rigfem.fe.cache import cached_solve, ladder_inputs, peak_sweep, read_ladder, save_ladder
 from rigfem.fe.forces import BearingLoad, Inertia, body_basis, body_coefficients
 from rigfem.fe.model import Model, build_model
 from rigfem.fe.solution import Solution
@@ -186,18 +186,26 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     With ``settled`` (a :class:`CaseResult` → bool, the verdict layer's judge) every part geometry
     climbs ``settings.levels()`` (coarse first) and stops at the first level where all its cases
     are settled, or at the last level (the cap); without it, it is solved at ``settings`` only.
+    Where the ladder stopped is stored (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases,
+    the levels and the code): a later check of the same cases starts at that level.
     ``on_stage(text)`` hears 'meshing part X' and 'solving part X' (with the level) as each begins.
     """
     geo: dict[tuple, list[tuple[str, PartCase]]] = {}
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
     levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
+    # where each geometry's ladder stopped before (a warm check starts there: the levels it
+    # discarded are not loaded again)
+    keys = {g: ladder_inputs(group, levels, solver) if len(levels) > 1 else None for g, group in geo.items()}
+    records = {g: read_ladder(k) if k else None for g, k in keys.items()}
+    start = {g: rec["index"] if rec else 0 for g, rec in records.items()}
     # every part's first level meshed ahead, 2 at a time, while the FE works on the first part
-    prefetch([mesh_job(_merged(group), levels[0][1]) for group in geo.values()])
+    prefetch([mesh_job(_merged(group), levels[start[g]][1]) for g, group in geo.items()])
     results = {}
-    for group in geo.values():
-        ladder = []
-        for k, (name, s) in enumerate(levels):
+    for g, group in geo.items():
+        ladder = records[g]["ladder"][:start[g]] if records[g] else []
+        for k in range(start[g], len(levels)):
+            name, s = levels[k]
             t0 = time.perf_counter()
             out = _solve_group(group, s, solver, on_stage, name)
             ladder.append({"level": name, "size_mm": s.size_mm, "local_size_mm": s.near_mm,
@@ -207,6 +215,8 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
             if done or k == len(levels) - 1:
                 break
             out = None  # free this level's model, matrix and factor before the finer level's
+        if keys[g] and k != start[g]:
+            save_ladder(keys[g], k, ladder)
         stopped = ("fixed mesh (no ladder)" if len(levels) == 1 else
                    "decided within the reporting target" if done else "reached the cap")
         for (mode, case), res in zip(group, out):

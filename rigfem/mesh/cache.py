@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import json
 import logging
 import os
@@ -165,27 +166,82 @@ def discard(folder: Path, why: str) -> None:
 def read_entry(folder: Path, inputs: dict) -> Path | None:
     """``folder`` if it holds a verified entry of ``inputs``; None if it is missing or was bad
     (then it is removed and logged).  A hit under the cache folder marks the entry as used."""
+    return folder if _verified(folder, inputs, (), {}) else None
+
+
+def read_arrays(folder: Path, inputs: dict, names: tuple[str, ...]) -> dict[str, np.ndarray] | None:
+    """The arrays ``names`` (:func:`save_arrays`) of a verified entry of ``inputs``, or None as
+    :func:`read_entry`.  Each array's file is read once: its checksum is taken on the very bytes
+    the array is made from (for the hundreds of MB of a part's unit solutions, half the reading)."""
+    got: dict[str, np.ndarray] = {}
+    return got if _verified(folder, inputs, names, got) else None
+
+
+def _verified(folder: Path, inputs: dict, names: tuple[str, ...], got: dict) -> bool:
     if _in_cache(folder) and not usable() or not folder.exists():
-        return None
-    try:
-        man = json.loads((folder / MANIFEST).read_text())
-        files = man["files"]
-        if man["inputs"] != _canonical(inputs):
-            return discard(folder, "made from other inputs")
-        present = {p.name for p in folder.iterdir()} - {MANIFEST}
-        if present != set(files):
-            return discard(folder, f"files {sorted(present ^ set(files))} missing or unexpected")
-        for name, digest in files.items():
-            if file_sha256(folder / name) != digest:
-                return discard(folder, f"{name} does not match its checksum")
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
-        return discard(folder, f"unreadable manifest: {type(e).__name__}")
+        return False
+    why = _why_bad(folder, inputs, {f"{n}.npy": n for n in names}, got)
+    if why:
+        discard(folder, why)
+        return False
     if _in_cache(folder):
         try:
             os.utime(folder / MANIFEST)  # least recently used goes first
         except OSError:
             pass
-    return folder
+    return True
+
+
+def _why_bad(folder: Path, inputs: dict, arrays: dict[str, str], got: dict) -> str:
+    """Why an entry cannot be used ("" if it can); the files named in ``arrays`` are read into ``got``."""
+    try:
+        man = json.loads((folder / MANIFEST).read_text())
+        files = man["files"]
+        if man["inputs"] != _canonical(inputs):
+            return "made from other inputs"
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
+        return f"unreadable manifest: {type(e).__name__}"
+    try:
+        present = {p.name for p in folder.iterdir()} - {MANIFEST}
+        if present != set(files) or not set(arrays) <= present:
+            return f"files {sorted((present ^ set(files)) | (set(arrays) - present))} missing or unexpected"
+        for name, digest in files.items():
+            if name in arrays:
+                buf = _whole(folder / name)
+                if hashlib.sha256(buf).hexdigest() != digest:
+                    return f"{name} does not match its checksum"
+                got[arrays[name]] = _npy(buf)
+            elif file_sha256(folder / name) != digest:
+                return f"{name} does not match its checksum"
+    except (OSError, ValueError, TypeError) as e:
+        return f"unreadable: {type(e).__name__}"
+    return ""
+
+
+def _whole(path: Path) -> bytearray:
+    """A file's bytes, read into one buffer (no copy made later: arrays are views of it)."""
+    buf = bytearray(path.stat().st_size)
+    with open(path, "rb", buffering=0) as fh:
+        view, n = memoryview(buf), 0
+        while n < len(buf):
+            k = fh.readinto(view[n:])
+            if not k:
+                raise ValueError(f"{path.name} shorter than its size")
+            n += k
+    return buf
+
+
+def _npy(buf: bytearray) -> np.ndarray:
+    """The array of a ``.npy`` file's bytes, a view of ``buf`` (no pickles: object arrays refused)."""
+    head = io.BytesIO(bytes(buf[:min(len(buf), 1 << 16)]))
+    version = np.lib.format.read_magic(head)
+    read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+    shape, fortran, dtype = read(head)
+    if dtype.hasobject:
+        raise ValueError("object arrays are not read")
+    count = int(np.prod(shape, dtype=np.int64))
+    a = np.frombuffer(buf, dtype=dtype, count=count, offset=head.tell())
+    return a.reshape(shape, order="F" if fortran else "C")
 
 
 def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bool:
@@ -223,22 +279,17 @@ def save_arrays(folder: Path, arrays: dict[str, np.ndarray]) -> None:
         np.save(folder / f"{name}.npy", np.asarray(a), allow_pickle=False)
 
 
-def load_arrays(folder: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """Read the arrays :func:`save_arrays` wrote (no pickles)."""
-    return {n: np.load(folder / f"{n}.npy", allow_pickle=False) for n in names}
-
-
 def cached_arrays(kind: str, inputs: dict, names: tuple[str, ...], compute: Callable[[], dict[str, np.ndarray]],
                   check: Callable[[dict[str, np.ndarray]], str]) -> tuple[dict[str, np.ndarray], bool]:
     """The arrays ``names`` that ``compute()`` returns, through the verified entry
     ``cache_dir()/kind/<key of inputs>``, and whether they were read from it.  A stored entry is
     used only if ``check(arrays)`` returns "" (else the reason: it is discarded and computed again)."""
     folder = cache_dir() / kind / entry_key(inputs)
-    if read_entry(folder, inputs) is not None:
+    got = read_arrays(folder, inputs, names)
+    if got is not None:
         try:
-            got = load_arrays(folder, names)
             why = check(got)
-        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
+        except (ValueError, KeyError, IndexError, TypeError) as e:
             why = f"unreadable: {type(e).__name__}"
         if not why:
             return got, True

@@ -162,9 +162,7 @@ def _supports(r: CaseResult, fm) -> tuple[list[tuple[np.ndarray, str]], str]:
 
 def _bar(fig, rect, norm, cmap: str, above: str | None, label: str, ticks, fmt, top_axis=None, marks=()) -> None:
     """Horizontal colour bar; ``top_axis`` = (label, function of the value, ticks) adds a second scale."""
-    cm = plt.get_cmap(cmap).copy()
-    if above:
-        cm.set_over(above)
+    cm = plt.get_cmap(cmap).with_extremes(over=above) if above else plt.get_cmap(cmap)
     ax = fig.add_axes(rect)
     cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cm), cax=ax, orientation="horizontal",
                       extend="max" if above else "neither", ticks=ticks)
