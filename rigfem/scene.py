@@ -1,10 +1,14 @@
 """Scene files: a TOML file read as validated, plain data.
 
 The whole file is checked against :mod:`rigfem.schema` first (unknown tables and keys,
-types, ranges); the ``[linkage]`` table becomes a :class:`Scene`: the linkage's type and
-builder arguments, its speed and what it names (masses, a gas force).  Nothing is computed
-here: :func:`rigfem.linkage.mechanisms.build` makes the linkage, the dynamics resolve the
-forces (:func:`rigfem.dynamics.forces.loaded_linkage`).  Keys (lengths mm, angles deg)::
+types, ranges).  Content that passed the same schema before is not checked again: a verified
+cache entry (:mod:`rigfem.mesh.cache`) keyed by the file's SHA-256, the schema's code and
+pydantic's version records the pass, so reading a known scene loads no pydantic (issue 26:
+``rigfem kinematics SCENE`` is a light command).  The ``[linkage]`` table becomes a
+:class:`Scene`: the linkage's type and builder arguments, its speed and what it names
+(masses, a gas force).  Nothing is computed here: :func:`rigfem.linkage.mechanisms.build`
+makes the linkage, the dynamics resolve the forces
+(:func:`rigfem.dynamics.forces.loaded_linkage`).  Keys (lengths mm, angles deg)::
 
     [linkage]
     type = "four-bar"          # four-bar | slider-crank | inverted-slider-crank | quick-return
@@ -26,15 +30,23 @@ Built-in scenes ship in ``rigfem/scenes`` and can be named without path or suffi
 
 from __future__ import annotations
 
+import hashlib
+import math
+import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
+from importlib.metadata import version
 from pathlib import Path
 
-import numpy as np
-from pydantic import ValidationError
+from rigfem.errors import InputError, decode_text, plain
+from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
 
-from rigfem.errors import InputError, plain
-from rigfem.schema import SceneFile, input_error, load_validated
+#: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
+MAX_DEPTH = 8
+#: largest scene file read (bytes)
+MAX_BYTES = 1_000_000
+#: the code a scene's validity depends on (rigfem.schema and the vocabularies it names)
+_SCHEMA_CODE = ("schema.py", "material.py", "settings.py")
 
 _SPEED_KEYS = ("speed_hz", "rpm", "omega_rad_s")
 
@@ -87,16 +99,12 @@ def _speed(t: dict) -> float:
     if k is None:
         return 1.0
     v = float(t[k])
-    return {"speed_hz": v, "rpm": v / 60.0, "omega_rad_s": v / (2 * np.pi)}[k]
+    return {"speed_hz": v, "rpm": v / 60.0, "omega_rad_s": v / (2 * math.pi)}[k]
 
 
 def linkage_params(t: dict) -> dict:
     """The builder arguments (:data:`rigfem.linkage.mechanisms.BUILDERS`) of a ``[linkage]``
     table (raw TOML, validated by rigfem.schema): lengths as floats, pairs as tuples."""
-    try:
-        SceneFile.model_validate({"linkage": t})
-    except ValidationError as exc:
-        raise input_error(exc, {"linkage": t}) from None
     masses = t.get("masses", "rig")
     kwargs: dict = {"masses": None if masses == "none" else "rig"}
     if t.get("bodies"):
@@ -115,10 +123,56 @@ def linkage_params(t: dict) -> dict:
     return kwargs
 
 
+def _depth(obj, level: int = 0) -> int:
+    if level > MAX_DEPTH:
+        return level
+    if isinstance(obj, dict):
+        return max([_depth(v, level + 1) for v in obj.values()] or [level])
+    if isinstance(obj, list):
+        return max([_depth(v, level + 1) for v in obj] or [level])
+    return level
+
+
+def read_toml(path: Path) -> tuple[dict, str]:
+    """Raw TOML of a scene file and the SHA-256 of the bytes it was read from; InputError (one
+    line) if unreadable, binary, not UTF-8, not TOML or nested deeper than :data:`MAX_DEPTH`."""
+    name = plain(str(path), 120)
+    try:
+        blob = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"scene {name!r} cannot be read: {plain(exc.strerror or exc, 80)}") from None
+    if len(blob) > MAX_BYTES:
+        raise InputError(f"scene {name!r} is {len(blob)} bytes; a scene file is at most {MAX_BYTES} bytes")
+    text = decode_text(blob, f"scene {name!r}")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"scene {name!r} is not valid TOML: {plain(exc, 160)}") from None
+    except RecursionError:
+        raise InputError(f"scene {name!r} is nested too deeply (at most {MAX_DEPTH} levels)") from None
+    if _depth(data) > MAX_DEPTH:
+        raise InputError(f"scene {name!r} is nested too deeply (at most {MAX_DEPTH} levels)")
+    return data, hashlib.sha256(blob).hexdigest()
+
+
+def _validate(data: dict, digest: str, name: str) -> None:
+    """Check a scene's raw TOML (``digest``: SHA-256 of its bytes) against :mod:`rigfem.schema`,
+    unless this content passed the same schema (code and pydantic version) before."""
+    inputs = {"scene": digest, "code": code_hash(*_SCHEMA_CODE), "pydantic": version("pydantic")}
+    folder = cache_dir() / "scenes" / entry_key(inputs)
+    if read_entry(folder, inputs) is not None:
+        return
+    from rigfem.schema import validate_scene  # pydantic: loaded for content not validated before
+
+    validate_scene(data, name)
+    write_entry(folder, inputs, lambda d: None)  # only valid content is recorded
+
+
 def load_scene(path_or_name: str | Path) -> Scene:
     """Read a scene file (or built-in scene name) as plain, validated data."""
     p = resolve(path_or_name)
-    data, _ = load_validated(p)
+    data, digest = read_toml(p)
+    _validate(data, digest, p.name)
     t = data["linkage"]
     return Scene(p.stem, t["type"], linkage_params(t), _speed(t), t, float(t.get("alpha_rad_s2", 0.0)),
                  t.get("instant_deg"), bool(t.get("textbook", False)), data,

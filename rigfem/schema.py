@@ -2,7 +2,7 @@
 ranges checked, NaN and infinity refused.
 
 A scene file is read as raw TOML, validated here, and only then turned into plain scene data
-(:mod:`rigfem.scene`) and check settings (:mod:`rigfem.settings`); CLI overrides of the
+(both in :mod:`rigfem.scene`) and check settings (:mod:`rigfem.settings`); CLI overrides of the
 ``[check]`` table go through the same :class:`CheckTable`.  Every problem becomes one
 :class:`~rigfem.errors.InputError` line naming the field (``[check].order``), the value and
 what is allowed; an unknown key gets a did-you-mean.  Units: mm, N, degrees, Hz, kg.
@@ -12,20 +12,14 @@ from __future__ import annotations
 
 import difflib
 import re
-import tomllib
-from pathlib import Path
 from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from rigfem.errors import InputError, decode_text, plain
+from rigfem.errors import InputError, plain
 from rigfem.material import RELIABILITY, SURFACE
 from rigfem.settings import FIDELITY, MODELS, MODES
 
-#: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
-MAX_DEPTH = 8
-#: largest scene file read (bytes)
-MAX_BYTES = 1_000_000
 
 class _Table(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
@@ -269,39 +263,6 @@ def input_error(exc: ValidationError, raw: dict, prefix: str = "") -> InputError
     return InputError(f"{prefix}{_message(first, raw)}{more}")
 
 
-# ----------------------------------------------------------------------------- reading
-def _depth(obj, level: int = 0) -> int:
-    if level > MAX_DEPTH:
-        return level
-    if isinstance(obj, dict):
-        return max([_depth(v, level + 1) for v in obj.values()] or [level])
-    if isinstance(obj, list):
-        return max([_depth(v, level + 1) for v in obj] or [level])
-    return level
-
-
-def read_toml(path: Path) -> dict:
-    """Raw TOML of a scene file; InputError (one line) if unreadable, binary, not UTF-8,
-    not TOML or nested deeper than :data:`MAX_DEPTH`."""
-    name = plain(str(path), 120)
-    try:
-        blob = path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"scene {name!r} cannot be read: {plain(exc.strerror or exc, 80)}") from None
-    if len(blob) > MAX_BYTES:
-        raise InputError(f"scene {name!r} is {len(blob)} bytes; a scene file is at most {MAX_BYTES} bytes")
-    text = decode_text(blob, f"scene {name!r}")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"scene {name!r} is not valid TOML: {plain(exc, 160)}") from None
-    except RecursionError:
-        raise InputError(f"scene {name!r} is nested too deeply (at most {MAX_DEPTH} levels)") from None
-    if _depth(data) > MAX_DEPTH:
-        raise InputError(f"scene {name!r} is nested too deeply (at most {MAX_DEPTH} levels)")
-    return data
-
-
 def validate_scene(data: dict, name: str = "scene") -> SceneFile:
     """The raw TOML dict of a scene checked against :class:`SceneFile`."""
     try:
@@ -324,9 +285,3 @@ def validate_check(table: dict, name: str = "scene") -> CheckTable:
         first = max(errs, key=lambda e: len(e["loc"]))
         more = f" (and {len(errs) - 1} more problem{'s' if len(errs) > 2 else ''})" if len(errs) > 1 else ""
         raise InputError(f"scene {plain(name, 80)!r}: {_message(first, raw)}{more}") from None
-
-
-def load_validated(path: Path) -> tuple[dict, SceneFile]:
-    """(raw TOML dict, validated scene) of a scene file."""
-    data = read_toml(path)
-    return data, validate_scene(data, path.name)
