@@ -210,6 +210,30 @@ def test_cli_bad_input(capsys):
     assert "tcp://HOST:PORT" in capsys.readouterr().err
 
 
+def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
+    """The CLI keeps finished chunks as cache entries, so a second run into another folder reads
+    them; with an unusable cache they go to ``--out``/.work."""
+    import rigfem.mesh.cache
+    import rigfem.studies.sweep
+    from rigfem.cli import main
+    from rigfem.errors import ComputeError
+
+    seen = []
+
+    def record(p, work_dir, **kw):
+        seen.append(work_dir)
+        raise ComputeError("stop here")
+    monkeypatch.setattr(rigfem.studies.sweep, "run_sweep", record)
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "a")]) == 3
+    assert seen[-1] == tmp_path / "cache" / "sweep_chunks"
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "file"))
+    rigfem.mesh.cache._usable.cache_clear()
+    assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "b")]) == 3
+    assert seen[-1] == tmp_path / "b" / ".work"
+
+
 @pytest.mark.heavy
 def test_default_local_cluster_equals_serial(params, bases, tmp_path):
     """The CLI's default path: a LocalCluster of worker processes inside this process."""

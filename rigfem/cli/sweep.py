@@ -78,7 +78,12 @@ def run(args: argparse.Namespace) -> int:
         wrote(out)
         return 0
     mark_folder(out)
-    table = run_sweep(p, out / ".work", chunk_size=args.chunk_size, workers=args.workers, configs=configs,
+    from rigfem.mesh.cache import cache_dir, usable
+
+    # finished chunks are verified cache entries: any later run of this sweep (into any folder)
+    # reads them instead of computing them (in --out only when the cache cannot be used)
+    work = cache_dir() / "sweep_chunks" if usable() else out / ".work"
+    table = run_sweep(p, work, chunk_size=args.chunk_size, workers=args.workers, configs=configs,
                       scheduler=args.scheduler, progress=not args.quiet, on_stage=stage)
     stage("report")
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))

@@ -10,6 +10,14 @@ cold run drew, without pyvista.  A fallback picture (matplotlib,
 where no OpenGL runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU
 field files of a cached solution (:func:`write_vtu`) are stored the same way, keyed by the
 solution's entry and the load combination.
+
+The drawing code (matplotlib) is imported only where a picture is drawn: a warm check draws
+none and saves the 0.4 s import.  A known cost, measured on ``final-cm`` draft in separate
+processes: on the very first check after an install (empty numba cache, kernels compiled in the
+check) the peak RSS is 2.43 GB with the import late against 1.79-1.90 GB with matplotlib
+imported at the start; with numba's kernels cached (every later check, even on an empty rigfem
+cache) 1.78 GB.  Why the import order matters there is not known (not the glibc mmap threshold,
+the malloc arena count, the garbage collector, nor any of matplotlib's dependencies alone).
 """
 
 from __future__ import annotations
@@ -22,10 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-# imported before any solve, as before this module existed: loaded after the first solve instead,
-# a cold check's peak RSS rose by ~0.55 GB (final-cm draft: 2.37 GB against 1.81 GB, the peak in
-# a part's solve; the cause, likely which threading runtime is loaded first, is not yet found)
-import rigfem.report.pictures  # noqa: F401
 from rigfem.mesh.cache import array_digest, cache_dir, code_hash, entry_key, read_entry, write_entry
 
 #: the source files that draw the pictures: an edit invalidates every stored picture
