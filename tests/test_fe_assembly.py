@@ -103,3 +103,34 @@ def test_bad_mesh_raises():
     p = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0.0]])
     with pytest.raises(InputError, match="degenerate"):
         fe_mesh(PartMesh("flat", np.vstack([p, [[0, 1, 0]]]), np.array([[0, 1, 2, 3], [0, 1, 2, 4]])), 2)
+
+
+def test_first_assembly_compiles_the_kernels_in_a_child(tmp_path):
+    """With numba's cache empty, one child process compiles the kernels and the assembling
+    process loads each from numba's cache (compiles nothing itself); the next process starts no
+    child (the marker entry)."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import subprocess\n"
+            "children, run = [], subprocess.run\n"
+            "subprocess.run = lambda *a, **k: children.append(a) or run(*a, **k)\n"
+            "from fe_shapes import box\n"
+            "from rigfem.fe import fe_mesh, stiffness\n"
+            "for order in (1, 2):\n"
+            "    stiffness(fe_mesh(box(3, 2, 1, 3, 2, 2, jitter=0.2), order), 210e3, 0.3)\n"
+            "import rigfem.fe.kernels as k\n"
+            "fs = (k.block_pattern, k.add_elastic_blocks)\n"
+            "print(sum(sum(f.stats.cache_misses.values()) for f in fs),\n"
+            "      sum(sum(f.stats.cache_hits.values()) for f in fs), len(children))\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "RIGFEM_CACHE": str(tmp_path / "cache"),
+           "PYTHONPATH": os.pathsep.join([os.path.dirname(__file__), os.environ.get("PYTHONPATH", "")])}
+    got = []
+    for _ in range(2):
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=900)
+        assert r.returncode == 0, r.stderr
+        got.append(tuple(map(int, r.stdout.split())))
+    (misses, hits, children), again = got
+    assert misses == 0 and hits >= 2 and children == 1  # compiled by the child, loaded here
+    assert again[0] == 0 and again[2] == 0  # the marker: no second child

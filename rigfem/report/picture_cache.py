@@ -12,12 +12,7 @@ field files of a cached solution (:func:`write_vtu`) are stored the same way, ke
 solution's entry and the load combination.
 
 The drawing code (matplotlib) is imported only where a picture is drawn: a warm check draws
-none and saves the 0.4 s import.  A known cost, measured on ``final-cm`` draft in separate
-processes: on the very first check after an install (empty numba cache, kernels compiled in the
-check) the peak RSS is 2.43 GB with the import late against 1.79-1.90 GB with matplotlib
-imported at the start; with numba's kernels cached (every later check, even on an empty rigfem
-cache) 1.78 GB.  Why the import order matters there is not known (not the glibc mmap threshold,
-the malloc arena count, the garbage collector, nor any of matplotlib's dependencies alone).
+none and saves the 0.4 s import.
 """
 
 from __future__ import annotations
