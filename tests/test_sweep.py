@@ -213,7 +213,6 @@ def test_cli_bad_input(capsys):
 def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
     """The CLI keeps finished chunks as cache entries, so a second run into another folder reads
     them; with an unusable cache they go to ``--out``/.work."""
-    import rigfem.mesh.cache
     import rigfem.studies.sweep
     from rigfem.cli import main
     from rigfem.errors import ComputeError
@@ -229,7 +228,6 @@ def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
     assert seen[-1] == tmp_path / "cache" / "sweep_chunks"
     (tmp_path / "file").write_text("not a folder")
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "file"))
-    rigfem.mesh.cache._usable.cache_clear()
     assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "b")]) == 3
     assert seen[-1] == tmp_path / "b" / ".work"
 

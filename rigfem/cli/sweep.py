@@ -31,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="local Dask worker processes (default: CPU count; 1 = serial, no cluster)")
     p.add_argument("--chunk-size", type=int, default=64, help="configurations per stored chunk (default 64)")
     p.add_argument("--out", default="results/sweep", help="output folder: a new one, or with --force one rigfem "
-                                                          "wrote (its stored chunks are reused)")
+                                                          "wrote (finished chunks are reused from the cache)")
     p.add_argument("--force", action="store_true", help="write into an existing --out folder rigfem wrote")
     p.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     p.add_argument("--report-only", action="store_true",

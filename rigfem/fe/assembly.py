@@ -302,13 +302,13 @@ _COMPILING = False
 
 @functools.lru_cache(maxsize=1)
 def _kernels():
-    """The compiled kernels (:mod:`rigfem.fe.kernels`).  Where numba has not compiled them yet
-    (the first assembly after an install), a child process compiles them into numba's cache
-    first (:func:`compile_kernels`) and this process loads them: LLVM's working memory goes with
-    the child.  Compiled in the check's own process, a first check's peak RSS was about 0.55 GB
-    higher (``final-cm`` draft: 2.43 GB against 1.78 GB with the kernels cached).  A marker entry
-    in rigfem's cache, keyed by the kernels' code and the numba and Python versions, says the
-    child ran; if numba's cache went missing since, this process compiles them (slower, correct)."""
+    """The compiled kernels (:mod:`rigfem.fe.kernels`).  On the first assembly after an install
+    (numba has not compiled them yet) a child process compiles them into numba's cache first
+    (:func:`compile_kernels`) and this process loads them: LLVM's working memory, which a process
+    keeps once it has compiled, goes with the child (a cold check's peak RSS:
+    ``python benchmarks/bench_perf.py --rows check``).  A marker entry in rigfem's cache, keyed by
+    the kernels' code and the numba and Python versions, says the child was started once; where it
+    failed, or numba's cache went missing since, this process compiles them (slower, correct)."""
     import importlib.metadata
     import subprocess
     import sys
@@ -317,10 +317,12 @@ def _kernels():
               "python": sys.version}
     folder = cache_dir() / "kernels" / entry_key(inputs)
     if not _COMPILING and read_entry(folder, inputs) is None and usable():
-        done = subprocess.run([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
-                               "compile_kernels()"], capture_output=True, timeout=900)
-        if done.returncode == 0:
-            write_entry(folder, inputs, lambda d: None)
+        try:
+            subprocess.run([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
+                            "compile_kernels()"], capture_output=True, timeout=900)
+        except (OSError, subprocess.SubprocessError):
+            pass  # compiled here instead, on first use
+        write_entry(folder, inputs, lambda d: None)
     import rigfem.fe.kernels
 
     return rigfem.fe.kernels

@@ -154,26 +154,25 @@ def _package_code() -> str:
     return code_hash("**/*.py")
 
 
-def read_ladder(inputs: dict) -> dict | None:
-    """The stored outcome of a ladder (:func:`save_ladder`), or None (missing or bad: discarded)."""
+def read_ladder(inputs: dict) -> list[dict] | None:
+    """The levels a ladder climbed before (:func:`save_ladder`; the last is where it stopped), or
+    None (missing, or bad: discarded)."""
     d = read_entry(_ladder_folder(inputs), inputs)
     if d is None:
         return None
     try:
-        rec = json.loads((d / "ladder.json").read_text())
+        ladder = json.loads((d / "ladder.json").read_text())
         names = [n for n, _ in inputs["levels"]]
-        ok = (0 <= rec["index"] < len(names) and rec["level"] == names[rec["index"]]
-              and [s["level"] for s in rec["ladder"]] == names[:rec["index"] + 1])
+        ok = 0 < len(ladder) <= len(names) and [s["level"] for s in ladder] == names[:len(ladder)]
     except (OSError, ValueError, KeyError, TypeError) as e:
         return discard(d, f"unreadable: {type(e).__name__}")
-    return rec if ok else discard(d, "its levels are not the ladder's")
+    return ladder if ok else discard(d, "its levels are not the ladder's")
 
 
-def save_ladder(inputs: dict, index: int, ladder: list[dict]) -> None:
-    """Store where a ladder stopped (``index`` into its levels) and what each level cost, so a
+def save_ladder(inputs: dict, ladder: list[dict]) -> None:
+    """Store the levels a ladder climbed (the last is where it stopped) and what each cost, so a
     warm check loads that level's solution only, not the coarser ones it discarded."""
-    rec = {"index": index, "level": ladder[index]["level"], "ladder": ladder}
-    write_entry(_ladder_folder(inputs), inputs, lambda tmp: (tmp / "ladder.json").write_text(json.dumps(rec)))
+    write_entry(_ladder_folder(inputs), inputs, lambda tmp: (tmp / "ladder.json").write_text(json.dumps(ladder)))
 
 
 def _ladder_folder(inputs: dict) -> Path:

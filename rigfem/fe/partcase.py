@@ -197,13 +197,13 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     # where each geometry's ladder stopped before (a warm check starts there: the levels it
     # discarded are not loaded again)
     keys = {g: ladder_inputs(group, levels, solver) if len(levels) > 1 else None for g, group in geo.items()}
-    records = {g: read_ladder(k) if k else None for g, k in keys.items()}
-    start = {g: rec["index"] if rec else 0 for g, rec in records.items()}
+    climbed = {g: read_ladder(k) if k else None for g, k in keys.items()}
+    start = {g: len(c) - 1 if c else 0 for g, c in climbed.items()}
     # every part's first level meshed ahead, 2 at a time, while the FE works on the first part
     prefetch([mesh_job(_merged(group), levels[start[g]][1]) for g, group in geo.items()])
     results = {}
     for g, group in geo.items():
-        ladder = records[g]["ladder"][:start[g]] if records[g] else []
+        ladder = climbed[g][:-1] if climbed[g] else []
         for k in range(start[g], len(levels)):
             name, s = levels[k]
             t0 = time.perf_counter()
@@ -216,7 +216,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
                 break
             out = None  # free this level's model, matrix and factor before the finer level's
         if keys[g] and k != start[g]:
-            save_ladder(keys[g], k, ladder)
+            save_ladder(keys[g], ladder)
         stopped = ("fixed mesh (no ladder)" if len(levels) == 1 else
                    "decided within the reporting target" if done else "reached the cap")
         for (mode, case), res in zip(group, out):

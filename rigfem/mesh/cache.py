@@ -219,7 +219,8 @@ def _why_bad(folder: Path, inputs: dict, arrays: dict[str, str], got: dict) -> s
 
 
 def _whole(path: Path) -> bytearray:
-    """A file's bytes, read into one buffer (no copy made later: arrays are views of it)."""
+    """A file's bytes, read into one buffer (no copy made later: arrays are views of it).  A
+    bytearray, not ``np.empty``: numpy's huge-page advice on a large buffer made the read slower."""
     buf = bytearray(path.stat().st_size)
     with open(path, "rb", buffering=0) as fh:
         view, n = memoryview(buf), 0
@@ -233,7 +234,7 @@ def _whole(path: Path) -> bytearray:
 
 def _npy(buf: bytearray) -> np.ndarray:
     """The array of a ``.npy`` file's bytes, a view of ``buf`` (no pickles: object arrays refused)."""
-    head = io.BytesIO(bytes(buf[:min(len(buf), 1 << 16)]))
+    head = io.BytesIO(bytes(buf[:1 << 16]))
     version = np.lib.format.read_magic(head)
     read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
     shape, fortran, dtype = read(head)

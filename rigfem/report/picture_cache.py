@@ -11,8 +11,8 @@ where no OpenGL runs) is not stored: a machine that gains OpenGL draws the real 
 field files of a cached solution (:func:`write_vtu`) are stored the same way, keyed by the
 solution's entry and the load combination.
 
-The drawing code (matplotlib) is imported only where a picture is drawn: a warm check draws
-none and saves the 0.4 s import.
+The drawing code (matplotlib) is imported only where a picture is drawn, so a warm check, which
+draws none, does not import it.
 """
 
 from __future__ import annotations
