@@ -54,9 +54,9 @@ from rigfem.report.document import (
 from rigfem.report.folder import atomic_dir, check_writable, folder_lock
 from rigfem.report.html import write_html
 from rigfem.report.picture_cache import (  # drawn once, then copied from the cache
-    part_pictures,
     plot_peaks,
     reactions_plot,
+    started_part_pictures,
     utilisation_plot,
     write_vtu,
 )
@@ -224,41 +224,44 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
     """Pictures (kept with the report; none without ``pictures``) and field files (VTU/PVD/INP:
     ParaView/CalculiX, not kept in the repository's result folders) of every part case; the
     pictures' scales go into ``parts``."""
-    files, fields = [], []
+    fields = []
     worst = {}
     for r in results:  # one set of pictures per part: its mode with the highest peak
         if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
             worst[r.case.name] = r
-    for r, entry in zip(results, parts):
-        stem = f"{r.case.name}_{r.mode}"
-        c = r.coef[r.row]
-        write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
-        fields.append(f"{stem}.vtu")
-        if export_inp:  # the identical model at the critical crank angle, for CalculiX
-            export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
-                         heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
-            fields.append(f"{stem}.inp")
-        if pictures and worst[r.case.name] is r:
-            pics = part_pictures(r, c, entry, limit, part_label(entry["name"], entry["part"]), allowable, d)
+    drawn = [(r, entry) for r, entry in zip(results, parts) if pictures and worst[r.case.name] is r]
+    of = {id(r): [] for r in results}  # each case's picture files, in the report's order
+    jobs = [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d) for r, entry in drawn]
+    with started_part_pictures(jobs) as wait:  # drawn in child processes while this one writes the field files
+        for r, entry in zip(results, parts):
+            stem = f"{r.case.name}_{r.mode}"
+            c = r.coef[r.row]
+            write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
+            fields.append(f"{stem}.vtu")
+            if export_inp:  # the identical model at the critical crank angle, for CalculiX
+                export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
+                             heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
+                fields.append(f"{stem}.inp")
+            if pictures and r.mode == "cycle":
+                utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
+                                 part_label(entry["name"], entry["part"]), allowable)
+                of[id(r)].append(f"{r.case.name}_utilisation.png")
+            if r.mode == "cycle" and frames:
+                rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
+                series = []
+                for k, i in enumerate(rows):
+                    name = f"{stem}_{k:03d}.vtu"
+                    write_vtu(d / name, r.solution, r.coef[i], allowable=limit, compact=True)
+                    series.append((float(r.case.rows[i]), name))
+                pvd = "\n".join(f'    <DataSet timestep="{t:g}" file="{f}"/>' for t, f in series)
+                (d / f"{stem}.pvd").write_text(
+                    '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                    f"{pvd}\n  </Collection>\n</VTKFile>\n")
+                fields.append(f"{stem}.pvd")
+        for (r, entry), pics in zip(drawn, wait()):
             entry["pictures"] = pics
-            files += list(pics["files"].values())
-        if pictures and r.mode == "cycle":
-            utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
-                             part_label(entry["name"], entry["part"]), allowable)
-            files.append(f"{r.case.name}_utilisation.png")
-        if r.mode == "cycle" and frames:
-            rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
-            series = []
-            for k, i in enumerate(rows):
-                name = f"{stem}_{k:03d}.vtu"
-                write_vtu(d / name, r.solution, r.coef[i], allowable=limit, compact=True)
-                series.append((float(r.case.rows[i]), name))
-            pvd = "\n".join(f'    <DataSet timestep="{t:g}" file="{f}"/>' for t, f in series)
-            (d / f"{stem}.pvd").write_text(
-                '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
-                f"{pvd}\n  </Collection>\n</VTKFile>\n")
-            fields.append(f"{stem}.pvd")
-    return files, fields
+            of[id(r)][:0] = list(pics["files"].values())
+    return [f for r in results for f in of[id(r)]], fields
 
 
 def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None
@@ -285,7 +288,7 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage,
-                              settled=lambda r: settled(r, cs.settings)), digest
+                              settled=lambda r, shrink=1.0: settled(r, cs.settings, shrink)), digest
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,

@@ -115,3 +115,41 @@ def test_no_adaptive_flag_and_bad_value(tmp_path, capsys):
     scene.write_text(FINAL_CM + '[check]\nadaptive = "yes"\n')
     assert main(["check", str(scene), "--out", str(tmp_path / "x"), *args]) == 2
     assert "[check].adaptive" in capsys.readouterr().err
+
+
+def test_best_shrink_is_the_element_orders_rate():
+    from rigfem.fe.partcase import best_shrink
+
+    coarse, draft, standard = (LADDER[n] for n in ("coarse", "draft", "standard"))
+    assert best_shrink(coarse, standard, 2) == pytest.approx(min(6 / 12, 1.2 / 2.4) ** 2)
+    assert best_shrink(coarse, draft, 2) == pytest.approx(min(8 / 12, 1.7 / 2.4) ** 2)
+    assert best_shrink(coarse, draft, 1) == pytest.approx(8 / 12)
+
+
+def test_a_level_that_cannot_settle_is_skipped(tmp_path, monkeypatch):
+    """The limit on the coarse peak at the standard preset: even the best rate (h²) leaves the
+    draft band straddling it, so the plate goes coarse → standard; a warm check solves standard only."""
+    import rigfem.fe.partcase as partcase
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "standard", "--samples", "72",
+            "--frames", "0", "--quiet"]
+    base = tmp_path / "base.toml"
+    base.write_text(FINAL_CM)
+    main(["check", str(base), "--out", str(tmp_path / "b"), *args])
+    low = json.loads((tmp_path / "b" / "report.json").read_text())["parts"][0]
+    assert low["mesh"]["level"] == "coarse"
+    scene = tmp_path / "edge.toml"
+    scene.write_text(FINAL_CM + f"[check]\nlimit_factor = {low['peak_mpa'] / (2 * low['limit_mpa'])!r}\n")
+    solved = []
+    real = partcase._solve_group
+    monkeypatch.setattr(partcase, "_solve_group", lambda g, s, *a: solved.append(a[-1]) or real(g, s, *a))
+    main(["check", str(scene), "--out", str(tmp_path / "o"), *args])
+    m = json.loads((tmp_path / "o" / "report.json").read_text())["parts"][0]["mesh"]
+    assert solved == ["coarse", "standard"]
+    assert [s["level"] for s in m["ladder"]] == ["coarse", "standard"] and m["ladder"][0]["skipped"] == ["draft"]
+    assert "coarse" in (tmp_path / "o" / "report.md").read_text() and "draft skipped" in \
+        (tmp_path / "o" / "report.md").read_text()
+    solved.clear()
+    main(["check", str(scene), "--out", str(tmp_path / "o2"), *args])
+    assert solved == ["standard"]

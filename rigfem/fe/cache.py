@@ -155,7 +155,7 @@ def _package_code() -> str:
 
 
 def read_ladder(inputs: dict) -> list[dict] | None:
-    """The levels a ladder climbed before (:func:`save_ladder`; the last is where it stopped), or
+    """The levels a ladder solved before (:func:`save_ladder`; the last is where it stopped), or
     None (missing, or bad: discarded)."""
     d = read_entry(_ladder_folder(inputs), inputs)
     if d is None:
@@ -163,9 +163,11 @@ def read_ladder(inputs: dict) -> list[dict] | None:
     try:
         ladder = json.loads((d / "ladder.json").read_text())
         names = [n for n, _ in inputs["levels"]]
-        ok = 0 < len(ladder) <= len(names) and [s["level"] for s in ladder] == names[:len(ladder)]
+        at = [names.index(s["level"]) if s["level"] in names else -1 for s in ladder]
     except (OSError, ValueError, KeyError, TypeError) as e:
         return discard(d, f"unreadable: {type(e).__name__}")
+    # the ladder's levels in its order, each at most once (a level predicted unsettled is skipped)
+    ok = bool(at) and min(at) >= 0 and all(a < b for a, b in zip(at, at[1:]))
     return ladder if ok else discard(d, "its levels are not the ladder's")
 
 

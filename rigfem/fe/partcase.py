@@ -14,6 +14,7 @@ cancels its resultant.  The relieved fraction is reported; the 3-2-1 support the
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import time
 
@@ -178,49 +179,70 @@ def _key(case: PartCase) -> tuple:
     return case.part, tuple(sorted(case.params.items()))
 
 
+def best_shrink(coarse, fine, order: int) -> float:
+    """The most a peak's error band can narrow from mesh settings ``coarse`` to ``fine``: the stress
+    error of order-p elements falls at best as h^p, h taken as the smaller of the global and the
+    local size ratios.  A level predicted unsettled even so is skipped (:func:`solve_cases`)."""
+    return min(fine.size_mm / coarse.size_mm, fine.near_mm / coarse.near_mm) ** order
+
+
 def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto",
                 progress=None, settled=None, on_stage=None) -> list[CaseResult]:
     """Solve every (mode, case); cases of one part geometry share mesh and stiffness, cases
     with the same supports share one factorisation, identical unit loads are solved once.
 
-    With ``settled`` (a :class:`CaseResult` → bool, the verdict layer's judge) every part geometry
-    climbs ``settings.levels()`` (coarse first) and stops at the first level where all its cases
-    are settled, or at the last level (the cap); without it, it is solved at ``settings`` only.
-    Where the ladder stopped is stored (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases,
-    the levels and the code): a later check of the same cases starts at that level.
-    ``on_stage(text)`` hears 'meshing part X' and 'solving part X' (with the level) as each begins.
+    With ``settled`` (``settled(result, shrink=1.0) -> bool``, the verdict layer's judge, with
+    the band narrowed by ``shrink``) every part geometry climbs ``settings.levels()`` (coarse
+    first) and stops at the first level where all its cases are settled, or at the last level
+    (the cap).  A level at which a case would be unsettled even with the band narrowed by
+    :func:`best_shrink` is skipped.  A part that climbs goes to the back of the queue, its finer
+    mesh made in a mesher process while the other parts solve.  Without ``settled`` every part is
+    solved at ``settings`` only.  Where the ladder stopped is stored
+    (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases, the levels and the code): a later
+    check of the same cases starts at that level.  ``on_stage(text)`` hears 'meshing part X' and
+    'solving part X' (with the level) as each begins.
     """
     geo: dict[tuple, list[tuple[str, PartCase]]] = {}
     for mode, case in cases:
         geo.setdefault(_key(case), []).append((mode, case))
     levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
+    last = len(levels) - 1
     # where each geometry's ladder stopped before (a warm check starts there: the levels it
     # discarded are not loaded again)
-    keys = {g: ladder_inputs(group, levels, solver) if len(levels) > 1 else None for g, group in geo.items()}
+    keys = {g: ladder_inputs(group, levels, solver) if last else None for g, group in geo.items()}
     climbed = {g: read_ladder(k) if k else None for g, k in keys.items()}
-    start = {g: len(c) - 1 if c else 0 for g, c in climbed.items()}
+    names = [n for n, _ in levels]
+    start = {g: names.index(c[-1]["level"]) if c else 0 for g, c in climbed.items()}
+    level = dict(start)
+    ladders = {g: c[:-1] if c else [] for g, c in climbed.items()}
     # every part's first level meshed ahead, 2 at a time, while the FE works on the first part
-    prefetch([mesh_job(_merged(group), levels[start[g]][1]) for g, group in geo.items()])
-    results = {}
-    for g, group in geo.items():
-        ladder = climbed[g][:-1] if climbed[g] else []
-        for k in range(start[g], len(levels)):
-            name, s = levels[k]
-            t0 = time.perf_counter()
-            out = _solve_group(group, s, solver, on_stage, name)
-            ladder.append({"level": name, "size_mm": s.size_mm, "local_size_mm": s.near_mm,
+    prefetch([mesh_job(_merged(group), levels[level[g]][1]) for g, group in geo.items()])
+    queue, results = collections.deque(geo), {}
+    while queue:
+        g = queue.popleft()
+        group, k = geo[g], level[g]
+        name, s = levels[k]
+        t0 = time.perf_counter()
+        out = _solve_group(group, s, solver, on_stage, name)
+        ladders[g].append({"level": name, "size_mm": s.size_mm, "local_size_mm": s.near_mm,
                            "dofs": int(out[0].solution.model.mesh.ndof),
                            "seconds": round(time.perf_counter() - t0, 3)})
-            done = settled is not None and all(settled(r) for r in out)
-            if done or k == len(levels) - 1:
-                break
-            out = None  # free this level's model, matrix and factor before the finer level's
-        if keys[g] and k != start[g]:
-            save_ladder(keys[g], ladder)
-        stopped = ("fixed mesh (no ladder)" if len(levels) == 1 else
+        done = settled is not None and all(settled(r) for r in out)
+        if not done and k < last:
+            while k + 1 < last and not all(settled(r, best_shrink(s, levels[k + 1][1], s.order)) for r in out):
+                k += 1  # unsettled there even at the best rate: skipped
+                ladders[g][-1].setdefault("skipped", []).append(names[k])
+            level[g] = k + 1
+            prefetch([mesh_job(_merged(group), levels[k + 1][1])], keep=True)
+            queue.append(g)
+            out = None  # free this level's model, matrix and factor before the next part's
+            continue
+        if keys[g] and level[g] != start[g]:
+            save_ladder(keys[g], ladders[g])
+        stopped = ("fixed mesh (no ladder)" if not last else
                    "decided within the reporting target" if done else "reached the cap")
         for (mode, case), res in zip(group, out):
-            res.level, res.stopped, res.ladder = name, stopped, ladder
+            res.level, res.stopped, res.ladder = name, stopped, ladders[g]
             results[id(case)] = res
             if progress:
                 progress(case.name, mode)

@@ -15,6 +15,7 @@ per-order factor (:data:`BAND_FACTOR`) calibrated so the band covers the converg
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from rigfem.fe.assembly import (
     NODE_BARY,
@@ -59,20 +60,42 @@ def element_node_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, elems=sl
     return np.einsum("aq,mqkc->makc", X, _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), L, elems), optimize=True)
 
 
-def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 2048) -> np.ndarray:
-    """Recovered nodal stresses (k, N, 6): average of element values at each node."""
+def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 65536,
+                 mem: float = 64e6) -> np.ndarray:
+    """Recovered nodal stresses (k, N, 6): average of element values at each node.
+
+    The element values at a node are the linear extrapolation of the quadrature-point stresses
+    (:func:`element_node_stress`), so extrapolation and averaging are one sparse matrix applied to
+    the quadrature stresses of every load column at once (``chunk`` elements and ``mem`` bytes of
+    gradients at a time)."""
     U = U.reshape(fm.ndof, -1)
-    k = U.shape[1]
-    acc = np.zeros((len(fm.nodes), k * 6))
-    for s in range(0, len(fm.elements), chunk):
-        sl = slice(s, s + chunk)
-        idx = fm.elements[sl].ravel()
-        Se = np.ascontiguousarray(element_node_stress(fm, E, nu, U, sl)).reshape(len(idx), k * 6)
-        for c in range(k * 6):
-            acc[:, c] += np.bincount(idx, Se[:, c], minlength=len(fm.nodes))
-    count = np.bincount(fm.elements.ravel(), minlength=len(fm.nodes))
-    # contiguous (k, N, 6): every superposition over the cases reads it whole
-    return np.ascontiguousarray((acc / count[:, None]).reshape(len(fm.nodes), k, 6).transpose(1, 0, 2))
+    k, N = U.shape[1], len(fm.nodes)
+    lam, mu = lame(E, nu)
+    L, _ = tet_quadrature(2 * (fm.order - 1))
+    X = NODE_BARY[: fm.elements.shape[1]] @ np.linalg.pinv(L)  # (nloc, nq): linear fit through the points
+    nloc, nq = X.shape
+    count = np.bincount(fm.elements.ravel(), minlength=N)
+    out = np.zeros((k, N, 6))
+    for e0 in range(0, len(fm.elements), chunk):
+        el = fm.elements[e0:e0 + chunk]
+        m = len(el)
+        # (node, quadrature point) weights: extrapolation to the node over the node's element count
+        P = sp.csr_matrix(((X[None] / count[el][:, :, None]).ravel(),
+                           (np.repeat(el.ravel(), nq), np.tile(np.arange(m * nq).reshape(m, 1, nq), (1, nloc, 1)).ravel())),
+                          shape=(N, m * nq))
+        dN, _ = geometry(fm, L, slice(e0, e0 + m))  # (m, nq, nloc, 3)
+        A = np.ascontiguousarray(dN.transpose(0, 1, 3, 2)).reshape(m, nq * 3, nloc)
+        kc = max(1, int(mem // (m * nq * 9 * 8)))
+        for k0 in range(0, k, kc):
+            c = min(kc, k - k0)
+            Ue = U[:, k0:k0 + c].reshape(N, 3 * c)[el]  # (m, nloc, 3c): u_i of load k at column i*c + k
+            H = (A @ Ue).reshape(m, nq, 3, 3, c)  # H[:, :, j, i] = ∂u_i/∂x_j
+            tr = lam * (H[:, :, 0, 0] + H[:, :, 1, 1] + H[:, :, 2, 2])
+            s = np.empty((m, nq, 6, c))
+            for v, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))):
+                s[:, :, v] = tr + 2 * mu * H[:, :, i, i] if i == j else mu * (H[:, :, i, j] + H[:, :, j, i])
+            out[k0:k0 + c] += (P @ s.reshape(m * nq, 6 * c)).reshape(N, 6, c).transpose(2, 0, 1)
+    return out
 
 
 #: Factor on the ZZ estimate per element order, so that ``peak·(1 ± factor·zz_error)`` covers the
@@ -101,3 +124,4 @@ def zz_error(fm: FEMesh, E: float, nu: float, u: np.ndarray, node: int, s_nodes:
     Se = element_node_stress(fm, E, nu, u, elems)[:, :, 0]
     ref = von_mises(s_nodes[node])
     return float(von_mises(Se - s_nodes[fm.elements[elems]]).max() / ref) if ref > 0 else 0.0
+

@@ -25,6 +25,7 @@ import logging
 import os
 import shutil
 import tempfile
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -107,13 +108,32 @@ def evict(keep: Path | None = None) -> list[Path]:
             shutil.rmtree(folder, ignore_errors=True)
             total -= size
             removed.append(folder)
+    _tally[str(cache_dir())] = [total, time.monotonic()]
     return removed
+
+
+#: seconds after which a write scans the whole cache again, though this process's tally fits
+RESCAN_S = 60.0
+#: per cache folder: [its bytes at the last scan plus what this process stored since, time of that scan]
+_tally: dict[str, list] = {}
+
+
+def _stored(folder: Path, size: int) -> None:
+    """Account for an entry of ``size`` bytes just stored: scan and evict (:func:`evict`) only when
+    this process's tally would pass the limit, or its last scan is :data:`RESCAN_S` old (other
+    processes write too), not on every write (a scan reads every manifest: quadratic in a sweep)."""
+    t = _tally.get(str(cache_dir()))
+    if t is None or t[0] + size > max_bytes() or time.monotonic() - t[1] > RESCAN_S:
+        evict(keep=folder)
+    else:
+        t[0] += size
 
 
 def clear() -> tuple[int, int]:
     """Remove every entry rigfem made under the cache folder (folders with a manifest), and the
     kind folders left empty; anything else stays.  Returns (entries, bytes) removed."""
     found = entries()
+    _tally.pop(str(cache_dir()), None)
     for folder, _, _ in found:
         shutil.rmtree(folder, ignore_errors=True)
     for kind in {f.parent for f, _, _ in found}:
@@ -262,6 +282,7 @@ def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bo
         write(tmp)
         files = {p.name: file_sha256(p) for p in sorted(tmp.iterdir())}
         (tmp / MANIFEST).write_text(json.dumps({"inputs": _canonical(inputs), "files": files}))
+        size = sum(p.stat().st_size for p in tmp.iterdir())
         os.replace(tmp, folder)
     except OSError:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -270,7 +291,7 @@ def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bo
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     if cached:
-        evict(keep=folder)
+        _stored(folder, size)
     return True
 
 

@@ -289,15 +289,16 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
 
 
-def prefetch(jobs: list[tuple]) -> int:
+def prefetch(jobs: list[tuple], keep: bool = False) -> int:
     """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
     processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them
     made; returns how many were started.  Jobs of an earlier call never taken (a check that
-    stopped early) are cancelled first.  In a daemonic process (a sweep worker, which may not
-    have children) nothing is started."""
+    stopped early) are cancelled first, unless ``keep``.  In a daemonic process (a sweep worker,
+    which may not have children) nothing is started."""
     import multiprocessing as mp
 
-    pool.cancel()
+    if not keep:
+        pool.cancel()
     if mp.current_process().daemon:
         return 0
     started = 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import multiprocessing as mp
+import os
 import signal
 import sys
 import threading
@@ -34,8 +35,16 @@ def _context() -> mp.context.BaseContext:
     return ctx
 
 
-def _child(conn, fn: Callable, args: tuple) -> None:
+def _rigfem_env() -> dict[str, str]:
+    return {k: v for k, v in os.environ.items() if k.startswith("RIGFEM_")}
+
+
+def _child(conn, fn: Callable, args: tuple, env: dict[str, str]) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides, and ends this process
+    # the parent's rigfem settings as they are now (the forkserver has those of its start)
+    for k in set(_rigfem_env()) - set(env):
+        del os.environ[k]
+    os.environ.update(env)
     try:
         result = (True, fn(*args))
     except BaseException as exc:  # noqa: BLE001 - every failure travels back to the parent
@@ -61,28 +70,29 @@ def _start(proc) -> None:
                 main.__file__ = path
 
 
-def call(fn: Callable, *args: Any, cancel: threading.Event | None = None) -> Any:
+def call(fn: Callable, *args: Any, cancel: threading.Event | None = None, what: str = "mesher") -> Any:
     """``fn(*args)`` in a child process; its exception is raised here.  KeyboardInterrupt or any
     exception raised in the parent while it waits (a signal handler's) kills the child first,
     and so does ``cancel`` being set (a caller in another thread: :mod:`rigfem.mesh.pool`).
-    In a daemonic process (which may not have children) ``fn`` runs in this process."""
+    ``what`` names the child in its process name and errors.  In a daemonic process (which may
+    not have children) ``fn`` runs in this process."""
     if mp.current_process().daemon:
         return fn(*args)
     ctx = _context()
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, fn, args), daemon=True, name="rigfem-mesher")
+    proc = ctx.Process(target=_child, args=(send, fn, args, _rigfem_env()), daemon=True, name=f"rigfem-{what}")
     _start(proc)
     send.close()
     try:
         while not recv.poll(POLL_S):
             if cancel is not None and cancel.is_set():
-                raise ComputeError("meshing cancelled")
+                raise ComputeError(f"{what} cancelled")
             if not proc.is_alive() and not recv.poll(0):
-                raise ComputeError(f"the mesher process ended without a result (exit code {proc.exitcode}; "
+                raise ComputeError(f"the {what} process ended without a result (exit code {proc.exitcode}; "
                                    f"out of memory?)")
         ok, value = recv.recv()
     except EOFError:
-        raise ComputeError(f"the mesher process ended without a result (exit code {proc.exitcode})") from None
+        raise ComputeError(f"the {what} process ended without a result (exit code {proc.exitcode})") from None
     finally:
         if proc.is_alive():
             proc.kill()

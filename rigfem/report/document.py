@@ -92,7 +92,8 @@ def study_tables(r: dict) -> list[str]:
               "|---|---|---|---|---|---|---|---|---|---|"]
     for p in parts:
         m = p["mesh"]
-        steps = ", ".join(f"{s['level']} {s['dofs']} ({s['seconds']:.1f})" for s in m.get("ladder", []))
+        steps = ", ".join(f"{s['level']} {s['dofs']} ({s['seconds']:.1f})"
+                          + "".join(f", {n} skipped" for n in s.get("skipped", [])) for s in m.get("ladder", []))
         lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {m.get('element', '')} | {m.get('fe_nodes', m['nodes'])} | "
                      f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | "
                      f"{m.get('level', '')} | {m.get('stopped', '')} | {steps} |")

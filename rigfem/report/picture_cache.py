@@ -17,10 +17,12 @@ draws none, does not import it.
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import functools
 import json
 import shutil
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -47,9 +49,9 @@ def _versions() -> dict[str, str]:
     return out
 
 
-def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[dict, list[str]]]) -> dict:
-    """``draw(folder)`` -> (result, file names it wrote in ``folder``), or the stored files copied
-    into ``folder`` and the stored result when an entry of ``inputs`` is in the cache."""
+def _lookup(kind: str, inputs: dict, folder: Path) -> tuple[dict | None, Path, dict]:
+    """The stored result of a picture (its files copied into ``folder``), or None; its entry and
+    full inputs."""
     inputs = {"kind": kind, **inputs, "code": code_hash(*PICTURE_CODE), "libraries": _versions()}
     entry = cache_dir() / "pictures" / entry_key(inputs)
     if read_entry(entry, inputs) is not None:
@@ -57,9 +59,18 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
             stored = json.loads((entry / _RESULT).read_text())
             for name in stored["files"]:
                 shutil.copyfile(entry / name, folder / name)
-            return stored["result"]
+            return stored["result"], entry, inputs
         except (OSError, ValueError, KeyError, TypeError):
             pass  # verified, yet unreadable here: draw it
+    return None, entry, inputs
+
+
+def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[dict, list[str]]]) -> dict:
+    """``draw(folder)`` -> (result, file names it wrote in ``folder``), or the stored files copied
+    into ``folder`` and the stored result when an entry of ``inputs`` is in the cache."""
+    result, entry, inputs = _lookup(kind, inputs, folder)
+    if result is not None:
+        return result
     result, files = draw(folder)
     if result.get("renderer", "pyvista") == "pyvista":
 
@@ -72,18 +83,21 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
     return result
 
 
+def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str, zoom_mm: float) -> dict:
+    sol, fm = r.solution, r.solution.model.mesh
+    groups = sorted(fm.surfaces)
+    return {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.F @ c),
+            "mesh": array_digest(fm.nodes, fm.elements, *(fm.surfaces[g] for g in groups)), "groups": groups,
+            "n_vertices": fm.n_vertices, "case": r.case.name, "mode": r.mode,
+            "crank_deg": float(r.case.rows[r.row]),
+            "loads": [(ld.kind, ld.group) for ld in r.case.loads], "supports": r.case.supports,
+            "entry": {k: entry[k] for k in ("utilisation_pct", "error_pct", "verdict")},
+            "limit": limit, "label": label, "allowable": allowable, "zoom_mm": zoom_mm}
+
+
 def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
                   folder: str | Path, zoom_mm: float = 30.0) -> dict:
     """:func:`rigfem.report.pictures.part_pictures` through the cache (same arguments, same result)."""
-    sol, fm = r.solution, r.solution.model.mesh
-    groups = sorted(fm.surfaces)
-    inputs = {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.F @ c),
-              "mesh": array_digest(fm.nodes, fm.elements, *(fm.surfaces[g] for g in groups)), "groups": groups,
-              "n_vertices": fm.n_vertices, "case": r.case.name, "mode": r.mode,
-              "crank_deg": float(r.case.rows[r.row]),
-              "loads": [(ld.kind, ld.group) for ld in r.case.loads], "supports": r.case.supports,
-              "entry": {k: entry[k] for k in ("utilisation_pct", "error_pct", "verdict")},
-              "limit": limit, "label": label, "allowable": allowable, "zoom_mm": zoom_mm}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
         from rigfem.report import pictures
@@ -91,7 +105,69 @@ def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allow
         out = pictures.part_pictures(r, c, entry, limit, label, allowable, d, zoom_mm)
         return out, list(out["files"].values())
 
-    return cached("part", inputs, Path(folder), draw)
+    return cached("part", _part_inputs(r, c, entry, limit, label, allowable, zoom_mm), Path(folder), draw)
+
+
+def _one_combination(r, c: np.ndarray):
+    """A copy of the case result ``r`` that holds only the combination ``c`` (as its one load case):
+    what its pictures are drawn from, a few MB to send to a child process instead of every unit
+    solution.  Its pictures, and their cache key, are those of ``r`` at ``c``: the fields are the
+    same numbers."""
+    sol = r.solution
+    model = dataclasses.replace(sol.model, mesh=dataclasses.replace(sol.model.mesh, cache={}), _K=None)
+    one = dataclasses.replace(sol, model=model, F=sol.F @ c[:, None], U=sol.U @ c[:, None],
+                              reactions=sol.reactions @ c[:, None],
+                              nodal_stress=np.tensordot(c, sol.nodal_stress, 1)[None], _unit_vm=None)
+    return dataclasses.replace(r, solution=one, coef=np.ones((1, 1)), cycle_nodes=None, cycle_stress=None)
+
+
+def _draw_all(jobs: list[tuple]) -> list[dict]:
+    return [part_pictures(*job) for job in jobs]
+
+
+@contextlib.contextmanager
+def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Callable[[], list[dict]]]:
+    """Start :func:`part_pictures` of every job (a tuple of its arguments); yields the function
+    that waits for their results, in order.
+
+    Pictures the cache holds are copied at once; the others, most of a cold report's time, are
+    drawn in up to ``workers`` child processes (:func:`rigfem.mesh.worker.call`, started through
+    :mod:`rigfem.mesh.pool`), each importing the drawing code once, while the caller writes the
+    rest of the report.  An exception in the block ends the children."""
+    from rigfem.mesh import pool
+    from rigfem.mesh.worker import call
+
+    done, todo = {}, []
+    for i, (r, c, entry, limit, label, allowable, folder, *zoom) in enumerate(jobs):
+        got = _lookup("part", _part_inputs(r, c, entry, limit, label, allowable, *(zoom or [30.0])), Path(folder))[0]
+        if got is None:
+            todo.append(i)
+        else:
+            done[i] = got
+    shares: list[list[int]] = [[] for _ in range(max(1, min(workers, len(todo))))]
+    for i in sorted(todo, key=lambda i: -len(jobs[i][0].solution.model.mesh.nodes)):  # largest first, to the
+        min(shares, key=lambda sh: sum(len(jobs[j][0].solution.model.mesh.nodes) for j in sh)).append(i)  # lightest
+    keys = []
+    if len(shares) > 1:
+        for share in shares:
+            slim = [(_one_combination(jobs[i][0], jobs[i][1]), np.ones(1), *jobs[i][2:]) for i in share]
+            key = f"pictures-{id(jobs)}-{share[0]}"
+            pool.submit(key, lambda stop, slim=slim: call(_draw_all, slim, cancel=stop, what="pictures"))
+            keys.append((key, share))
+
+    def wait() -> list[dict]:
+        for key, share in keys:
+            done.update(zip(share, pool.take(key)))
+        for i in todo:
+            if i not in done:  # one picture to draw, or one worker: here
+                done[i] = part_pictures(*jobs[i])
+        return [done[i] for i in range(len(jobs))]
+
+    try:
+        yield wait
+    except BaseException:
+        pool.cancel()
+        raise
 
 
 def utilisation_plot(r, limit: float, path: str | Path, label: str, allowable: str) -> Path:

@@ -69,17 +69,20 @@ def balance(sol, c: np.ndarray) -> dict:
             "residual_Nmm": float(np.linalg.norm(app[3:] + tot_s[3:]))}
 
 
-def settled(res: CaseResult, settings) -> bool:
+def settled(res: CaseResult, settings, shrink: float = 1.0) -> bool:
     """True when a finer mesh cannot change what the report says of a case: its band does not
     straddle the limit (:func:`half_ultimate`) and its half-width ``peak·error_pct/100`` is within
     the preset's reporting target, ``settings.target_pct`` % of the allowable (a part nothing loads
-    is settled; a free body out of balance is not a matter of mesh and is judged by the band alone)."""
+    is settled; a free body out of balance is not a matter of mesh and is judged by the band alone).
+    With ``shrink`` < 1, whether it would be with its band that many times narrower (a finer
+    level's best case: :func:`rigfem.fe.partcase.best_shrink`)."""
     pk = res.peak
-    v = half_ultimate(pk.value, settings.material.sigma_u, pk.error_pct, settings.limit_factor,
+    err = pk.error_pct * shrink
+    v = half_ultimate(pk.value, settings.material.sigma_u, err, settings.limit_factor,
                       loaded=bool(np.any(res.coef != 0)))
     if v.verdict == "not loaded":
         return True
-    return v.verdict != "undecided" and pk.value * pk.error_pct <= settings.target_pct * v.limit_mpa
+    return v.verdict != "undecided" and pk.value * err <= settings.target_pct * v.limit_mpa
 
 
 def verdict_of(res: CaseResult, settings) -> dict:

@@ -1,0 +1,40 @@
+"""A cold report's part pictures are drawn in child processes while the check writes its field
+files (issue 26): the same pictures as drawing them in the check's own process."""
+
+from rigfem.check import load_check_scene, solve_scene
+
+FAST = {"parts": ["plate_A", "plate_B"], "fidelity": "draft", "samples": 72, "frames": 0, "modes": ["cycle"]}
+
+
+def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(tmp_path, monkeypatch):
+    """A cold report's part pictures are drawn in two children from a copy of each result that
+    holds only its critical combination: the same files, byte for byte, and the same result as
+    drawing from the whole result in this process; a picture the cache holds is only copied."""
+    import rigfem.report.picture_cache as pc
+
+    cs = load_check_scene("final-cm", FAST)
+    _, results, _ = solve_scene(cs)
+    entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
+    jobs = {d: [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path / d) for r in results]
+            for d in ("here", "children", "copied")}
+    for d in jobs:
+        (tmp_path / d).mkdir()
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "c1"))
+    here = [pc.part_pictures(*job) for job in jobs["here"]]
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "c2"))
+
+    def not_here(*a, **k):
+        raise AssertionError("drawn in this process")
+
+    monkeypatch.setattr(pc, "part_pictures", not_here)  # the children import their own
+    with pc.started_part_pictures(jobs["children"]) as wait:
+        children = wait()
+    assert children == here and len(children) == 2
+    names = sorted(p.name for p in (tmp_path / "here").iterdir())
+    assert len(names) == 6 and names == sorted(p.name for p in (tmp_path / "children").iterdir())
+    for name in names:
+        assert (tmp_path / "children" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
+    monkeypatch.setattr("rigfem.mesh.worker.call", not_here)
+    with pc.started_part_pictures(jobs["copied"]) as wait:  # warm: copied, no child started
+        assert wait() == here
+    assert sorted(p.name for p in (tmp_path / "copied").iterdir()) == names
