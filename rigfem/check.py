@@ -219,12 +219,12 @@ def _differences(parts: list[dict]) -> list[str]:
     return out
 
 
-def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit: float, allowable: str,
-                   frames: int, export_inp: bool, pictures: bool = True) -> tuple[list[str], list[str]]:
-    """Pictures (kept with the report; none without ``pictures``) and field files (VTU/PVD/INP:
-    ParaView/CalculiX, not kept in the repository's result folders) of every part case; the
-    pictures' scales go into ``parts``."""
-    fields = []
+def _write_outputs(d: Path, h: ReactionHistory, results: list[CaseResult], parts: list[dict], limit: float,
+                   allowable: str, frames: int, export_inp: bool, pictures: bool = True) -> tuple[list[str], list[str]]:
+    """Pictures (kept with the report; none without ``pictures``) of the reactions and of every
+    part case, and field files (VTU/PVD/INP: ParaView/CalculiX, not kept in the repository's
+    result folders); the pictures' scales go into ``parts``."""
+    fields, first = [], []
     worst = {}
     for r in results:  # one set of pictures per part: its mode with the highest peak
         if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
@@ -233,6 +233,12 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
     of = {id(r): [] for r in results}  # each case's picture files, in the report's order
     jobs = [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d) for r, entry in drawn]
     with started_part_pictures(jobs) as wait:  # drawn in child processes while this one writes the field files
+        if pictures:
+            reactions_plot(h, d / "reactions.png")
+            first.append("reactions.png")
+        if pictures and results:
+            plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
+            first.append("peak_von_mises.png")
         for r, entry in zip(results, parts):
             stem = f"{r.case.name}_{r.mode}"
             c = r.coef[r.row]
@@ -261,7 +267,7 @@ def _write_outputs(d: Path, results: list[CaseResult], parts: list[dict], limit:
         for (r, entry), pics in zip(drawn, wait()):
             entry["pictures"] = pics
             of[id(r)][:0] = list(pics["files"].values())
-    return [f for r in results for f in of[id(r)]], fields
+    return first + [f for r in results for f in of[id(r)]], fields
 
 
 def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None
@@ -353,17 +359,8 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
     if on_stage:
         on_stage("report")
     with atomic_dir(out, force) as d:
-        files, fields = ["report.json", "report.md"], []
-        if pictures:
-            reactions_plot(h, d / "reactions.png")
-            files.append("reactions.png")
-        if results:
-            if pictures:
-                plot_peaks(results, limit, d / "peak_von_mises.png", allowable)
-                files.append("peak_von_mises.png")
-            pics, fields = _write_outputs(d, results, parts, limit, allowable, cs.frames, export_inp, pictures)
-            files += pics
-        report["files"] = files + ["report.html"]
+        pics, fields = _write_outputs(d, h, results, parts, limit, allowable, cs.frames, export_inp, pictures)
+        report["files"] = ["report.json", "report.md", *pics, "report.html"]
         report["field_files"] = fields
         write_json(report, d / "report.json")
         (d / "report.md").write_text(render_markdown(report))

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -27,7 +28,7 @@ from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
 from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
-from rigfem.mesh.mesher import MeshSettings, mesh_part, prefetch
+from rigfem.mesh.mesher import MeshSettings, estimate_part, mesh_part, prefetch
 from rigfem.mesh.partmesh import PartMesh
 from rigfem.rig.parts import load_part
 
@@ -195,8 +196,9 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     the band narrowed by ``shrink``) every part geometry climbs ``settings.levels()`` (coarse
     first) and stops at the first level where all its cases are settled, or at the last level
     (the cap).  A level at which a case would be unsettled even with the band narrowed by
-    :func:`best_shrink` is skipped.  A part that climbs goes to the back of the queue, its finer
-    mesh made in a mesher process while the other parts solve.  Without ``settled`` every part is
+    :func:`best_shrink` is skipped.  Parts are solved smallest first (the estimated mesh); a part
+    that climbs goes to the back of the queue, its finer mesh made in a mesher process while the
+    other parts solve.  Without ``settled`` every part is
     solved at ``settings`` only.  Where the ladder stopped is stored
     (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases, the levels and the code): a later
     check of the same cases starts at that level.  ``on_stage(text)`` hears 'meshing part X' and
@@ -215,9 +217,12 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     start = {g: names.index(c[-1]["level"]) if c else 0 for g, c in climbed.items()}
     level = dict(start)
     ladders = {g: c[:-1] if c else [] for g, c in climbed.items()}
-    # every part's first level meshed ahead, 2 at a time, while the FE works on the first part
-    prefetch([mesh_job(_merged(group), levels[level[g]][1]) for g, group in geo.items()])
-    queue, results = collections.deque(geo), {}
+    # every part's first level meshed ahead, 2 at a time, the smallest first: the FE starts on
+    # the part meshed soonest and works while the larger ones are meshed
+    jobs = {g: mesh_job(_merged(group), levels[level[g]][1]) for g, group in geo.items()}
+    order = sorted(geo, key=lambda g: getattr(estimate_part(*jobs[g]), "tets", math.inf))
+    prefetch([jobs[g] for g in order])
+    queue, results = collections.deque(order), {}
     while queue:
         g = queue.popleft()
         group, k = geo[g], level[g]
