@@ -203,3 +203,16 @@ def test_peak_von_mises_is_exact():
         assert np.allclose(vals, brute.max(1), rtol=1e-13, atol=0)
         ok = vals > 0
         assert np.array_equal(nodes[ok], brute.argmax(1)[ok])
+
+
+def test_pardiso_runs_with_rigfems_settings_and_no_inner_refinement(cantilever):
+    """PARDISO gets rigfem's iparm (not MKL's defaults, which refine every solve twice): it reports
+    no refinement step of its own, and rigfem's check of every solve still holds."""
+    from rigfem.fe.solver import PARDISO_IPARM
+
+    ls = StaticProblem(cantilever, [Fixed("xmin")], "pardiso").linear_solver
+    F = np.random.default_rng(1).standard_normal((ls.A.shape[0], 8))
+    X = ls.solve(F)
+    assert all(ls._ps.iparm[i - 1] == v for i, v in PARDISO_IPARM.items())
+    assert ls._ps.iparm[6] == 0  # iterative refinement steps PARDISO performed
+    assert ls.backward_errors.max() < 1e-13 and np.abs(ls.A @ X - F).max() < 1e-8 * np.abs(F).max()

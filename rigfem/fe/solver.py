@@ -49,6 +49,14 @@ def pardiso():
 
 DIRECT_MAX_DOF = 600_000
 
+#: PARDISO's settings (pypardiso's 1-based iparm numbers): our own values, not MKL's defaults (1);
+#: parallel nested dissection ordering (2); no iterative refinement inside PARDISO (8), since
+#: :meth:`LinearSolver.solve` checks every solve's backward error and refines only where needed:
+#: MKL's default of 2 steps on every solve made a rail's many-load solve several times slower, at
+#: the same residuals (``python benchmarks/bench_pardiso.py``); no scaling, an SPD
+#: matrix needs none (11).
+PARDISO_IPARM = {1: 1, 2: 3, 8: 0, 11: 0}
+
 
 METHODS = ("auto", "pardiso", "superlu", "amg")
 
@@ -89,10 +97,8 @@ class LinearSolver:
             # MKL keeps the factors outside Python: release them with this solver, or a long run
             # (a sweep, a convergence study, the test suite) accumulates every factorisation
             weakref.finalize(self, self._ps.free_memory, True)
-            self._ps.set_iparm(11, 0)  # no scaling needed for SPD
-            # parallel nested dissection instead of METIS: on a rail it solves many loads several
-            # times faster, with the same residuals (python benchmarks/bench_pardiso_ordering.py)
-            self._ps.set_iparm(1, 3)
+            for i, v in PARDISO_IPARM.items():
+                self._ps.set_iparm(i, v)
             self._upper = sp.triu(self.A, format="csr")
             self._upper.sort_indices()
             self._ps.factorize(self._upper)

@@ -1,13 +1,15 @@
-"""MKL PARDISO's fill-in ordering on a rig part: METIS (its default) against parallel nested dissection.
+"""MKL PARDISO's default settings on a rig part against rigfem's (no refinement inside PARDISO).
 
-    python benchmarks/bench_pardiso_ordering.py [--repeats 3] [--level draft] [--rhs 60]
+    python benchmarks/bench_pardiso.py [--repeats 3] [--level draft] [--rhs 60]
 
 Builds the supported stiffness of the 1000 mm rail of ``final-cm`` (the coupler/rocker rail, the
 original mode's bolted supports) at the ladder ``--level``, then, in fresh processes alternating the
-two orderings, times PARDISO's analysis (phase 11), numeric factorisation (22) and one solve of
+two settings, times PARDISO's analysis (phase 11), numeric factorisation (22) and one solve of
 ``--rhs`` right-hand sides (33: a cycle-mode part has about that many unit loads), with the worst
-relative residual of the solves.  ``rigfem.fe.solver.LinearSolver`` uses the faster one.
-Writes results/benchmarks/pardiso_ordering.json (``python benchmarks/publish.py`` writes the .md).
+relative residual of the solves.  MKL's defaults (``iparm[0] = 0``) include 2 steps of iterative
+refinement in every solve; ``rigfem.fe.solver.PARDISO_IPARM`` turns them off, since rigfem checks
+every solve's backward error itself and refines only where needed.
+Writes results/benchmarks/pardiso.json (``python benchmarks/publish.py`` writes the .md).
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
 from rigfem.fe.model import StaticProblem, build_model
 from rigfem.fe.partcase import _key, _merged, mesh_case, supports_of
+from rigfem.fe.solver import PARDISO_IPARM
 from rigfem.loads.cases import part_cases
-ordering, level, nrhs = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+mine, level, nrhs = sys.argv[1] == "rigfem", sys.argv[2], int(sys.argv[3])
 cs = load_check_scene("final-cm")
 h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
 groups = {}
@@ -43,8 +46,8 @@ U = __import__("scipy.sparse", fromlist=["triu"]).triu(A, format="csr")
 U.sort_indices()
 B = np.asfortranarray(np.random.default_rng(0).standard_normal((A.shape[0], nrhs)))
 ps = pypardiso.PyPardisoSolver(mtype=2)
-ps.set_iparm(11, 0)
-ps.set_iparm(1, ordering)
+for i, v in (PARDISO_IPARM.items() if mine else ()):
+    ps.set_iparm(i, v)
 out = {"dofs": int(A.shape[0]), "nnz_upper": int(U.nnz)}
 for phase, name, b in ((11, "analysis_s", np.zeros((A.shape[0], 1))), (22, "factorise_s", np.zeros((A.shape[0], 1))),
                        (33, "solve_s", B)):
@@ -54,10 +57,11 @@ for phase, name, b in ((11, "analysis_s", np.zeros((A.shape[0], 1))), (22, "fact
     out[name] = time.perf_counter() - t0
 out["residual_max"] = float((np.linalg.norm(A @ x - B, axis=0) / np.linalg.norm(B, axis=0)).max())
 out["peak_numeric_kb"] = int(ps.iparm[16])
+out["refinement_steps"] = int(ps.iparm[6])
 print(json.dumps(out))
 """
 
-LABELS = {2: "METIS (iparm[1] = 2, MKL's default)", 3: "parallel nested dissection (iparm[1] = 3)"}
+LABELS = {"mkl": "MKL's defaults (iparm[0] = 0)", "rigfem": "rigfem's: PARDISO_IPARM (no refinement inside)"}
 
 
 def main() -> None:
@@ -68,8 +72,8 @@ def main() -> None:
     a = ap.parse_args()
     runs: dict[str, list[dict]] = {label: [] for label in LABELS.values()}
     for _ in range(a.repeats):
-        for ordering, label in LABELS.items():
-            out = subprocess.run([sys.executable, "-c", CHILD, str(ordering), a.level, str(a.rhs)], check=True,
+        for which, label in LABELS.items():
+            out = subprocess.run([sys.executable, "-c", CHILD, which, a.level, str(a.rhs)], check=True,
                                  capture_output=True, text=True).stdout
             runs[label].append(json.loads(out.strip().splitlines()[-1]))
 
@@ -77,12 +81,12 @@ def main() -> None:
         v = sorted(r[key] for r in runs[label])
         return v[len(v) // 2]
 
-    metis, nd = LABELS[2], LABELS[3]
-    derived = {f"{k} METIS / parallel ND": med(metis, k) / med(nd, k) for k in ("analysis_s", "factorise_s", "solve_s")}
+    mkl, mine = LABELS["mkl"], LABELS["rigfem"]
+    derived = {f"{k} MKL / rigfem": med(mkl, k) / med(mine, k) for k in ("analysis_s", "factorise_s", "solve_s")}
     derived["residual_max"] = max(r["residual_max"] for v in runs.values() for r in v)
     params = {"repeats": a.repeats, "level": a.level, "rhs": a.rhs, "part": "coupler_rail (1000 mm rail)",
               "mode": "original (bolted)"}
-    print(f"wrote {write_record('pardiso_ordering', runs, derived, params)}")
+    print(f"wrote {write_record('pardiso', runs, derived, params)}")
 
 
 if __name__ == "__main__":
