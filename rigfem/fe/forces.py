@@ -133,9 +133,10 @@ def outward_normals(fm: FEMesh, name: str, degree: int = 1) -> np.ndarray:
     return normals * np.sign(np.einsum("kqd,kd->kq", normals, x[:, 0] - opposite))[..., None]
 
 
-def _resultant(fm: FEMesh, f: np.ndarray, about: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    F = f.reshape(-1, 3)
-    return F.sum(0), np.cross(fm.nodes - about, F).sum(0)
+def _resultant(fm: FEMesh, f: np.ndarray, about: np.ndarray, nodes=slice(None)) -> tuple[np.ndarray, np.ndarray]:
+    """Force and moment about ``about`` of the nodal vector f, loaded at ``nodes`` only."""
+    F = f.reshape(-1, 3)[nodes]
+    return F.sum(0), np.cross(fm.nodes[nodes] - about, F).sum(0)
 
 
 def _hole(holes: dict[str, Hole], name: str) -> tuple[Hole, np.ndarray]:
@@ -185,7 +186,8 @@ def _exact(fm: FEMesh, name: str, c: np.ndarray, a: np.ndarray, f0: np.ndarray, 
     error of f0 on an unsymmetric surface mesh.
     """
     e2 = np.cross(a, e)
-    depth = max(np.ptp((fm.nodes[np.unique(fm.surfaces[name])] - c) @ a), np.finfo(float).tiny)
+    on = np.unique(fm.surfaces[name])  # the only loaded nodes
+    depth = max(np.ptp((fm.nodes[on] - c) @ a), np.finfo(float).tiny)
     fs = [f0, _cosine(fm, name, c, a, e2, depth), _cosine(fm, name, c, a, e, depth, True),
           _cosine(fm, name, c, a, e2, depth, True)]
     z = np.zeros(3)
@@ -194,7 +196,7 @@ def _exact(fm: FEMesh, name: str, c: np.ndarray, a: np.ndarray, f0: np.ndarray, 
         fs.append(_cosine(fm, name, c, a, e, depth))
         rows.append(np.r_[z, a])
     rows = np.array(rows)
-    R = np.array([np.concatenate(_resultant(fm, f, c)) for f in fs]).T  # (6, n)
+    R = np.array([np.concatenate(_resultant(fm, f, c, on)) for f in fs]).T  # (6, n)
     k = np.linalg.solve(rows @ R, rows @ target)
     return sum(ki * fi for ki, fi in zip(k, fs))
 
