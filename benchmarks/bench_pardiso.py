@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import subprocess
 import sys
 
@@ -78,8 +79,7 @@ def main() -> None:
             runs[label].append(json.loads(out.strip().splitlines()[-1]))
 
     def med(label: str, key: str) -> float:
-        v = sorted(r[key] for r in runs[label])
-        return v[len(v) // 2]
+        return statistics.median(r[key] for r in runs[label])
 
     mkl, mine = LABELS["mkl"], LABELS["rigfem"]
     derived = {f"{k} MKL / rigfem": med(mkl, k) / med(mine, k) for k in ("analysis_s", "factorise_s", "solve_s")}

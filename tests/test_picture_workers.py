@@ -1,19 +1,26 @@
 """A cold report's part pictures are drawn in child processes while the check writes its field
 files (issue 26): the same pictures as drawing them in the check's own process."""
 
+import multiprocessing as mp
+
+import pytest
+
 from rigfem.check import load_check_scene, solve_scene
 
 FAST = {"parts": ["plate_A", "plate_B"], "fidelity": "draft", "samples": 72, "frames": 0, "modes": ["cycle"]}
 
 
-def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(tmp_path, monkeypatch):
+@pytest.fixture(scope="module")
+def results():
+    return solve_scene(load_check_scene("final-cm", FAST))[1]
+
+
+def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_path, monkeypatch):
     """A cold report's part pictures are drawn in two children from a copy of each result that
     holds only its critical combination: the same files, byte for byte, and the same result as
     drawing from the whole result in this process; a picture the cache holds is only copied."""
     import rigfem.report.picture_cache as pc
 
-    cs = load_check_scene("final-cm", FAST)
-    _, results, _ = solve_scene(cs)
     entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
     jobs = {d: [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path / d) for r in results]
             for d in ("here", "children", "copied")}
@@ -38,3 +45,17 @@ def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(tmp_path, mon
     with pc.started_part_pictures(jobs["copied"]) as wait:  # warm: copied, no child started
         assert wait() == here
     assert sorted(p.name for p in (tmp_path / "copied").iterdir()) == names
+
+
+def test_an_error_while_they_draw_ends_the_children_first(results, tmp_path, monkeypatch):
+    """The check fails while the children draw: they are ended before the error goes on, so no
+    child outlives it to write into a folder the caller is about to remove."""
+    import rigfem.report.picture_cache as pc
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
+    jobs = [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path) for r in results]
+    with pytest.raises(RuntimeError, match="stop"):
+        with pc.started_part_pictures(jobs):
+            raise RuntimeError("stop")
+    assert [p.name for p in mp.active_children() if p.name == "rigfem-pictures"] == []

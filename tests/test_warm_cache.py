@@ -159,4 +159,3 @@ def test_viewer_data_is_read_once_per_animation(warm, monkeypatch):
     m.point_data["von_mises"] = 2 * m.point_data["von_mises"]
     meshio.write(frame, m)  # another frame: read again
     assert viewer.viewer_data(d, files, 100.0) != first
-

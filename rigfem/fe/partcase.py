@@ -181,9 +181,11 @@ def _key(case: PartCase) -> tuple:
 
 
 def best_shrink(coarse, fine, order: int) -> float:
-    """The most a peak's error band can narrow from mesh settings ``coarse`` to ``fine``: the stress
-    error of order-p elements falls at best as h^p, h taken as the smaller of the global and the
-    local size ratios.  A level predicted unsettled even so is skipped (:func:`solve_cases`)."""
+    """How much a peak's error band narrows from mesh settings ``coarse`` to ``fine`` at the
+    asymptotic rate of order-p elements' stress error, h^p, h the smaller of the global and the
+    local size ratios.  A heuristic: a level at which a case would stay unsettled with its band
+    narrowed so much, its peak unchanged, is skipped (:func:`solve_cases`).  A skip costs time
+    (a finer level than needed), never the verdict: the part is still judged where it stops."""
     return min(fine.size_mm / coarse.size_mm, fine.near_mm / coarse.near_mm) ** order
 
 
@@ -195,7 +197,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     With ``settled`` (``settled(result, shrink=1.0) -> bool``, the verdict layer's judge, with
     the band narrowed by ``shrink``) every part geometry climbs ``settings.levels()`` (coarse
     first) and stops at the first level where all its cases are settled, or at the last level
-    (the cap).  A level at which a case would be unsettled even with the band narrowed by
+    (the cap).  A level at which a case would stay unsettled with the band narrowed by
     :func:`best_shrink` is skipped.  Parts are solved smallest first (the estimated mesh); a part
     that climbs goes to the back of the queue, its finer mesh made in a mesher process while the
     other parts solve.  Without ``settled`` every part is
@@ -235,7 +237,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
         done = settled is not None and all(settled(r) for r in out)
         if not done and k < last:
             while k + 1 < last and not all(settled(r, best_shrink(s, levels[k + 1][1], s.order)) for r in out):
-                k += 1  # unsettled there even at the best rate: skipped
+                k += 1  # unsettled there even at the asymptotic rate: skipped
                 ladders[g][-1].setdefault("skipped", []).append(names[k])
             level[g] = k + 1
             prefetch([mesh_job(_merged(group), levels[k + 1][1])], keep=True)

@@ -60,7 +60,7 @@ def element_node_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, elems=sl
     return np.einsum("aq,mqkc->makc", X, _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), L, elems), optimize=True)
 
 
-def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 65536,
+def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 16384,
                  mem: float = 64e6) -> np.ndarray:
     """Recovered nodal stresses (k, N, 6): average of element values at each node.
 
@@ -124,4 +124,3 @@ def zz_error(fm: FEMesh, E: float, nu: float, u: np.ndarray, node: int, s_nodes:
     Se = element_node_stress(fm, E, nu, u, elems)[:, :, 0]
     ref = von_mises(s_nodes[node])
     return float(von_mises(Se - s_nodes[fm.elements[elems]]).max() / ref) if ref > 0 else 0.0
-

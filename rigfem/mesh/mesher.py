@@ -278,14 +278,14 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     if first is not None:
         check_estimate(first, settings, machine_gib, "would give at least")
     key, inputs = mesh_inputs(part, settings)
+    if use_cache and machine_gib == MACHINE_GIB:
+        pm = pool.take(key)  # made ahead (prefetch): taken, so the pool keeps no copy of it
+        if pm is not None:
+            return pm
     if use_cache and read_entry(mesh_folder(part, key), inputs):
         pm = load_npz(mesh_folder(part, key) / "mesh.npz")
         pm.meta["cache"] = "hit"
         return pm
-    if use_cache and machine_gib == MACHINE_GIB:
-        pm = pool.take(key)
-        if pm is not None:
-            return pm
     return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
 
 

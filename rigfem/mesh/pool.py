@@ -60,11 +60,13 @@ def take(key: str) -> Any:
         raise
 
 
-def cancel() -> None:
-    """End every job not yet taken: queued ones never start, running ones see their ``stop`` set."""
+def cancel() -> list[Future]:
+    """End every job not yet taken: queued ones never start, running ones see their ``stop`` set.
+    Returns their futures (done once each job has ended its child)."""
     with _lock:
         jobs = list(_jobs.values())
         _jobs.clear()
     for fut, stop in jobs:
         stop.set()
         fut.cancel()
+    return [fut for fut, _ in jobs]

@@ -133,7 +133,10 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
     Pictures the cache holds are copied at once; the others, most of a cold report's time, are
     drawn in up to ``workers`` child processes (:func:`rigfem.mesh.worker.call`, started through
     :mod:`rigfem.mesh.pool`), each importing the drawing code once, while the caller writes the
-    rest of the report.  An exception in the block ends the children."""
+    rest of the report.  In a process that may not have children (a daemonic one) they are drawn
+    when waited for.  An exception in the block ends the children before it goes on."""
+    import multiprocessing as mp
+
     from rigfem.mesh import pool
     from rigfem.mesh.worker import call
 
@@ -144,29 +147,33 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
             todo.append(i)
         else:
             done[i] = got
+    size = {i: len(jobs[i][0].solution.model.mesh.nodes) for i in todo}
     shares: list[list[int]] = [[] for _ in range(max(1, min(workers, len(todo))))]
-    for i in sorted(todo, key=lambda i: -len(jobs[i][0].solution.model.mesh.nodes)):  # largest first, to the
-        min(shares, key=lambda sh: sum(len(jobs[j][0].solution.model.mesh.nodes) for j in sh)).append(i)  # lightest
-    keys = []
-    if len(shares) > 1:
-        for share in shares:
-            slim = [(_one_combination(jobs[i][0], jobs[i][1]), np.ones(1), *jobs[i][2:]) for i in share]
-            key = f"pictures-{id(jobs)}-{share[0]}"
-            pool.submit(key, lambda stop, slim=slim: call(_draw_all, slim, cancel=stop, what="pictures"))
-            keys.append((key, share))
+    for i in sorted(todo, key=lambda i: -size[i]):  # the largest first, each to the lightest share
+        min(shares, key=lambda sh: sum(size[j] for j in sh)).append(i)
+    if len(shares) < 2 or mp.current_process().daemon:
+        shares = []
+    slim = [[(_one_combination(jobs[i][0], jobs[i][1]), np.ones(1), *jobs[i][2:]) for i in share] for share in shares]
+    keys = [(f"pictures-{id(jobs)}-{share[0]}", share) for share in shares]
 
     def wait() -> list[dict]:
         for key, share in keys:
-            done.update(zip(share, pool.take(key)))
+            done.update(zip(share, pool.take(key) or []))
         for i in todo:
-            if i not in done:  # one picture to draw, or one worker: here
+            if i not in done:  # one picture to draw, one worker, or a job cancelled: here
                 done[i] = part_pictures(*jobs[i])
         return [done[i] for i in range(len(jobs))]
 
     try:
+        for (key, _), part in zip(keys, slim):
+            pool.submit(key, lambda stop, part=part: call(_draw_all, part, cancel=stop, what="pictures"))
         yield wait
     except BaseException:
-        pool.cancel()
+        for fut in pool.cancel():  # the children end before the caller removes their folder
+            try:
+                fut.exception(timeout=5.0)
+            except BaseException:  # noqa: BLE001 - cancelled or still ending: nothing more to wait for
+                pass
         raise
 
 
