@@ -30,21 +30,16 @@ from rigfem.check import load_check_scene
 from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
 from rigfem.fe.model import StaticProblem, build_model
-from rigfem.fe.partcase import _key, _merged, mesh_case, supports_of
+from rigfem.fe.partcase import mesh_case, supports_of
 from rigfem.fe.solver import PARDISO_IPARM
 from rigfem.loads.cases import part_cases
 mine, level, nrhs = sys.argv[1] == "rigfem", sys.argv[2], int(sys.argv[3])
-cs = load_check_scene("final-cm")
+cs = load_check_scene("final-cm", {"parts": ["coupler_rail"], "modes": ["original"]})
 h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
-groups = {}
-for mode, case in part_cases(h, peaks(h), cs.settings):
-    groups.setdefault(_key(case), []).append((mode, case))
-group = next(g for g in groups.values() if g[0][1].name == "coupler_rail")
+(_, case), = part_cases(h, peaks(h), cs.settings)
 s = dict(cs.settings.levels())[level]
-model = build_model(mesh_case(_merged(group), s), s.material, s.order)
-A = StaticProblem(model, supports_of(group[0][1]), solver="pardiso").linear_solver.A
-U = __import__("scipy.sparse", fromlist=["triu"]).triu(A, format="csr")
-U.sort_indices()
+ls = StaticProblem(build_model(mesh_case(case, s), s.material, s.order), supports_of(case), "pardiso").linear_solver
+A, U = ls.A, ls._upper  # the supported stiffness and the upper triangle PARDISO is given
 B = np.asfortranarray(np.random.default_rng(0).standard_normal((A.shape[0], nrhs)))
 ps = pypardiso.PyPardisoSolver(mtype=2)
 for i, v in (PARDISO_IPARM.items() if mine else ()):

@@ -2,6 +2,7 @@
 files (issue 26): the same pictures as drawing them in the check's own process."""
 
 import multiprocessing as mp
+import time
 
 import pytest
 
@@ -55,7 +56,14 @@ def test_an_error_while_they_draw_ends_the_children_first(results, tmp_path, mon
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
     jobs = [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path) for r in results]
+    def drawing() -> int:
+        return len([p for p in mp.active_children() if p.name == "rigfem-pictures"])
+
     with pytest.raises(RuntimeError, match="stop"):
         with pc.started_part_pictures(jobs):
+            t0 = time.monotonic()
+            while drawing() < 2 and time.monotonic() - t0 < 30:  # both children have started
+                time.sleep(0.01)
+            assert drawing() == 2
             raise RuntimeError("stop")
-    assert [p.name for p in mp.active_children() if p.name == "rigfem-pictures"] == []
+    assert drawing() == 0

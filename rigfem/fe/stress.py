@@ -20,7 +20,6 @@ import scipy.sparse as sp
 from rigfem.fe.assembly import (
     NODE_BARY,
     FEMesh,
-    element_dofs,
     geometry,
     points_at,
     tet_quadrature,
@@ -29,18 +28,37 @@ from rigfem.fe.tensors import von_mises
 from rigfem.material import lame
 
 
+def _gradient_operator(fm: FEMesh, L: np.ndarray, elems) -> np.ndarray:
+    """(m, nq·3, nloc) of elements ``elems``: row 3q + j takes ∂/∂x_j at barycentric point q of L
+    (nq, 4) from an element's nodal values."""
+    dN, _ = geometry(fm, L, elems)  # (m, nq, nloc, 3)
+    m, nq, nloc, _ = dN.shape
+    return np.ascontiguousarray(dN.transpose(0, 1, 3, 2)).reshape(m, nq * 3, nloc)
+
+
+def _voigt_stress(G: np.ndarray, el: np.ndarray, U: np.ndarray, lam: float, mu: float) -> np.ndarray:
+    """Stress (m, nq, 6, k) at the points of ``G`` (:func:`_gradient_operator`) of elements ``el``
+    for U (ndof, k): Hooke's law on the displacement gradients of every load column at once."""
+    m, k = len(el), U.shape[1]
+    H = (G @ U.reshape(-1, 3 * k)[el]).reshape(m, -1, 3, 3, k)  # H[:, q, j, i] = ∂u_i/∂x_j
+    tr = lam * (H[:, :, 0, 0] + H[:, :, 1, 1] + H[:, :, 2, 2])
+    s = np.empty((m, H.shape[1], 6, k))
+    for v, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))):
+        s[:, :, v] = tr + 2 * mu * H[:, :, i, i] if i == j else mu * (H[:, :, i, j] + H[:, :, j, i])
+    return s
+
+
 def _stress_at(fm: FEMesh, E: float, nu: float, U: np.ndarray, L: np.ndarray, elems) -> np.ndarray:
     """Stress (m, nq, k, 6) at barycentric points L (nq, 4) of elements ``elems`` for U (ndof, k)."""
     lam, mu = lame(E, nu)
-    dN, _ = geometry(fm, L, elems)
-    el = fm.elements[elems]
-    Ue = U[element_dofs(el)].reshape(len(el), el.shape[1], 3, -1)
-    H = np.einsum("maik,mqaj->mqkij", Ue, dN, optimize=True)
-    e = 0.5 * (H + np.swapaxes(H, -1, -2))
-    tr = np.trace(e, axis1=-2, axis2=-1)
-    s = 2 * mu * e
-    s[..., [0, 1, 2], [0, 1, 2]] += (lam * tr)[..., None]
-    return np.stack([s[..., 0, 0], s[..., 1, 1], s[..., 2, 2], s[..., 0, 1], s[..., 1, 2], s[..., 0, 2]], -1)
+    return np.moveaxis(_voigt_stress(_gradient_operator(fm, L, elems), fm.elements[elems], U, lam, mu), 2, 3)
+
+
+def _extrapolation(fm: FEMesh) -> tuple[np.ndarray, np.ndarray]:
+    """The stiffness's quadrature points L (nq, 4) and the linear fit X (nloc, nq) through them
+    to each element's own nodes."""
+    L, _ = tet_quadrature(2 * (fm.order - 1))
+    return L, NODE_BARY[: fm.elements.shape[1]] @ np.linalg.pinv(L)
 
 
 def quadrature_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -55,8 +73,7 @@ def element_node_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, elems=sl
     from the stiffness's quadrature points (as CalculiX does for C3D10).  Exact on straight P2
     elements, whose stress is linear; on curved ones it is the robust choice (no evaluation at
     a corner where the mapping is most distorted)."""
-    L, _ = tet_quadrature(2 * (fm.order - 1))
-    X = NODE_BARY[: fm.elements.shape[1]] @ np.linalg.pinv(L)  # (nloc, nq): linear fit through the points
+    L, X = _extrapolation(fm)
     return np.einsum("aq,mqkc->makc", X, _stress_at(fm, E, nu, U.reshape(fm.ndof, -1), L, elems), optimize=True)
 
 
@@ -71,8 +88,7 @@ def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 16
     U = U.reshape(fm.ndof, -1)
     k, N = U.shape[1], len(fm.nodes)
     lam, mu = lame(E, nu)
-    L, _ = tet_quadrature(2 * (fm.order - 1))
-    X = NODE_BARY[: fm.elements.shape[1]] @ np.linalg.pinv(L)  # (nloc, nq): linear fit through the points
+    L, X = _extrapolation(fm)
     nloc, nq = X.shape
     count = np.bincount(fm.elements.ravel(), minlength=N)
     out = np.zeros((k, N, 6))
@@ -83,17 +99,11 @@ def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 16
         P = sp.csr_matrix(((X[None] / count[el][:, :, None]).ravel(),
                            (np.repeat(el.ravel(), nq), np.tile(np.arange(m * nq).reshape(m, 1, nq), (1, nloc, 1)).ravel())),
                           shape=(N, m * nq))
-        dN, _ = geometry(fm, L, slice(e0, e0 + m))  # (m, nq, nloc, 3)
-        A = np.ascontiguousarray(dN.transpose(0, 1, 3, 2)).reshape(m, nq * 3, nloc)
+        G = _gradient_operator(fm, L, slice(e0, e0 + m))
         kc = max(1, int(mem // (m * nq * 9 * 8)))
         for k0 in range(0, k, kc):
-            c = min(kc, k - k0)
-            Ue = U[:, k0:k0 + c].reshape(N, 3 * c)[el]  # (m, nloc, 3c): u_i of load k at column i*c + k
-            H = (A @ Ue).reshape(m, nq, 3, 3, c)  # H[:, :, j, i] = ∂u_i/∂x_j
-            tr = lam * (H[:, :, 0, 0] + H[:, :, 1, 1] + H[:, :, 2, 2])
-            s = np.empty((m, nq, 6, c))
-            for v, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))):
-                s[:, :, v] = tr + 2 * mu * H[:, :, i, i] if i == j else mu * (H[:, :, i, j] + H[:, :, j, i])
+            s = _voigt_stress(G, el, U[:, k0:k0 + kc], lam, mu)
+            c = s.shape[-1]
             out[k0:k0 + c] += (P @ s.reshape(m * nq, 6 * c)).reshape(N, 6, c).transpose(2, 0, 1)
     return out
 
