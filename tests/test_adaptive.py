@@ -153,3 +153,28 @@ def test_a_level_that_cannot_settle_is_skipped(tmp_path, monkeypatch):
     solved.clear()
     main(["check", str(scene), "--out", str(tmp_path / "o2"), *args])
     assert solved == ["standard"]
+
+
+def test_the_part_whose_mesh_is_made_first_is_solved_first(monkeypatch):
+    """The queue's estimates only guess which mesh comes first: the first part whose mesh is ready
+    is taken, waiting while meshes are being made; with none being made, the queue's head."""
+    from collections import deque
+
+    from rigfem.fe import partcase
+
+    seen = []
+    timeline = {"a": ["making", "making", "making"], "b": ["making", "making", "ready"], "c": ["none"] * 3}
+
+    def state(name, _settings):
+        seen.append(name)
+        calls = seen.count(name) - 1
+        return timeline[name][min(calls, 2)]
+
+    monkeypatch.setattr(partcase, "mesh_state", state)
+    monkeypatch.setattr(partcase.time, "sleep", lambda s: None)
+    assert partcase._next_ready(deque("abc"), lambda g: (g, None)) == "b"  # after two rounds of waiting
+    assert seen.count("b") == 3
+    timeline.update(a=["none"] * 3, b=["none"] * 3)
+    assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "c"  # none being made: the head
+    timeline.update(a=["ready"] * 3)
+    assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "a"

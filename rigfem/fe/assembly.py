@@ -298,30 +298,58 @@ def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
 
 #: True in the child process that compiles the kernels (:func:`compile_kernels`)
 _COMPILING = False
+#: the child process compiling the kernels, once :func:`start_compiling` started it
+_compiler = None
 
 
-@functools.lru_cache(maxsize=1)
-def _kernels():
-    """The compiled kernels (:mod:`rigfem.fe.kernels`).  On the first assembly after an install
-    (numba has not compiled them yet) a child process compiles them into numba's cache first
-    (:func:`compile_kernels`) and this process loads them: LLVM's working memory, which a process
-    keeps once it has compiled, goes with the child (a cold check's peak RSS:
-    ``python benchmarks/bench_perf.py --rows check``).  A marker entry in rigfem's cache, keyed by
-    the kernels' code and the numba and Python versions, says the child was started once; where it
-    failed, or numba's cache went missing since, this process compiles them (slower, correct)."""
+def _marker() -> tuple[dict, object]:
+    """Inputs and folder of the cache entry that says the kernels were compiled once."""
     import importlib.metadata
-    import subprocess
     import sys
 
     inputs = {"code": code_hash("fe/kernels.py", "fe/assembly.py"), "numba": importlib.metadata.version("numba"),
               "python": sys.version}
-    folder = cache_dir() / "kernels" / entry_key(inputs)
-    if not _COMPILING and read_entry(folder, inputs) is None and usable():
+    return inputs, cache_dir() / "kernels" / entry_key(inputs)
+
+
+def start_compiling() -> None:
+    """On the first assembly after an install (numba has not compiled the kernels yet) start a
+    child process that compiles them into numba's cache (:func:`compile_kernels`); a caller that
+    knows it will assemble starts it early, so that the compile overlaps the meshing."""
+    global _compiler
+    import subprocess
+    import sys
+
+    if _COMPILING or _compiler is not None or not usable():
+        return
+    inputs, folder = _marker()
+    if read_entry(folder, inputs) is not None:
+        return
+    try:
+        _compiler = subprocess.Popen([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
+                                      "compile_kernels()"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        _compiler = False  # compiled here instead, on first use
+
+
+@functools.lru_cache(maxsize=1)
+def _kernels():
+    """The compiled kernels (:mod:`rigfem.fe.kernels`), compiled by the child of
+    :func:`start_compiling` and loaded here: LLVM's working memory, which a process keeps once it
+    has compiled, goes with the child (a cold check's peak RSS: ``python benchmarks/bench_perf.py
+    --rows check``).  A marker entry in rigfem's cache, keyed by the kernels' code and the numba
+    and Python versions, says the child ran once; where it failed, or numba's cache went missing
+    since, this process compiles them (slower, correct)."""
+    import subprocess
+
+    start_compiling()
+    if _compiler:
         try:
-            subprocess.run([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
-                            "compile_kernels()"], capture_output=True, timeout=900)
-        except (OSError, subprocess.SubprocessError):
-            pass  # compiled here instead, on first use
+            _compiler.wait(timeout=900)
+        except subprocess.TimeoutExpired:
+            _compiler.kill()
+            _compiler.wait()
+        inputs, folder = _marker()
         write_entry(folder, inputs, lambda d: None)
     import rigfem.fe.kernels
 

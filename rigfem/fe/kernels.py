@@ -11,19 +11,26 @@ __all__ = ["block_pattern", "add_elastic_blocks"]
 
 @numba.njit(cache=True)
 def block_pattern(el, n):  # pragma: no cover - compiled
+    """CSR pattern of the node graph and each element pair's position in it.  Plain loops only:
+    numba compiles numpy's generic sort, search and cumsum in seconds, these in about one."""
     m, k = el.shape
     eptr = np.zeros(n + 1, np.int64)  # node -> elements (counting sort)
     for e in range(m):
         for a in range(k):
             eptr[el[e, a] + 1] += 1
-    eptr = np.cumsum(eptr)
-    elist = np.empty(eptr[-1], np.int64)
-    fill = eptr[:-1].copy()
+    for r in range(n):
+        eptr[r + 1] += eptr[r]
+    elist = np.empty(eptr[n], np.int64)
+    fill = np.empty(n, np.int64)
+    for r in range(n):
+        fill[r] = eptr[r]
     for e in range(m):
         for a in range(k):
             elist[fill[el[e, a]]] = e
             fill[el[e, a]] += 1
-    mark = -np.ones(n, np.int64)
+    mark = np.empty(n, np.int64)
+    for r in range(n):
+        mark[r] = -1
     indptr = np.zeros(n + 1, np.int64)
     for r in range(n):  # count distinct neighbours
         c = 0
@@ -34,8 +41,9 @@ def block_pattern(el, n):  # pragma: no cover - compiled
                     mark[j] = r
                     c += 1
         indptr[r + 1] = indptr[r] + c
-    indices = np.empty(indptr[-1], np.int32)
-    mark[:] = -1
+    indices = np.empty(indptr[n], np.int32)
+    for r in range(n):
+        mark[r] = -1
     for r in range(n):
         c = indptr[r]
         for p in range(eptr[r], eptr[r + 1]):
@@ -43,16 +51,26 @@ def block_pattern(el, n):  # pragma: no cover - compiled
                 j = el[elist[p], b]
                 if mark[j] != r:
                     mark[j] = r
-                    indices[c] = j
+                    i = c  # insertion into the row's sorted columns
+                    while i > indptr[r] and indices[i - 1] > j:
+                        indices[i] = indices[i - 1]
+                        i -= 1
+                    indices[i] = j
                     c += 1
-        indices[indptr[r]:indptr[r + 1]] = np.sort(indices[indptr[r]:indptr[r + 1]])
     pos = np.empty((m, k, k), np.int64)
     for e in range(m):
         for a in range(k):
             r = el[e, a]
-            row = indices[indptr[r]:indptr[r + 1]]
             for b in range(k):
-                pos[e, a, b] = indptr[r] + np.searchsorted(row, el[e, b])
+                j = el[e, b]
+                lo, hi = indptr[r], indptr[r + 1]
+                while lo < hi:  # binary search of column j in row r
+                    mid = (lo + hi) // 2
+                    if indices[mid] < j:
+                        lo = mid + 1
+                    else:
+                        hi = mid
+                pos[e, a, b] = lo
     return indptr, indices, pos
 
 

@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from rigfem.fe.assembly import start_compiling
 from rigfem.fe.cache import cached_solve, ladder_inputs, peak_sweep, read_ladder, save_ladder
 from rigfem.fe.forces import BearingLoad, Inertia, body_basis, body_coefficients
 from rigfem.fe.model import Model, build_model
@@ -28,7 +29,7 @@ from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
 from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
-from rigfem.mesh.mesher import MeshSettings, estimate_part, mesh_part, prefetch
+from rigfem.mesh.mesher import MeshSettings, estimate_part, mesh_part, mesh_state, prefetch
 from rigfem.mesh.partmesh import PartMesh
 from rigfem.rig.parts import load_part
 
@@ -198,8 +199,9 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     the band narrowed by ``shrink``) every part geometry climbs ``settings.levels()`` (coarse
     first) and stops at the first level where all its cases are settled, or at the last level
     (the cap).  A level at which a case would stay unsettled with the band narrowed by
-    :func:`best_shrink` is skipped.  Parts are solved smallest first (the estimated mesh); a part
-    that climbs goes to the back of the queue, its finer mesh made in a mesher process while the
+    :func:`best_shrink` is skipped.  Parts are queued smallest first (the estimated mesh) and
+    solved as their meshes are made: the first part in the queue whose mesh is ready; a part that
+    climbs goes to the back of the queue, its finer mesh made in a mesher process while the
     other parts solve.  Without ``settled`` every part is
     solved at ``settings`` only.  Where the ladder stopped is stored
     (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases, the levels and the code): a later
@@ -224,9 +226,11 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     jobs = {g: mesh_job(_merged(group), levels[level[g]][1]) for g, group in geo.items()}
     order = sorted(geo, key=lambda g: getattr(estimate_part(*jobs[g]), "tets", math.inf))
     prefetch([jobs[g] for g in order])
+    start_compiling()  # a first run after an install: numba compiles while the meshes are made
     queue, results = collections.deque(order), {}
     while queue:
-        g = queue.popleft()
+        g = _next_ready(queue, lambda g: mesh_job(_merged(geo[g]), levels[level[g]][1]))
+        queue.remove(g)
         group, k = geo[g], level[g]
         name, s = levels[k]
         t0 = time.perf_counter()
@@ -254,6 +258,18 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
             if progress:
                 progress(case.name, mode)
     return [results[id(case)] for _, case in cases]
+
+
+def _next_ready(queue: collections.deque, job) -> tuple:
+    """The first part in ``queue`` whose mesh (``job(g)``: part, settings) is ready, waiting while
+    the mesher processes make them (the estimates only guess which comes first); the first part
+    when none is being made."""
+    while True:
+        states = {g: mesh_state(*job(g)) for g in queue}
+        ready = [g for g in queue if states[g] == "ready"]
+        if ready or "making" not in states.values():
+            return (ready or list(queue))[0]
+        time.sleep(0.05)
 
 
 def _solve_group(group: list[tuple[str, PartCase]], settings, solver: str, on_stage=None,

@@ -289,6 +289,14 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
     return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
 
 
+def mesh_state(part, settings: MeshSettings) -> str:
+    """'ready' (made ahead, or cached: :func:`mesh_part` returns it without waiting), 'making'
+    (a mesher process makes it) or 'none'."""
+    key, _ = mesh_inputs(part, settings)
+    made = pool.state(key)
+    return "ready" if made == "done" or mesh_folder(part, key).exists() else "making" if made == "pending" else "none"
+
+
 def prefetch(jobs: list[tuple], keep: bool = False) -> int:
     """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
     processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them

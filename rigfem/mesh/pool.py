@@ -14,7 +14,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
-__all__ = ["WORKERS", "submit", "take", "cancel"]
+__all__ = ["WORKERS", "submit", "state", "take", "cancel"]
 
 #: jobs at a time (each a mesher process holding one gmsh model; the FE runs beside them)
 WORKERS = 2
@@ -44,6 +44,14 @@ def submit(key: str, fn: Callable[[threading.Event], Any]) -> bool:
         _jobs[key] = (fut, stop)
     threading.Thread(target=_run, args=(fut, stop, fn), daemon=True, name=f"rigfem-pool-{key}").start()
     return True
+
+
+def state(key: str) -> str:
+    """'done' (its result or exception ready to take), 'pending' (queued or running) or 'none'
+    (no job ``key``)."""
+    with _lock:
+        job = _jobs.get(key)
+    return "none" if job is None else "done" if job[0].done() else "pending"
 
 
 def take(key: str) -> Any:
