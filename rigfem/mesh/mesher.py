@@ -290,10 +290,8 @@ def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
 
 
 def mesh_state(part, settings: MeshSettings) -> str:
-    """'ready' (made ahead, or cached: :func:`mesh_part` returns it without waiting), 'making'
-    (a mesher process makes it) or 'none'."""
-    key, _ = mesh_inputs(part, settings)
-    made = pool.state(key)
+    """'ready' (made ahead or cached: :func:`mesh_part` does not wait), 'making' (a mesher process) or 'none'."""
+    made = pool.state(key := mesh_inputs(part, settings)[0])
     return "ready" if made == "done" or mesh_folder(part, key).exists() else "making" if made == "pending" else "none"
 
 
