@@ -262,3 +262,23 @@ def test_stored_chunks_are_keyed_by_geometry_masses_and_code(monkeypatch):
     with monkeypatch.context() as m:
         m.setattr(PartDef, "content_hash", lambda self: "edited")
         assert p.key() != k0
+
+
+def test_bases_built_in_child_processes_equal_the_ones_built_here(params, bases):
+    """Two geometries at a time in child processes give the same unit fields, in the same order,
+    as one after another in this process (the default)."""
+    two = build_bases(params, workers=2)
+    assert list(two) == list(bases)
+    for key, b in bases.items():
+        c = two[key]
+        assert c.loads == b.loads and c.fe_mass == b.fe_mass
+        assert np.array_equal(c.S, b.S) and np.array_equal(c.vm, b.vm) and np.array_equal(c.top, b.top)
+
+
+def test_an_error_in_a_bases_child_is_raised_here_and_leaves_no_child(params):
+    """The first child's error is raised in the caller; no child process is left running."""
+    import multiprocessing as mp
+
+    with pytest.raises(InputError, match="solver"):
+        build_bases(params, solver="no-such-solver", workers=2)
+    assert not [c for c in mp.active_children() if c.name.startswith("rigfem-unit bases")]

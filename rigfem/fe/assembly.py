@@ -332,6 +332,25 @@ def start_compiling() -> None:
         _compiler = False  # compiled here instead, on first use
 
 
+def compiled() -> None:
+    """Wait for the child of :func:`start_compiling`, if one runs, and record that it ran (the
+    marker); a caller that starts processes which assemble calls it first, so they start none."""
+    global _compiler
+    import subprocess
+
+    start_compiling()
+    if not _compiler:
+        return
+    try:
+        _compiler.wait(timeout=900)
+    except subprocess.TimeoutExpired:
+        _compiler.kill()
+        _compiler.wait()
+    inputs, folder = _marker()
+    write_entry(folder, inputs, lambda d: None)
+    _compiler = False  # nothing more to wait for
+
+
 @functools.lru_cache(maxsize=1)
 def _kernels():
     """The compiled kernels (:mod:`rigfem.fe.kernels`), compiled by the child of
@@ -340,17 +359,7 @@ def _kernels():
     --rows check``).  A marker entry in rigfem's cache, keyed by the kernels' code and the numba
     and Python versions, says the child ran once; where it failed, or numba's cache went missing
     since, this process compiles them (slower, correct)."""
-    import subprocess
-
-    start_compiling()
-    if _compiler:
-        try:
-            _compiler.wait(timeout=900)
-        except subprocess.TimeoutExpired:
-            _compiler.kill()
-            _compiler.wait()
-        inputs, folder = _marker()
-        write_entry(folder, inputs, lambda d: None)
+    compiled()
     import rigfem.fe.kernels
 
     return rigfem.fe.kernels

@@ -94,18 +94,25 @@ def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase
     return specs
 
 
-def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
+def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set.
 
-    The geometries are meshed ahead in the mesher processes while the FE works on the first, and
-    each geometry's model is released before the next one's is built: only the float32 unit
-    fields of the parts done are held, not every part's mesh, stiffness and quadrature caches."""
-    from rigfem.fe.cache import cached_solve
-    from rigfem.fe.model import build_model
-    from rigfem.fe.partcase import fe_load, mesh_case, mesh_job, relieved_cases, supports_of
-    from rigfem.fe.supports import FreeBody
-    from rigfem.fe.tensors import von_mises
-    from rigfem.mesh.mesher import prefetch
+    The geometries are meshed ahead in the mesher processes.  With ``workers`` > 1 their FE runs
+    in up to that many child processes at a time (:func:`rigfem.mesh.worker.call`), the largest
+    mesh first: most of a basis's time is single-threaded (stress recovery, load vectors), so
+    two geometries at once use two cores and hold two geometries' FE in memory (a sweep's
+    ``--workers`` chooses this).  A child returns only the float32 unit fields.  Otherwise, or
+    in a daemonic process (a sweep worker), the geometries are built here one after another,
+    each model released before the next one's is built."""
+    import multiprocessing as mp
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from rigfem.fe.assembly import compiled
+    from rigfem.fe.partcase import mesh_case, mesh_job
+    from rigfem.mesh import pool
+    from rigfem.mesh.mesher import estimate_part, prefetch
+    from rigfem.mesh.worker import call
 
     s = p.settings()
     by_geo: dict[tuple, dict[tuple, tuple[PartCase, list[UnitLoad]]]] = {}
@@ -114,22 +121,52 @@ def build_bases(p: SweepParams, solver: str = "auto") -> dict[tuple, UnitBasis]:
     merged = {geo: dataclasses.replace(next(iter(specs.values()))[0],
                                        refine=tuple(sorted({g for c, _ in specs.values() for g in c.refine})))
               for geo, specs in by_geo.items()}
-    prefetch([mesh_job(case, s) for case in merged.values()])
+    parallel = workers > 1 and len(by_geo) > 1 and not mp.current_process().daemon
+    order = list(by_geo)
+    if parallel:  # the largest first, so the last child to end has a small part
+        order.sort(key=lambda geo: -getattr(estimate_part(*mesh_job(merged[geo], s)), "tets", 0))
+    prefetch([mesh_job(merged[geo], s) for geo in order])
+
+    if parallel:
+        compiled()  # numba compiles the kernels once, while the meshers work, for both children
+        stop = threading.Event()  # an error or an interruption here ends the children
+        threads = ThreadPoolExecutor(min(workers, len(order)), thread_name_prefix="rigfem-bases")
+        try:
+            futures = [threads.submit(lambda g=geo: call(_geo_bases, mesh_case(merged[g], s), by_geo[g], s, solver,
+                                                         cancel=stop, what="unit bases")) for geo in order]
+            done = [f.result() for f in futures]
+        except BaseException:
+            stop.set()
+            pool.cancel()
+            raise
+        finally:
+            threads.shutdown(wait=True, cancel_futures=True)
+    else:
+        done = [_geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver) for geo in order]
+    return {key: b for geo in by_geo for key, b in done[order.index(geo)].items()}
+
+
+def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: CheckSettings,
+               solver: str) -> dict[tuple, UnitBasis]:
+    """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs``."""
+    from rigfem.fe.cache import cached_solve
+    from rigfem.fe.model import build_model
+    from rigfem.fe.partcase import fe_load, relieved_cases, supports_of
+    from rigfem.fe.supports import FreeBody
+    from rigfem.fe.tensors import von_mises
+
+    model = build_model(pm, s.material, s.order)
     out = {}
-    for geo, specs in by_geo.items():
-        pm = mesh_case(merged[geo], s)
-        model = build_model(pm, s.material, s.order)
-        for key, (case, loads) in specs.items():
-            supports = supports_of(case)
-            fe_loads = [fe_load(u) for u in loads]
-            if any(isinstance(x, FreeBody) for x in supports):
-                fe_loads = relieved_cases(model, fe_loads)[0]
-            sol = cached_solve(model, supports, fe_loads, solver=solver)
-            out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
-                               model.volume * s.material.density * 1e3)
-            del sol
-        model.release()
-        del model, pm
+    for key, (case, loads) in specs.items():
+        supports = supports_of(case)
+        fe_loads = [fe_load(u) for u in loads]
+        if any(isinstance(x, FreeBody) for x in supports):
+            fe_loads = relieved_cases(model, fe_loads)[0]
+        sol = cached_solve(model, supports, fe_loads, solver=solver)
+        out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
+                           model.volume * s.material.density * 1e3)
+        del sol
+    model.release()
     return out
 
 
