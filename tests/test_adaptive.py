@@ -171,10 +171,27 @@ def test_the_part_whose_mesh_is_made_first_is_solved_first(monkeypatch):
         return timeline[name][min(calls, 2)]
 
     monkeypatch.setattr(partcase, "mesh_state", state)
-    monkeypatch.setattr(partcase.time, "sleep", lambda s: None)
+    monkeypatch.setattr(partcase, "POLL_S", 0.0)
     assert partcase._next_ready(deque("abc"), lambda g: (g, None)) == "b"  # after two rounds of waiting
     assert seen.count("b") == 3
     timeline.update(a=["none"] * 3, b=["none"] * 3)
     assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "c"  # none being made: the head
     timeline.update(a=["ready"] * 3)
     assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "a"
+
+
+def test_an_interruption_while_waiting_for_a_mesh_cancels_the_meshers(monkeypatch):
+    from collections import deque
+
+    from rigfem.fe import partcase
+
+    cancelled = []
+
+    def state(name, _settings):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(partcase, "mesh_state", state)
+    monkeypatch.setattr(partcase.pool, "cancel", lambda: cancelled.append(True) or [])
+    with pytest.raises(KeyboardInterrupt):
+        partcase._next_ready(deque("ab"), lambda g: (g, None))
+    assert cancelled == [True]

@@ -134,3 +134,19 @@ def test_first_assembly_compiles_the_kernels_in_a_child(tmp_path):
     (misses, hits, children), again = got
     assert misses == 0 and hits >= 2 and children == 1  # compiled by the child, loaded here
     assert again[0] == 0 and again[2] == 0  # the marker: no second child
+
+
+def test_once_the_kernels_are_loaded_no_compile_child_is_started(tmp_path, monkeypatch):
+    """A later cache without the marker (a changed RIGFEM_CACHE) starts no child that nobody
+    would wait for: the kernels are loaded in this process already."""
+    import subprocess
+
+    from rigfem.fe import assembly
+
+    assembly._kernels()
+    started = []
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "empty"))
+    assembly.start_compiling()
+    assembly.compiled()
+    assert started == []

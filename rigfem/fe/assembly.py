@@ -298,7 +298,7 @@ def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
 
 #: True in the child process that compiles the kernels (:func:`compile_kernels`)
 _COMPILING = False
-#: the child process compiling the kernels, once :func:`start_compiling` started it
+#: the child compiling the kernels (:func:`start_compiling`); False once waited for (or not startable)
 _compiler = None
 
 
@@ -339,16 +339,19 @@ def compiled() -> None:
     import subprocess
 
     start_compiling()
-    if not _compiler:
+    child, _compiler = _compiler, False  # from now on nothing more is started or waited for
+    if not child:
         return
     try:
-        _compiler.wait(timeout=900)
-    except subprocess.TimeoutExpired:
-        _compiler.kill()
-        _compiler.wait()
+        child.wait(timeout=900)
+    except BaseException as exc:  # too slow (compiled here instead), or interrupted: it ends here
+        child.kill()
+        child.wait()
+        if not isinstance(exc, subprocess.TimeoutExpired):
+            raise
+        return
     inputs, folder = _marker()
     write_entry(folder, inputs, lambda d: None)
-    _compiler = False  # nothing more to wait for
 
 
 @functools.lru_cache(maxsize=1)

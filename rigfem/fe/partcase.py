@@ -28,6 +28,7 @@ from rigfem.fe.model import Model, build_model
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
+from rigfem.mesh import pool
 from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
 from rigfem.mesh.mesher import MeshSettings, estimate_part, mesh_part, mesh_state, prefetch
 from rigfem.mesh.partmesh import PartMesh
@@ -223,13 +224,15 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     ladders = {g: c[:-1] if c else [] for g, c in climbed.items()}
     # every part's first level meshed ahead, 2 at a time, the smallest first: the FE starts on
     # the part meshed soonest and works while the larger ones are meshed
-    jobs = {g: mesh_job(_merged(group), levels[level[g]][1]) for g, group in geo.items()}
-    order = sorted(geo, key=lambda g: getattr(estimate_part(*jobs[g]), "tets", math.inf))
-    prefetch([jobs[g] for g in order])
+    def job(g: tuple) -> tuple:  # the part and mesh settings of g's current level
+        return mesh_job(_merged(geo[g]), levels[level[g]][1])
+
+    order = sorted(geo, key=lambda g: getattr(estimate_part(*job(g)), "tets", math.inf))
+    prefetch([job(g) for g in order])
     start_compiling()  # a first run after an install: numba compiles while the meshes are made
     queue, results = collections.deque(order), {}
     while queue:
-        g = _next_ready(queue, lambda g: mesh_job(_merged(geo[g]), levels[level[g]][1]))
+        g = _next_ready(queue, job)
         queue.remove(g)
         group, k = geo[g], level[g]
         name, s = levels[k]
@@ -244,7 +247,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
                 k += 1  # unsettled there even at the asymptotic rate: skipped
                 ladders[g][-1].setdefault("skipped", []).append(names[k])
             level[g] = k + 1
-            prefetch([mesh_job(_merged(group), levels[k + 1][1])], keep=True)
+            prefetch([job(g)], keep=True)
             queue.append(g)
             out = None  # free this level's model, matrix and factor before the next part's
             continue
@@ -260,16 +263,25 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     return [results[id(case)] for _, case in cases]
 
 
+#: how often a part waiting for its mesh looks at the mesher processes, s
+POLL_S = 0.05
+
+
 def _next_ready(queue: collections.deque, job) -> tuple:
     """The first part in ``queue`` whose mesh (``job(g)``: part, settings) is ready, waiting while
     the mesher processes make them (the estimates only guess which comes first); the first part
-    when none is being made."""
-    while True:
-        states = {g: mesh_state(*job(g)) for g in queue}
-        ready = [g for g in queue if states[g] == "ready"]
-        if ready or "making" not in states.values():
-            return (ready or list(queue))[0]
-        time.sleep(0.05)
+    when none is being made.  An interruption while waiting cancels the mesh jobs."""
+    jobs = {g: job(g) for g in queue}
+    try:
+        while True:
+            states = {g: mesh_state(*jobs[g]) for g in queue}
+            ready = [g for g in queue if states[g] == "ready"]
+            if ready or "making" not in states.values():
+                return (ready or list(queue))[0]
+            time.sleep(POLL_S)
+    except BaseException:
+        pool.cancel()
+        raise
 
 
 def _solve_group(group: list[tuple[str, PartCase]], settings, solver: str, on_stage=None,

@@ -46,25 +46,28 @@ def turning(p: SweepParams, configs: list[dict]) -> int:
     return sum(c["b2"] + abs(c.get("offset", 0.0)) < c["b3"] for c in configs)
 
 
-def bases_cost(p: SweepParams) -> JobCost:
-    """The unit solutions of ``p``'s parts at its fidelity: memory of the largest part (meshing or
-    its direct P2 solve), meshing time of all of them; from their dimensions, nothing built."""
+def bases_cost(p: SweepParams, workers: int = 1) -> JobCost:
+    """The unit solutions of ``p``'s parts at its fidelity: memory of the largest parts solved at
+    once (meshing or their direct P2 solves; :func:`rigfem.studies.sweep_bases.parallel_bases`
+    of them with ``workers``), meshing time of all of them; from their dimensions, nothing built."""
     from rigfem.mesh.mesher import estimate_part
     from rigfem.rig.parts import load_part
+    from rigfem.studies.sweep_bases import parallel_bases
 
     s = p.settings()
-    gib, seconds = 0.0, 0.0
+    gibs, seconds = [], 0.0
     for spec in s.parts.values():
         est = estimate_part(load_part(spec["part"], {"length": spec["length"]} if "length" in spec else None), s)
         if est is not None:
-            gib, seconds = max(gib, est.gib), seconds + est.seconds
+            gibs, seconds = gibs + [est.gib], seconds + est.seconds
+    gib = sum(sorted(gibs)[::-1][:parallel_bases(workers, len(gibs))])
     return JobCost(f"unit solutions of {len(s.parts)} parts at {p.fidelity}", gib, seconds)
 
 
 def sweep_cost(p: SweepParams, configs: list[dict], workers: int, bases: bool = True) -> JobCost:
     """Cost of sweeping ``configs`` on ``workers`` processes (``bases``: unit solutions included)."""
     n = turning(p, configs)
-    base = bases_cost(p) if bases else JobCost("", 0.0, 0.0)
+    base = bases_cost(p, workers) if bases else JobCost("", 0.0, 0.0)
     per = p.samples * BYTES_PER_ANGLE / 2**30
     return JobCost(f"{len(configs)} {p.linkage_type} configurations ({n} turn fully) × {p.samples} crank angles "
                    f"on {workers} worker{'s' * (workers != 1)}",

@@ -171,9 +171,10 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     ``work_dir``: where finished chunks are stored (a folder per parameter hash is made in it).
     ``distributed``: run chunks on Dask (default: when ``workers > 1`` or a ``scheduler`` is
     given); ``scheduler`` is ``tcp://HOST:PORT`` of an existing cluster, else a LocalCluster
-    with ``workers`` processes runs inside this process; the unit bases are built ``workers``
-    geometries at a time (:func:`~rigfem.studies.sweep_bases.build_bases`).  ``configs``: only these configurations
-    (default: every mountable one).  ``bases``: unit solutions already built for ``p``.
+    with ``workers`` processes runs inside this process; with ``workers`` > 1 the unit bases
+    are built two geometries at a time (:func:`~rigfem.studies.sweep_bases.build_bases`).
+    ``configs``: only these configurations (default: every mountable one).  ``bases``: unit
+    solutions already built for ``p``.
     The job's cost is estimated from the counts before any work (:mod:`rigfem.studies.cost`;
     past ``machine_gib`` or the time limit: InputError).  ``on_stage(text)`` hears each stage.
     """

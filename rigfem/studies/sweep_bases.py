@@ -15,7 +15,7 @@ import numpy as np
 
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError, InputError
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import PartCase, UnitLoad, directions, part_cases
 from rigfem.rig.parts import rail_hole_name
@@ -94,19 +94,28 @@ def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase
     return specs
 
 
+def parallel_bases(workers: int, geometries: int) -> int:
+    """How many part geometries :func:`build_bases` solves at a time: at most two (the
+    :data:`rigfem.mesh.pool.WORKERS` of the meshers beside them), one per worker."""
+    from rigfem.mesh.pool import WORKERS
+
+    return max(1, min(workers, WORKERS, geometries))
+
+
 def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set.
 
     The geometries are meshed ahead in the mesher processes.  With ``workers`` > 1 their FE runs
-    in up to that many child processes at a time (:func:`rigfem.mesh.worker.call`), the largest
-    mesh first: most of a basis's time is single-threaded (stress recovery, load vectors), so
-    two geometries at once use two cores and hold two geometries' FE in memory (a sweep's
-    ``--workers`` chooses this).  A child returns only the float32 unit fields.  Otherwise, or
-    in a daemonic process (a sweep worker), the geometries are built here one after another,
-    each model released before the next one's is built."""
+    in child processes (:func:`rigfem.mesh.worker.call`), :func:`parallel_bases` at a time, the
+    largest mesh first: most of a basis's time is single-threaded (stress recovery, load
+    vectors), so two geometries at once use two cores and hold two geometries' FE in memory (a
+    sweep's ``--workers`` chooses this; :func:`rigfem.studies.cost.bases_cost` counts it).  A
+    child returns only the float32 unit fields.  Otherwise, or in a daemonic process (a sweep
+    worker), the geometries are built here one after another, each model released before the
+    next one's is built."""
     import multiprocessing as mp
     import threading
-    from concurrent.futures import ThreadPoolExecutor
+    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
     from rigfem.fe.assembly import compiled
     from rigfem.fe.partcase import mesh_case, mesh_job
@@ -130,10 +139,20 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
     if parallel:
         compiled()  # numba compiles the kernels once, while the meshers work, for both children
         stop = threading.Event()  # an error or an interruption here ends the children
-        threads = ThreadPoolExecutor(min(workers, len(order)), thread_name_prefix="rigfem-bases")
+
+        def child(g: tuple) -> dict[tuple, UnitBasis]:
+            if stop.is_set():
+                raise ComputeError("unit bases cancelled")
+            pm = mesh_case(merged[g], s)
+            return call(_geo_bases, pm, by_geo[g], s, solver, cancel=stop, what="unit bases")
+
+        threads = ThreadPoolExecutor(parallel_bases(workers, len(order)), thread_name_prefix="rigfem-bases")
         try:
-            futures = [threads.submit(lambda g=geo: call(_geo_bases, mesh_case(merged[g], s), by_geo[g], s, solver,
-                                                         cancel=stop, what="unit bases")) for geo in order]
+            futures = [threads.submit(child, geo) for geo in order]
+            finished, _ = wait(futures, return_when=FIRST_EXCEPTION)  # the first error, not the largest part's end
+            for f in finished:
+                if f.exception() is not None:
+                    raise f.exception()
             done = [f.result() for f in futures]
         except BaseException:
             stop.set()
