@@ -126,6 +126,7 @@ def test_best_shrink_is_the_element_orders_rate():
     assert best_shrink(coarse, draft, 1) == pytest.approx(8 / 12)
 
 
+@pytest.mark.heavy  # two checks of a part on three levels (~12 s): keeps the default run within 10 minutes
 def test_a_level_that_cannot_settle_is_skipped(tmp_path, monkeypatch):
     """The limit on the coarse peak at the standard preset: even the best rate (h²) leaves the
     draft band straddling it, so the plate goes coarse → standard; a warm check solves standard only."""
