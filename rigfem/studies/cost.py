@@ -60,7 +60,7 @@ def bases_cost(p: SweepParams, workers: int = 1) -> JobCost:
         est = estimate_part(load_part(spec["part"], {"length": spec["length"]} if "length" in spec else None), s)
         if est is not None:
             gibs, seconds = gibs + [est.gib], seconds + est.seconds
-    gib = sum(sorted(gibs)[::-1][:parallel_bases(workers, len(gibs))])
+    gib = sum(sorted(gibs, reverse=True)[:parallel_bases(workers, len(gibs))])
     return JobCost(f"unit solutions of {len(s.parts)} parts at {p.fidelity}", gib, seconds)
 
 

@@ -153,7 +153,7 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
             for f in finished:
                 if f.exception() is not None:
                     raise f.exception()
-            done = [f.result() for f in futures]
+            done = {g: f.result() for g, f in zip(order, futures)}
         except BaseException:
             stop.set()
             pool.cancel()
@@ -161,8 +161,8 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
         finally:
             threads.shutdown(wait=True, cancel_futures=True)
     else:
-        done = [_geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver) for geo in order]
-    return {key: b for geo in by_geo for key, b in done[order.index(geo)].items()}
+        done = {geo: _geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver) for geo in order}
+    return {key: b for geo in by_geo for key, b in done[geo].items()}
 
 
 def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: CheckSettings,
