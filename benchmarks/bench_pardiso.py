@@ -6,9 +6,12 @@ Builds the supported stiffness of the 1000 mm rail of ``final-cm`` (the coupler/
 original mode's bolted supports) at the ladder ``--level``, then, in fresh processes alternating the
 two settings, times PARDISO's analysis (phase 11), numeric factorisation (22) and one solve of
 ``--rhs`` right-hand sides (33: a cycle-mode part has about that many unit loads), with the worst
-relative residual of the solves.  MKL's defaults (``iparm[0] = 0``) include 2 steps of iterative
-refinement in every solve; ``rigfem.fe.solver.PARDISO_IPARM`` turns them off, since rigfem checks
-every solve's backward error itself and refines only where needed.
+relative residual of the solves and the process's peak resident memory over the three phases
+(Linux: its high-water mark, reset before the analysis), for three settings: MKL's defaults
+(``iparm[0] = 0``), which include 2 steps of iterative refinement in every solve;
+``rigfem.fe.solver.PARDISO_IPARM``, which turns them off, since rigfem checks every solve's
+backward error itself and refines only where needed, and stores the matrix in variable-size
+blocks (iparm 37); and rigfem's without the blocks.
 Writes results/benchmarks/pardiso.json (``python benchmarks/publish.py`` writes the .md).
 """
 
@@ -22,6 +25,8 @@ import sys
 
 from record import write_record
 
+from rigfem.fe.solver import PARDISO_IPARM
+
 CHILD = """
 import json, sys, time
 import numpy as np
@@ -31,9 +36,8 @@ from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
 from rigfem.fe.model import StaticProblem, build_model
 from rigfem.fe.partcase import mesh_case, supports_of
-from rigfem.fe.solver import PARDISO_IPARM
 from rigfem.loads.cases import part_cases
-mine, level, nrhs = sys.argv[1] == "rigfem", sys.argv[2], int(sys.argv[3])
+iparm, level, nrhs = json.loads(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 cs = load_check_scene("final-cm", {"parts": ["coupler_rail"], "modes": ["original"]})
 h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
 (_, case), = part_cases(h, peaks(h), cs.settings)
@@ -42,9 +46,17 @@ ls = StaticProblem(build_model(mesh_case(case, s), s.material, s.order), support
 A, U = ls.A, ls._upper  # the supported stiffness and the upper triangle PARDISO is given
 B = np.asfortranarray(np.random.default_rng(0).standard_normal((A.shape[0], nrhs)))
 ps = pypardiso.PyPardisoSolver(mtype=2)
-for i, v in (PARDISO_IPARM.items() if mine else ()):
-    ps.set_iparm(i, v)
+for i, v in iparm.items():
+    ps.set_iparm(int(i), v)
 out = {"dofs": int(A.shape[0]), "nnz_upper": int(U.nnz)}
+
+
+def kib(field):
+    return next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith(field + ":"))
+
+
+open("/proc/self/clear_refs", "w").write("5")  # the high-water mark starts again from here
+before = kib("VmRSS")
 for phase, name, b in ((11, "analysis_s", np.zeros((A.shape[0], 1))), (22, "factorise_s", np.zeros((A.shape[0], 1))),
                        (33, "solve_s", B)):
     ps.set_phase(phase)
@@ -52,12 +64,16 @@ for phase, name, b in ((11, "analysis_s", np.zeros((A.shape[0], 1))), (22, "fact
     x = ps._call_pardiso(U, b)
     out[name] = time.perf_counter() - t0
 out["residual_max"] = float((np.linalg.norm(A @ x - B, axis=0) / np.linalg.norm(B, axis=0)).max())
-out["peak_numeric_kb"] = int(ps.iparm[16])
+out["peak_rss_growth_kib"] = kib("VmHWM") - before
 out["refinement_steps"] = int(ps.iparm[6])
 print(json.dumps(out))
 """
 
-LABELS = {"mkl": "MKL's defaults (iparm[0] = 0)", "rigfem": "rigfem's: PARDISO_IPARM (no refinement inside)"}
+LABELS = {"mkl": "MKL's defaults (iparm[0] = 0)",
+          "rigfem": "rigfem's: PARDISO_IPARM (no refinement inside, variable blocks)",
+          "csr": "rigfem's without the variable blocks (iparm 37 = 0)"}
+#: pypardiso's 1-based iparm numbers and values of each setting
+SETTINGS = {"mkl": {}, "rigfem": PARDISO_IPARM, "csr": {**PARDISO_IPARM, 37: 0}}
 
 
 def main() -> None:
@@ -69,15 +85,18 @@ def main() -> None:
     runs: dict[str, list[dict]] = {label: [] for label in LABELS.values()}
     for _ in range(a.repeats):
         for which, label in LABELS.items():
-            out = subprocess.run([sys.executable, "-c", CHILD, which, a.level, str(a.rhs)], check=True,
+            out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(SETTINGS[which]), a.level, str(a.rhs)],
+                                 check=True,
                                  capture_output=True, text=True).stdout
             runs[label].append(json.loads(out.strip().splitlines()[-1]))
 
     def med(label: str, key: str) -> float:
         return statistics.median(r[key] for r in runs[label])
 
-    mkl, mine = LABELS["mkl"], LABELS["rigfem"]
-    derived = {f"{k} MKL / rigfem": med(mkl, k) / med(mine, k) for k in ("analysis_s", "factorise_s", "solve_s")}
+    mkl, mine, csr = LABELS["mkl"], LABELS["rigfem"], LABELS["csr"]
+    keys = ("analysis_s", "factorise_s", "solve_s", "peak_rss_growth_kib")
+    derived = {f"{k} MKL / rigfem": med(mkl, k) / med(mine, k) for k in keys}
+    derived |= {f"{k} without blocks / rigfem": med(csr, k) / med(mine, k) for k in keys}
     derived["residual_max"] = max(r["residual_max"] for v in runs.values() for r in v)
     params = {"repeats": a.repeats, "level": a.level, "rhs": a.rhs, "part": "coupler_rail (1000 mm rail)",
               "mode": "original (bolted)"}
