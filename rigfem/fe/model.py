@@ -153,8 +153,9 @@ class StaticProblem:
             D = sp.diags(d)
             A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
             self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
-        else:
-            self.linear_solver = LinearSolver(A[self.free][:, self.free], solver, rtol=rtol)
+        else:  # supports by springs alone fix no DOF: the whole matrix, not a copy of it
+            A = A[self.free][:, self.free] if len(self.fixed) else A
+            self.linear_solver = LinearSolver(A, solver, rtol=rtol)
 
     def solve(self, cases: list) -> Solution:
         """Displacements, reactions and recovered stresses of every load case (one factorisation)."""
