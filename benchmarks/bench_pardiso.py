@@ -1,13 +1,14 @@
-"""MKL PARDISO's default settings on a rig part against rigfem's (no refinement inside PARDISO).
+"""MKL PARDISO's default settings, rigfem's, and rigfem's without the variable blocks, on a rig part.
 
     python benchmarks/bench_pardiso.py [--repeats 3] [--level draft] [--rhs 60]
 
 Builds the supported stiffness of the 1000 mm rail of ``final-cm`` (the coupler/rocker rail, the
 original mode's bolted supports) at the ladder ``--level``, then, in fresh processes alternating the
-two settings, times PARDISO's analysis (phase 11), numeric factorisation (22) and one solve of
+settings, times PARDISO's analysis (phase 11), numeric factorisation (22) and one solve of
 ``--rhs`` right-hand sides (33: a cycle-mode part has about that many unit loads), with the worst
-relative residual of the solves and the process's peak resident memory over the three phases
-(Linux: its high-water mark, reset before the analysis), for three settings: MKL's defaults
+relative residual of the solves and the growth of the process's peak resident memory over the
+three phases (Linux: its high-water mark, reset after the matrix is built, read before the
+residual is checked; nothing is factorised before), for three settings: MKL's defaults
 (``iparm[0] = 0``), which include 2 steps of iterative refinement in every solve;
 ``rigfem.fe.solver.PARDISO_IPARM``, which turns them off, since rigfem checks every solve's
 backward error itself and refines only where needed, and stores the matrix in variable-size
@@ -25,8 +26,6 @@ import sys
 
 from record import write_record
 
-from rigfem.fe.solver import PARDISO_IPARM
-
 CHILD = """
 import json, sys, time
 import numpy as np
@@ -34,7 +33,8 @@ import pypardiso
 from rigfem.check import load_check_scene
 from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
-from rigfem.fe.model import StaticProblem, build_model
+import scipy.sparse as sp
+from rigfem.fe.model import build_model, constraints
 from rigfem.fe.partcase import mesh_case, supports_of
 from rigfem.loads.cases import part_cases
 iparm, level, nrhs = json.loads(sys.argv[1]), sys.argv[2], int(sys.argv[3])
@@ -42,8 +42,14 @@ cs = load_check_scene("final-cm", {"parts": ["coupler_rail"], "modes": ["origina
 h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
 (_, case), = part_cases(h, peaks(h), cs.settings)
 s = dict(cs.settings.levels())[level]
-ls = StaticProblem(build_model(mesh_case(case, s), s.material, s.order), supports_of(case), "pardiso").linear_solver
-A, U = ls.A, ls._upper  # the supported stiffness and the upper triangle PARDISO is given
+model = build_model(mesh_case(case, s), s.material, s.order)
+# the supported stiffness as rigfem.fe.model.StaticProblem builds it, and its upper triangle
+fixed, springs, _ = constraints(model.mesh, model.part.holes, supports_of(case), model.material.E)
+A = (model.K if springs is None else model.K + springs).tocsr()
+free = np.setdiff1d(np.arange(model.mesh.ndof), fixed)
+A = A[free][:, free] if len(fixed) else A
+U = sp.triu(A, format="csr")
+U.sort_indices()
 B = np.asfortranarray(np.random.default_rng(0).standard_normal((A.shape[0], nrhs)))
 ps = pypardiso.PyPardisoSolver(mtype=2)
 for i, v in iparm.items():
@@ -63,8 +69,8 @@ for phase, name, b in ((11, "analysis_s", np.zeros((A.shape[0], 1))), (22, "fact
     t0 = time.perf_counter()
     x = ps._call_pardiso(U, b)
     out[name] = time.perf_counter() - t0
-out["residual_max"] = float((np.linalg.norm(A @ x - B, axis=0) / np.linalg.norm(B, axis=0)).max())
 out["peak_rss_growth_kib"] = kib("VmHWM") - before
+out["residual_max"] = float((np.linalg.norm(A @ x - B, axis=0) / np.linalg.norm(B, axis=0)).max())
 out["refinement_steps"] = int(ps.iparm[6])
 print(json.dumps(out))
 """
@@ -72,8 +78,6 @@ print(json.dumps(out))
 LABELS = {"mkl": "MKL's defaults (iparm[0] = 0)",
           "rigfem": "rigfem's: PARDISO_IPARM (no refinement inside, variable blocks)",
           "csr": "rigfem's without the variable blocks (iparm 37 = 0)"}
-#: pypardiso's 1-based iparm numbers and values of each setting
-SETTINGS = {"mkl": {}, "rigfem": PARDISO_IPARM, "csr": {**PARDISO_IPARM, 37: 0}}
 
 
 def main() -> None:
@@ -82,12 +86,15 @@ def main() -> None:
     ap.add_argument("--level", default="draft", choices=("coarse", "draft", "standard"))
     ap.add_argument("--rhs", type=int, default=60)
     a = ap.parse_args()
+    from rigfem.fe.solver import PARDISO_IPARM
+
+    # pypardiso's 1-based iparm numbers and values of each setting
+    settings = {"mkl": {}, "rigfem": PARDISO_IPARM, "csr": {**PARDISO_IPARM, 37: 0}}
     runs: dict[str, list[dict]] = {label: [] for label in LABELS.values()}
     for _ in range(a.repeats):
         for which, label in LABELS.items():
-            out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(SETTINGS[which]), a.level, str(a.rhs)],
-                                 check=True,
-                                 capture_output=True, text=True).stdout
+            out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(settings[which]), a.level, str(a.rhs)],
+                                 check=True, capture_output=True, text=True).stdout
             runs[label].append(json.loads(out.strip().splitlines()[-1]))
 
     def med(label: str, key: str) -> float:

@@ -119,14 +119,20 @@ def _le10(le: dict) -> str:
 
 
 def _pardiso(p: dict) -> str:
-    """README cell of the PARDISO settings record: the solve ratio, analysis + numeric factorisation (medians)."""
-    fact = {k: med(p, k, "analysis_s") + med(p, k, "factorise_s") for k in p["samples"]}
-    mkl, mine, csr = fact.values()  # the record's order: MKL's, rigfem's, rigfem's without blocks
-    d = p["derived"]
-    return (f"rigfem's solve of {p['params']['rhs']} loads {d['solve_s MKL / rigfem']:.1f}× faster than MKL's "
-            f"defaults; analysis + factorisation {mine:.2f} s against {csr:.2f} s without the blocks "
-            f"({mkl:.2f} s MKL's), peak memory {d['peak_rss_growth_kib without blocks / rigfem']:.2f}× less "
-            "— results/benchmarks/pardiso.md")
+    """README cell of the PARDISO settings record: the solve, analysis + numeric factorisation
+    (medians) and memory of each setting against rigfem's."""
+    from bench_pardiso import LABELS
+
+    mkl, mine, csr = (LABELS[k] for k in ("mkl", "rigfem", "csr"))
+    fact = {k: med(p, k, "analysis_s") + med(p, k, "factorise_s") for k in (mkl, mine, csr)}
+    solve = {k: med(p, k, "solve_s") for k in (mkl, mine, csr)}
+    mem = {k: med(p, k, "peak_rss_growth_kib") / 1024 for k in (mkl, mine, csr)}
+    n = p["params"]["rhs"]
+    return (f"rigfem's settings: analysis + factorisation {fact[mine]:.2f} s, a solve of {n} loads "
+            f"{solve[mine]:.2f} s, peak memory growth {mem[mine]:.0f} MiB; without the variable blocks "
+            f"{fact[csr]:.2f} s, {solve[csr]:.2f} s, {mem[csr]:.0f} MiB; MKL's defaults {fact[mkl]:.2f} s, "
+            f"{solve[mkl]:.2f} s, {mem[mkl]:.0f} MiB — results/benchmarks/pardiso.md")
+
 
 def _sweep(sw: dict) -> str:
     one = next(iter(sw["samples"].values()))[0]

@@ -153,7 +153,8 @@ class StaticProblem:
             D = sp.diags(d)
             A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
             self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
-        else:  # supports by springs alone fix no DOF: the whole matrix, not a copy of it
+        else:  # supports by springs alone fix no DOF: A is K + springs, a matrix of its own (the
+            # solver sorts it in place), given whole instead of copied row by row and column by column
             A = A[self.free][:, self.free] if len(self.fixed) else A
             self.linear_solver = LinearSolver(A, solver, rtol=rtol)
 
