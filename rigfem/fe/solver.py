@@ -57,8 +57,9 @@ DIRECT_MAX_DOF = 600_000
 #: matrix needs none (11); the matrix stored internally in variable-size blocks where 80 % of
 #: neighbouring rows share their pattern (37 = -80): a node's three displacement rows do.  The
 #: blocks trade a faster analysis for a slower numeric factorisation and solve; on the draft
-#: 1000 mm rail analysis + factorisation take 13 % less time and the process 18 % less memory,
-#: a solve of 60 loads 23 % more time, at the same residuals (same benchmark).
+#: 1000 mm rail analysis + factorisation take 13 % less time and the process 11 % less memory,
+#: a solve of 60 loads 23 % more time, at the same residuals (same benchmark); on the finer rail
+#: of the CalculiX comparison (one load) the factorisation takes a quarter less time.
 PARDISO_IPARM = {1: 1, 2: 3, 8: 0, 11: 0, 37: -80}
 
 
