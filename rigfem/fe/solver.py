@@ -58,8 +58,7 @@ DIRECT_MAX_DOF = 600_000
 #: neighbouring rows share their pattern (37 = -80): a node's three displacement rows do.  The
 #: blocks trade a faster analysis for a slower numeric factorisation and solve; on the draft
 #: 1000 mm rail analysis + factorisation take 13 % less time and the process 11 % less memory,
-#: a solve of 60 loads 23 % more time, at the same residuals (same benchmark); on the finer rail
-#: of the CalculiX comparison (one load) the factorisation takes a quarter less time.
+#: a solve of 60 loads 23 % more time, at the same residuals (same benchmark).
 PARDISO_IPARM = {1: 1, 2: 3, 8: 0, 11: 0, 37: -80}
 
 
