@@ -49,6 +49,7 @@ COMMANDS = {
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
     "bad_inputs": "python benchmarks/bad_inputs.py",
     "pardiso": "python benchmarks/bench_pardiso.py --repeats 3",
+    "mesh": "python benchmarks/bench_mesh.py --repeats 3",
     "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft",
     "levers": "mkdir -p /tmp/base && git archive e5e90b5 | tar -x -C /tmp/base; "
               "python benchmarks/bench_levers.py --label before --src /tmp/base; "
@@ -188,6 +189,11 @@ ROWS = [
     ("sweep", "the whole four-bar sweep, `rigfem sweep --four-bar`, end to end (start-up included)", _sweep),
     ("pardiso", "MKL PARDISO's defaults, and rigfem's settings without the variable blocks, against rigfem's "
      "settings on a 1000 mm rail (no refinement inside PARDISO, variable blocks)", _pardiso),
+    ("mesh", "meshing the check's parts at every ladder level (final-cm, standard): gmsh's default precision of "
+     "the 1D size integration against rigfem's",
+     lambda m: f"all meshes {m['derived']['seconds, all meshes: gmsh / rigfem']:.2f}× faster at rigfem's (the 1D "
+               f"step {m['derived']['1D seconds, all meshes: gmsh / rigfem']:.1f}×); tet counts within "
+               f"{100 * m['derived']['largest tet count change']:.1f} % — results/benchmarks/mesh.md"),
     ("malloc_trim", "Dask's MALLOC_TRIM_THRESHOLD_ on a sweep chunk",
      lambda m: f"{100 * m['derived']['wall with / without - 1']:+.0f} % wall time with it — "
                "results/benchmarks/malloc_trim.md"),

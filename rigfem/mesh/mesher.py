@@ -49,6 +49,14 @@ CURVATURE_MM = 48.0
 SMOOTHED_KINDS = frozenset({"rail", "custom"})
 
 
+#: gmsh's relative precision for integrating the size field along a curve (``Mesh.LcIntegrationPrecision``),
+#: which sets how many nodes each curve gets.  gmsh's default, 1e-9, made the 1D step the costliest
+#: of a plate or post mesh (2.6 s of the coarse post's 3.0 s); 1e-4 changes a curve's node count by
+#: at most a ten-thousandth of a node per node (``python benchmarks/bench_mesh.py``:
+#: results/benchmarks/mesh.md)
+LC_INTEGRATION_PRECISION = 1e-4
+
+
 def curvature_n(s: MeshSettings) -> int:
     """Elements per 2*pi on a curved surface: CURVATURE_MM / size (at least 6), so curved
     faces (rail grooves, holes) get finer with the global size and a size sequence converges."""
@@ -200,6 +208,7 @@ def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -
     gmsh.option.setNumber("Mesh.MeshSizeMax", s.size_mm)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature_n(s))
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
     gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
     if not refine_tags:
         return
@@ -353,6 +362,11 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
     from rigfem.mesh.geometry import build, gmsh_session
 
     t0 = time.perf_counter()
+    stages = {}  # seconds of each step, in the mesh's metadata (benchmarks/bench_mesh.py reads them)
+
+    def lap(name: str) -> None:
+        stages[name] = time.perf_counter() - t0 - sum(stages.values())
+
     with gmsh_session(part.name):
         gmsh.option.setNumber("General.NumThreads", 1)
         holes = build(part)
@@ -367,7 +381,10 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
         curved = _curved_groups(groups, settings)
         check_estimate(est, settings, machine_gib)
         _set_fields(refine_tags, conc_tags, settings)
-        gmsh.model.mesh.generate(3)
+        lap("geometry")
+        for dim in (1, 2, 3):  # generate(3)'s mesh (to rounding), one dimension at a time to time each
+            gmsh.model.mesh.generate(dim)
+            lap(f"{dim}D")
         q = _quality()
         if len(q) and q.min() < settings.min_quality:
             # HXT can leave a flat tet across a thin wall whose two faces carry mirrored surface
@@ -376,6 +393,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
             gmsh.option.setNumber("Mesh.Algorithm3D", 1)
             gmsh.model.mesh.generate(3)
             q = _quality()
+            lap("3D again (Delaunay)")
         if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
             raise InputError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
                              f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
@@ -383,6 +401,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
         points, tets, surfaces, edges, mids = second_order(
             {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()},
             smooth=part.kind in SMOOTHED_KINDS)
+        lap("second order")
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
@@ -393,7 +412,8 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
     meta = {"part": part.name, "kind": part.kind, "dims": {k: d.value for k, d in part.dims.items()},
             "density": part.density, "settings": settings.key(), "hash": key,
             "smoothed": part.kind in SMOOTHED_KINDS,
-            "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "cache": "miss"}
+            "curved": curved, "estimate_tets": est.tets, "estimate_gib": est.gib, "seconds": seconds, "stages": stages,
+            "cache": "miss"}
     pm = PartMesh(part.name, points, tets, surfaces, holes, quality, meta, edges, mids)
     return pm
 
