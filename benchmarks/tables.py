@@ -417,7 +417,7 @@ def mesh(rec: dict) -> str:
     old, new = p["precision"]
     lines = head(rec, f"gmsh's meshing steps per part and ladder level ({p['scene']}, {p['fidelity']}): "
                       "gmsh's default 1D integration precision against rigfem's")
-    lines += [f"Mesh.LcIntegrationPrecision: {old} = {p['precision'][old]:g}, {new} = {p['precision'][new]:g}.  "
+    lines += [f"Mesh.LcIntegrationPrecision: gmsh's default {p['precision'][old]:g}, rigfem's {p['precision'][new]:g}.  "
               "The check's own meshes (its cases' loaded holes refined), no cache, one thread; all meshes of a "
               f"setting in one fresh process, the settings alternating, median of {p['repeats']} processes each.  "
               "Seconds per step from the mesher (`meta[\"stages\"]`; second order includes gmsh's "

@@ -50,10 +50,10 @@ SMOOTHED_KINDS = frozenset({"rail", "custom"})
 
 
 #: gmsh's relative precision for integrating the size field along a curve (``Mesh.LcIntegrationPrecision``),
-#: which sets how many nodes each curve gets.  gmsh's default, 1e-9, made the 1D step the costliest
-#: of a plate or post mesh (2.6 s of the coarse post's 3.0 s); 1e-4 changes a curve's node count by
-#: at most a ten-thousandth of a node per node (``python benchmarks/bench_mesh.py``:
-#: results/benchmarks/mesh.md)
+#: which sets how many nodes each curve gets.  At gmsh's default, 1e-9, the 1D step was most of a
+#: plate's or post's mesh time (2.5 s of the coarse post's 3.0 s); at 1e-4 it takes a tenth of that,
+#: and no mesh of a check's ladder changes its tet count by more than 2 %
+#: (``python benchmarks/bench_mesh.py``: results/benchmarks/mesh.md)
 LC_INTEGRATION_PRECISION = 1e-4
 
 
