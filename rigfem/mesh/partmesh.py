@@ -60,6 +60,48 @@ class PartMesh:
     curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
+def fit_cylinder(points: np.ndarray, tris: np.ndarray, rtol: float = 1e-3) -> Hole | None:
+    """The cylinder through the vertices of a triangulated surface, or None if it is not one.
+
+    Start: axis orthogonal to the face normals (smallest eigenvector of sum n n^T), circle by
+    a linear (Kasa) fit in the plane normal to it; then a least-squares fit of the distances
+    to the axis.  Rejected if the surface is flat or a vertex lies off by more than rtol*r.
+    """
+    from scipy.optimize import least_squares
+
+    p = points[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    w, v = np.linalg.eigh(n.T @ n)
+    if w[1] < 0.05 * w.sum() or w[0] > 0.2 * w.sum():  # flat, or normals spread in 3-D
+        return None
+    a0 = v[:, 0]
+    q = points[np.unique(tris)]
+    e1 = np.cross(a0, [1.0, 0, 0] if abs(a0[0]) < 0.9 else [0, 1.0, 0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a0, e1)
+    x, y = q @ e1, q @ e2
+    sol, *_ = np.linalg.lstsq(np.c_[2 * x, 2 * y, np.ones_like(x)], x**2 + y**2, rcond=None)
+    r0 = np.sqrt(sol[2] + sol[0] ** 2 + sol[1] ** 2)
+
+    def axis_point(z):
+        a = a0 + z[0] * e1 + z[1] * e2
+        return a / np.linalg.norm(a), (sol[0] + z[2]) * e1 + (sol[1] + z[3]) * e2
+
+    def residual(z):
+        a, c = axis_point(z)
+        return np.linalg.norm(np.cross(q - c, a), axis=1) - z[4]
+
+    fit = least_squares(residual, [0, 0, 0, 0, r0], x_scale=[1, 1, r0, r0, r0], xtol=1e-14, ftol=1e-14)
+    a, c = axis_point(fit.x)
+    r = float(fit.x[4])
+    if r <= 0 or np.abs(fit.fun).max() > rtol * r:
+        return None
+    a = a * np.sign(a[np.argmax(np.abs(a))])
+    t = (q - c) @ a
+    return Hole(c + a * (t.min() + t.max()) / 2, a, r, float(t.max() - t.min()))
+
+
 def quality_summary(q: np.ndarray) -> dict[str, float]:
     """Minimum, 1st and 5th percentile and median of per-tet quality values."""
     return {"min": float(q.min()), "p01": float(np.percentile(q, 1)),
