@@ -66,12 +66,18 @@ def _rigfem(args: list[str], env: dict, ok: tuple[int, ...] = (0,)) -> dict:
     return _sample(r)
 
 
-def cold_warm(run, repeats: int) -> tuple[list, list]:
-    """``repeats`` cold runs (each on fresh caches), then ``repeats`` warm runs on the caches one filled."""
+def cold_runs(run, repeats: int) -> list:
+    """``repeats`` runs, each on fresh caches of its own (a second run on the first's would be warm)."""
     cold = []
     for _ in range(repeats):
         with tempfile.TemporaryDirectory(prefix="perf-") as tmp:
             cold.append(run(cold_env(tmp), tmp))
+    return cold
+
+
+def cold_warm(run, repeats: int) -> tuple[list, list]:
+    """``repeats`` cold runs (:func:`cold_runs`), then ``repeats`` warm runs on the caches one filled."""
+    cold = cold_runs(run, repeats)
     with tempfile.TemporaryDirectory(prefix="perf-") as tmp:
         env = cold_env(tmp)
         run(env, tmp)  # fills both caches
@@ -97,8 +103,7 @@ def row_light(a: argparse.Namespace) -> dict[str, list]:
 
 
 def row_synth(a: argparse.Namespace) -> dict[str, list]:
-    with tempfile.TemporaryDirectory(prefix="perf-") as tmp:
-        return {"synthesize --rig cold": [_rigfem(SYNTH, cold_env(tmp), ok=(0, 1)) for _ in range(a.repeats or 1)]}
+    return {"synthesize --rig cold": cold_runs(lambda env, tmp: _rigfem(SYNTH, env, ok=(0, 1)), a.repeats or 1)}
 
 
 def row_sweep(a: argparse.Namespace) -> dict[str, list]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import copy
 import datetime
 import importlib
@@ -133,6 +134,19 @@ def test_perf_table_says_met_from_the_data(tmp_path):
     assert "up to 1,000,000 DOF, 0.5 MiB per 1000 DOF, R² 1.000" in dof and dof.endswith("| met |")
     block = publish.blocks({**publish.load(), "perf": rec})["performance"]
     assert "| `rigfem --help` | < 0.3 s | 0.15 s | 0.10 s | 50 MiB | met |" in block and "perf.md" in block
+
+
+def test_every_cold_run_has_fresh_caches_of_its_own(monkeypatch):
+    """A cold series never reuses a cache an earlier run of it filled (a second run would be warm);
+    the warm runs share the one their first run filled."""
+    bench_perf = importlib.import_module("bench_perf")
+    seen = []
+    monkeypatch.setattr(bench_perf, "_rigfem", lambda args, env, ok=(0,): seen.append(env["RIGFEM_CACHE"]) or _run(1.0))
+    assert len(bench_perf.row_synth(argparse.Namespace(repeats=3))["synthesize --rig cold"]) == 3
+    assert len(set(seen)) == 3
+    seen.clear()
+    cold, warm = bench_perf.cold_warm(lambda env, tmp: bench_perf._rigfem([], env), 2)
+    assert len(set(seen[:2])) == 2 and len(set(seen[2:])) == 1 and not set(seen[:2]) & set(seen[2:])
 
 
 def test_perf_record_keeps_rows_not_remeasured(tmp_path):
