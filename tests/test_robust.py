@@ -245,8 +245,9 @@ def test_cache_command_shows_and_clears_only_rigfems_entries(tmp_path, monkeypat
     out = capsys.readouterr().out
     assert str(tmp_path) in out and "meshes: 2 entries" in out and "solutions: 1 entries" in out
     assert "total 3 entries" in out and "of 1 GB" in out
+    assert re.search(r"meshes: 2 entries, 10\.\d kB", out) and "e-0" not in out  # a small cache in kB, not 1e-05 GB
     assert main(["cache", "--clear"]) == 0
-    assert "removed 3 entries" in capsys.readouterr().out
+    assert re.search(r"removed 3 entries, 1\d\.\d kB", capsys.readouterr().out)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
     assert main(["cache"]) == 0 and "total 0 entries" in capsys.readouterr().out
 

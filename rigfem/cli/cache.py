@@ -10,6 +10,14 @@ HELP = "show the cache (folder, entries by kind, size, limit) or clear it (--cle
 SUCCESS = "cache shown or cleared"
 
 
+def _size(b: int) -> str:
+    """Bytes in the largest unit that keeps the number at 1 or more (kB, MB, GB), 3 digits."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= scale:
+            return f"{b / scale:.3g} {unit}"
+    return f"{b} B"
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--clear", action="store_true",
                    help="remove every entry rigfem stored (folders with a manifest); nothing else is touched")
@@ -21,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     root, limit = cache_dir(), max_bytes()
     if args.clear:
         n, size = clear() if root.is_dir() else (0, 0)  # only rigfem's entries: a user's files stay
-        print(f"cache {root}: removed {n} entries, {size / 1e9:.3g} GB")
+        print(f"cache {root}: removed {n} entries, {_size(size)}")
         return 0
     found = entries(root) if root.is_dir() else []
     count, size = Counter(), Counter()
@@ -32,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     state = "" if usable() else " (not usable: rigfem runs without a cache)"
     print(f"cache {root}{state} (RIGFEM_CACHE)")
     for kind in sorted(count):
-        print(f"  {kind}: {count[kind]} entries, {size[kind] / 1e9:.3g} GB")
-    print(f"total {len(found)} entries, {sum(size.values()) / 1e9:.3g} GB of {limit / 1e9:.3g} GB "
+        print(f"  {kind}: {count[kind]} entries, {_size(size[kind])}")
+    print(f"total {len(found)} entries, {_size(sum(size.values()))} of {_size(limit)} "
           f"({MAX_GB_ENV}; least recently used entries are removed past it)")
     return 0
