@@ -3,11 +3,12 @@ integration precision and at rigfem's (``rigfem.mesh.mesher.LC_INTEGRATION_PRECI
 
     python benchmarks/bench_mesh.py [--repeats 3] [--scene final-cm] [--fidelity standard]
 
-The meshes are the check's own: every part geometry of the scene (its cases' loaded holes refined,
-as ``rigfem.fe.partcase.solve_cases`` groups them) at every level of the preset's ladder.  Each
-setting meshes them all in a fresh process (``rigfem.mesh.mesher._mesh``, the mesher process's gmsh
-work: no cache, one thread), the settings alternating, ``--repeats`` processes each; the steps are
-timed by the mesher itself (the mesh's ``meta["stages"]``).  Writes results/benchmarks/mesh.json
+The meshes are the check's own: every part geometry of the scene, refined at its cases' loaded
+holes (``rigfem.fe.partcase.part_geometries`` and ``group_job``, as the check groups them), at every
+level of the preset's ladder.  Each setting meshes them all in a fresh process
+(``rigfem.mesh.mesher._mesh``, the mesher process's gmsh work: no cache, one thread), the settings
+alternating, ``--repeats`` processes each; the steps are timed by the mesher itself (the mesh's
+``meta["stages"]``).  Writes results/benchmarks/mesh.json
 (``python benchmarks/publish.py`` writes mesh.md).
 """
 
@@ -26,21 +27,18 @@ import json, sys
 from rigfem.check import load_check_scene
 from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
-from rigfem.fe.partcase import _key, _merged, mesh_job
+from rigfem.fe.partcase import group_job, part_geometries
 from rigfem.loads.cases import part_cases
 from rigfem.mesh import mesher
 precision, scene, fidelity = sys.argv[1], sys.argv[2], sys.argv[3]
 if precision != "rigfem":
     mesher.LC_INTEGRATION_PRECISION = float(precision)
-cs = load_check_scene(scene, {"check": {"fidelity": fidelity}} if fidelity != "standard" else None)
+cs = load_check_scene(scene, {"fidelity": fidelity})
 h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
-geo = {}
-for mode, case in part_cases(h, peaks(h), cs.settings):
-    geo.setdefault(_key(case), []).append((mode, case))
 out = []
-for group in geo.values():
+for group in part_geometries(part_cases(h, peaks(h), cs.settings)).values():
     for level, s in cs.settings.levels():
-        part, ms = mesh_job(_merged(group), s)
+        part, ms = group_job(group, s)
         pm = mesher._mesh(part, ms, float("inf"), "bench")
         out.append({"part": f"{part.name} ({group[0][1].name})", "level": level, "tets": len(pm.tets),
                     "min_sicn": pm.quality["min"], "seconds": pm.meta["seconds"], **pm.meta["stages"]})

@@ -34,7 +34,7 @@ from rigfem.check import load_check_scene
 from rigfem.dynamics.cycle import cycle_history
 from rigfem.dynamics.history import peaks
 import scipy.sparse as sp
-from rigfem.fe.model import build_model, constraints
+from rigfem.fe.model import build_model, free_block, supported_stiffness
 from rigfem.fe.partcase import mesh_case, supports_of
 from rigfem.loads.cases import part_cases
 iparm, level, nrhs = json.loads(sys.argv[1]), sys.argv[2], int(sys.argv[3])
@@ -43,11 +43,9 @@ h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mas
 (_, case), = part_cases(h, peaks(h), cs.settings)
 s = dict(cs.settings.levels())[level]
 model = build_model(mesh_case(case, s), s.material, s.order)
-# the supported stiffness as rigfem.fe.model.StaticProblem builds it, and its upper triangle
-fixed, springs, _ = constraints(model.mesh, model.part.holes, supports_of(case), model.material.E)
-A = (model.K if springs is None else model.K + springs).tocsr()
-free = np.setdiff1d(np.arange(model.mesh.ndof), fixed)
-A = A[free][:, free] if len(fixed) else A
+# the supported stiffness rigfem.fe.model.StaticProblem gives a direct solver, and its upper triangle
+K, fixed, _ = supported_stiffness(model, supports_of(case))
+A = free_block(K, fixed)
 U = sp.triu(A, format="csr")
 U.sort_indices()
 B = np.asfortranarray(np.random.default_rng(0).standard_normal((A.shape[0], nrhs)))

@@ -305,7 +305,7 @@ def bad_inputs(rec: dict) -> str:
 #: record name -> its table renderer (results/benchmarks/<name>.md)
 def perf_rows(rec: dict) -> list[str]:
     """Issue 26's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals)."""
-    from bench_perf import GOALS, status  # the one home of the goals (loads no FE code)
+    from bench_perf import status  # the one home of the goals (loads no FE code)
 
     def t(s: float | None) -> str:
         return "-" if s is None else hms(s) if s >= 10 else f"{s:.2f} s"
@@ -317,8 +317,7 @@ def perf_rows(rec: dict) -> list[str]:
             f"R² {v['r2']:.3f}" if "dof" in v else "")
         met = {None: "not measured", True: "met", False: "**not met**"}[v["met"]]
         rss = "-" if v["rss_mib"] is None else f"{v['rss_mib']:.0f} MiB"
-        cold = "-" if {"ratio", "dof"} & GOALS[v["row"]].keys() else t(v["cold_s"])  # their wall: the whole benchmark
-        out.append(f"| {v['work']} | {v['goal']} | {cold} | {t(v['warm_s'])} | {rss}{extra} | {met} |")
+        out.append(f"| {v['work']} | {v['goal']} | {t(v['cold_s'])} | {t(v['warm_s'])} | {rss}{extra} | {met} |")
     return out
 
 

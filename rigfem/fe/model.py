@@ -134,15 +134,30 @@ def export_data(model: Model, supports: list, cases: list) -> ExportData:
                       model.material.E, model.material.nu)
 
 
+def supported_stiffness(model: Model, supports: list) -> tuple[sp.csr_matrix, np.ndarray, dict]:
+    """The stiffness with the supports' springs (``K`` itself when there are none), the DOFs the
+    supports fix, and each support's DOFs (:func:`rigfem.fe.supports.constraints`)."""
+    fixed, springs, support_dofs = constraints(model.mesh, model.part.holes, supports, model.material.E)
+    return (model.K if springs is None else (model.K + springs).tocsr()), fixed, support_dofs
+
+
+def free_block(A: sp.csr_matrix, fixed: np.ndarray) -> sp.csr_matrix:
+    """``A`` on the DOFs not in ``fixed``: a copy, or ``A`` itself when nothing is fixed (supports by
+    springs alone, whose ``A`` is ``K`` + springs, a matrix of its own)."""
+    if not len(fixed):
+        return A
+    free = np.setdiff1d(np.arange(A.shape[0]), fixed)
+    return A[free][:, free]
+
+
 class StaticProblem:
     """A model with its supports, factorised once; :meth:`solve` takes any number of load cases."""
 
     def __init__(self, model: Model, supports: list, solver: str = "auto", rtol: float = 1e-10) -> None:
         fm = model.mesh
         self.model = model
-        self.fixed, springs, self.support_dofs = constraints(fm, model.part.holes, supports, model.material.E)
+        A, self.fixed, self.support_dofs = supported_stiffness(model, supports)
         self.free_body = any(isinstance(s, FreeBody) for s in supports)
-        A = model.K if springs is None else (model.K + springs).tocsr()
         self.free = np.setdiff1d(np.arange(fm.ndof), self.fixed)
         self._R = rigid_modes(fm.nodes)
         self._amg = (default_method(len(self.free)) if solver == "auto" else solver) == "amg"
@@ -153,10 +168,8 @@ class StaticProblem:
             D = sp.diags(d)
             A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
             self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
-        else:  # supports by springs alone fix no DOF: A is K + springs, a matrix of its own (the
-            # solver sorts it in place), given whole instead of copied row by row and column by column
-            A = A[self.free][:, self.free] if len(self.fixed) else A
-            self.linear_solver = LinearSolver(A, solver, rtol=rtol)
+        else:
+            self.linear_solver = LinearSolver(free_block(A, self.fixed), solver, rtol=rtol)
 
     def solve(self, cases: list) -> Solution:
         """Displacements, reactions and recovered stresses of every load case (one factorisation)."""

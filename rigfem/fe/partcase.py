@@ -53,10 +53,25 @@ def mesh_case(case: PartCase, settings: MeshSettings) -> PartMesh:
     return mesh_part(*mesh_job(case, settings))
 
 
+def part_geometries(cases: list[tuple[str, PartCase]]) -> dict[tuple, list[tuple[str, PartCase]]]:
+    """The (mode, case) pairs of each part geometry (part and parameters), in order: they share one
+    mesh and one stiffness (:func:`solve_cases`)."""
+    geo: dict[tuple, list[tuple[str, PartCase]]] = {}
+    for mode, case in cases:
+        geo.setdefault((case.part, tuple(sorted(case.params.items()))), []).append((mode, case))
+    return geo
+
+
 def _merged(group: list[tuple[str, PartCase]]) -> PartCase:
     """The first case of a part geometry's group, refined where any case of the group is."""
     refine = tuple(sorted({g for _, c in group for g in c.refine}))
     return dataclasses.replace(group[0][1], refine=refine)
+
+
+def group_job(group: list[tuple[str, PartCase]], settings: MeshSettings) -> tuple:
+    """The part and mesh settings of a part geometry's cases (:func:`part_geometries`): its mesh
+    is refined where any of them is loaded (:func:`mesh_job`)."""
+    return mesh_job(_merged(group), settings)
 
 
 def supports_of(case: PartCase) -> list:
@@ -178,10 +193,6 @@ def imbalance(model: Model, coef: np.ndarray, R: np.ndarray, scale: np.ndarray) 
     return float(force.max()), float(moment.max())
 
 
-def _key(case: PartCase) -> tuple:
-    return case.part, tuple(sorted(case.params.items()))
-
-
 def best_shrink(coarse, fine, order: int) -> float:
     """How much a peak's error band narrows from mesh settings ``coarse`` to ``fine`` at the
     asymptotic rate of order-p elements' stress error, h^p, h the smaller of the global and the
@@ -209,9 +220,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     check of the same cases starts at that level.  ``on_stage(text)`` hears 'meshing part X' and
     'solving part X' (with the level) as each begins.
     """
-    geo: dict[tuple, list[tuple[str, PartCase]]] = {}
-    for mode, case in cases:
-        geo.setdefault(_key(case), []).append((mode, case))
+    geo = part_geometries(cases)
     levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
     last = len(levels) - 1
     # where each geometry's ladder stopped before (a warm check starts there: the levels it
@@ -225,7 +234,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     # every part's first level meshed ahead, 2 at a time, the smallest first: the FE starts on
     # the part meshed soonest and works while the larger ones are meshed
     def job(g: tuple) -> tuple:  # the part and mesh settings of g's current level
-        return mesh_job(_merged(geo[g]), levels[level[g]][1])
+        return group_job(geo[g], levels[level[g]][1])
 
     order = sorted(geo, key=lambda g: getattr(estimate_part(*job(g)), "tets", math.inf))
     prefetch([job(g) for g in order])

@@ -167,7 +167,7 @@ def _set_fields(refine_tags: list[int], conc_tags: list[int], s: MeshSettings) -
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature_n(s))
     gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
-    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here and min SICN >= 0.3 on the rig parts
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: fastest here (min SICN: results/benchmarks/mesh.md)
     if not refine_tags:
         return
     f = gmsh.model.mesh.field
