@@ -93,6 +93,13 @@ def test_peak_memory_is_the_whole_process_tree(tmp_path):
     assert r["exit"] == 0 and r["peak_tree_rss_mib"] > 300 and r["wall_s"] > 1.5
 
 
+def test_wall_time_ends_with_the_process_not_at_the_next_poll():
+    """A 0.1 s process polled every 5 s: its wall time is its own, not the poll interval (the old
+    loop slept a whole interval before it saw the exit)."""
+    r = record.timed_process([sys.executable, "-c", "import time; time.sleep(0.1)"], poll_s=5.0)
+    assert r["exit"] == 0 and 0.1 <= r["wall_s"] < 2.5
+
+
 def test_write_record_computes_the_summaries(tmp_path):
     path = record.write_record("demo", {"a": [{"wall_s": 3.0}, {"wall_s": 1.0}, {"wall_s": 2.0}]}, {"x": 1},
                                command="python benchmarks/demo.py", out=tmp_path)

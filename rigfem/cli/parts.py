@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
         if part.kind == "rail":
             per_m = m / part["length"] * 1000
             ref = part.reference
-            note = (f"; {len(rig.rail_hole_x(part))} holes; {per_m:.3f} kg/m "
+            note = (f"; {rig.rail_hole_count(part)} holes; {per_m:.3f} kg/m "
                     f"(catalogue {ref['linear_mass_catalogue'].value:g}: "
                     f"{100 * (per_m / ref['linear_mass_catalogue'].value - 1):+.1f} %, "
                     f"study {ref['linear_mass_study'].value:g}: "

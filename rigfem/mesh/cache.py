@@ -28,10 +28,12 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from rigfem.files import file_sha256
+
+if TYPE_CHECKING:  # numpy is imported where arrays are handled: `rigfem parts` reads volumes without it
+    import numpy as np
 
 #: the channel a discarded entry is reported on
 log = logging.getLogger("rigfem.cache")
@@ -169,6 +171,8 @@ def entry_key(inputs: dict) -> str:
 
 def array_digest(*arrays) -> str:
     """SHA-256 of arrays (dtype, shape and bytes): an input key's stand-in for large arrays."""
+    import numpy as np
+
     h = hashlib.sha256()
     for a in arrays:
         a = np.ascontiguousarray(a)
@@ -254,6 +258,8 @@ def _whole(path: Path) -> bytearray:
 
 def _npy(buf: bytearray) -> np.ndarray:
     """The array of a ``.npy`` file's bytes, a view of ``buf`` (no pickles: object arrays refused)."""
+    import numpy as np
+
     head = io.BytesIO(bytes(buf[:1 << 16]))
     version = np.lib.format.read_magic(head)
     read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
@@ -297,6 +303,8 @@ def write_entry(folder: Path, inputs: dict, write: Callable[[Path], None]) -> bo
 
 def save_arrays(folder: Path, arrays: dict[str, np.ndarray]) -> None:
     """Write each array as ``<name>.npy`` in ``folder`` (for :func:`write_entry`)."""
+    import numpy as np
+
     for name, a in arrays.items():
         np.save(folder / f"{name}.npy", np.asarray(a), allow_pickle=False)
 

@@ -151,7 +151,7 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
     shares: list[list[int]] = [[] for _ in range(max(1, min(workers, len(todo))))]
     for i in sorted(todo, key=lambda i: -size[i]):  # the largest first, each to the lightest share
         min(shares, key=lambda sh: sum(size[j] for j in sh)).append(i)
-    if len(shares) < 2 or mp.current_process().daemon:
+    if not todo or mp.current_process().daemon:
         shares = []
     slim = [[(_one_combination(jobs[i][0], jobs[i][1]), np.ones(1), *jobs[i][2:]) for i in share] for share in shares]
     keys = [(f"pictures-{id(jobs)}-{share[0]}", share) for share in shares]
@@ -160,7 +160,7 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
         for key, share in keys:
             done.update(zip(share, pool.take(key) or []))
         for i in todo:
-            if i not in done:  # one picture to draw, one worker, or a job cancelled: here
+            if i not in done:  # no children here, or a job cancelled: here
                 done[i] = part_pictures(*jobs[i])
         return [done[i] for i in range(len(jobs))]
 

@@ -38,10 +38,12 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from rigfem.errors import InputError, check_range
+
+if TYPE_CHECKING:  # numpy only where hole positions are made: `rigfem parts` lists without it
+    import numpy as np
 
 #: folder with the part definition files: the top-level geometry/, installed as rigfem.geometry
 GEOMETRY_DIR = Path(str(resources.files("rigfem.geometry")))
@@ -193,11 +195,17 @@ def envelope_mm3(part: PartDef) -> float | None:
     return None
 
 
-def rail_hole_x(part: PartDef) -> np.ndarray:
-    """x of every mounting hole of a rail, mm: first_offset + i*pitch up to L - first_offset."""
+def rail_hole_count(part: PartDef) -> int:
+    """How many mounting holes a rail has: at first_offset + i*pitch up to L - first_offset."""
     L, a, p = part["length"], part["first_offset"], part["pitch"]
-    n = int(math.floor((L - 2 * a) / p + 1e-9)) + 1
-    return a + p * np.arange(max(n, 0))
+    return max(int(math.floor((L - 2 * a) / p + 1e-9)) + 1, 0)
+
+
+def rail_hole_x(part: PartDef) -> np.ndarray:
+    """x of every mounting hole of a rail, mm (:func:`rail_hole_count` of them)."""
+    import numpy as np
+
+    return part["first_offset"] + part["pitch"] * np.arange(rail_hole_count(part))
 
 
 def rail_hole_groups(i: int) -> tuple[str, str, str]:
