@@ -213,8 +213,8 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     (the cap).  A level at which a case would stay unsettled with the band narrowed by
     :func:`best_shrink` is skipped.  Parts are queued smallest first (the estimated mesh) and
     solved as their meshes are made: the first part in the queue whose mesh is ready; a part that
-    climbs goes to the back of the queue, its finer mesh made in a mesher process while the
-    other parts solve.  Without ``settled`` every part is
+    climbs goes to the back of the queue, its finer mesh (and the cap's, in case it climbs on)
+    made in a mesher process while the other parts solve.  Without ``settled`` every part is
     solved at ``settings`` only.  Where the ladder stopped is stored
     (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases, the levels and the code): a later
     check of the same cases starts at that level.  ``on_stage(text)`` hears 'meshing part X' and
@@ -256,7 +256,9 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
                 k += 1  # unsettled there even at the asymptotic rate: skipped
                 ladders[g][-1].setdefault("skipped", []).append(names[k])
             level[g] = k + 1
-            prefetch([job(g)], keep=True)
+            # the cap's mesh too, after the next level's: a part that climbs once often climbs on,
+            # and then its FE would wait for the mesh (made while the other parts solve)
+            prefetch([job(g), group_job(geo[g], levels[last][1])], keep=True)
             queue.append(g)
             out = None  # free this level's model, matrix and factor before the next part's
             continue
