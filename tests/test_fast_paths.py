@@ -2,6 +2,9 @@
 meshes prefetched in mesher processes, smoothing by part kind, a check without pictures."""
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -126,3 +129,16 @@ def test_run_check_without_pictures(tmp_path):
                                                              "samples": 36, "frames": 0, "modes": ["original"]},
                   quiet=True, pictures=False)
     assert r["verdict"] == "pass" and not list((tmp_path / "o").glob("*.png"))
+
+
+def test_pypardiso_is_told_where_mkl_is():
+    """pypardiso, imported without PYPARDISO_MKL_RT, searches the whole environment for MKL's
+    library (a tenth of a second of every solving process); rigfem names the mkl wheel's file."""
+    code = ("import glob, os\n"
+            "def searched(*a, **k):\n    raise AssertionError('pypardiso searched for MKL')\n"
+            "glob.glob = searched\n"
+            "import rigfem.fe.solver as s\np = s.pardiso()\n"
+            "print(p.ps.libmkl._name == os.environ['PYPARDISO_MKL_RT'] == s._mkl_rt())")
+    env = {k: v for k, v in os.environ.items() if k != "PYPARDISO_MKL_RT"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True"

@@ -34,10 +34,26 @@ import scipy.sparse as sp
 
 from rigfem.errors import ComputeError, InputError
 
+def _mkl_rt() -> str | None:
+    """MKL's runtime library where the ``mkl`` wheel installed it, or None.  Told it, pypardiso
+    does not search the whole environment for it when imported (0.5 s of every process that
+    solves; measured in issue 26)."""
+    from importlib import metadata
+
+    try:
+        found = sorted((f for f in metadata.files("mkl") or () if f.name.startswith("libmkl_rt")),
+                       key=lambda f: len(f.name))
+    except metadata.PackageNotFoundError:
+        return None
+    return next((str(p) for p in (f.locate().resolve() for f in found) if p.is_file()), None)
+
+
 @functools.lru_cache(maxsize=None)
 def pardiso():
     """pypardiso, imported on first use (loading MKL takes a tenth of a second a warm check,
     which solves nothing, does not need), or None on a platform without MKL."""
+    if "PYPARDISO_MKL_RT" not in os.environ and (path := _mkl_rt()):
+        os.environ["PYPARDISO_MKL_RT"] = path
     try:
         import pypardiso
     except ImportError:  # pragma: no cover - platform without MKL
