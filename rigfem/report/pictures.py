@@ -211,7 +211,7 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
     names, the scale (for report.json) and the renderer.
     """
     from rigfem.report.vtu import SAFETY_CAP
-    from rigfem.report.views import FieldView, framing, plotter, render, surface
+    from rigfem.report.views import FieldView, framing, render
 
     folder = Path(folder)
     fm, sol = r.solution.model.mesh, r.solution
@@ -271,22 +271,17 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
                                          marks=[1.0])),
     }
     files = {}
-    try:  # every view with one plotter, of one surface
-        with plotter() as p:
-            shell = surface(x[:n], tets)
-            images = {key: [render(view, w_h[0], d, up, p=p, surf=shell),
-                            render(view, w_h[1], d, up, box, p=p, surf=shell)] for key, (view, _, _) in pics.items()}
-    except Exception:  # noqa: BLE001 - no OpenGL context on this machine: the simpler pictures
-        images = None
     for key, (view, what, bar) in pics.items():
         name = f"{r.case.name}.png" if key == "von_mises" else f"{r.case.name}_{key}.png"
-        if images is None:
+        try:
+            images = [render(view, w_h[0], d, up), render(view, w_h[1], d, up, box)]
+        except Exception:  # noqa: BLE001 - no OpenGL context on this machine: the simpler picture
             field_picture(fm.nodes, fm.elements, view.values, folder / name, f"{label}: {what}", what,
                           norm=plt.Normalize(*view.clim))
             files[key], renderer = name, "matplotlib"
             continue
         lines = [head[0].format(what=what), *head[1:]]
-        _page(images[key], elongated, lines, entry["verdict"], legend, folder / name, bar)
+        _page(images, elongated, lines, entry["verdict"], legend, folder / name, bar)
         files[key], renderer = name, "pyvista"
     return {"files": files, "renderer": renderer, "deformation_scale": scale,
             "utilisation_scale_pct": list(UTILISATION_SCALE_PCT), "utilisation_scale_mpa": [0.0, limit],

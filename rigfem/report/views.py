@@ -10,8 +10,6 @@ the caller composes the page (title, colour bar) with matplotlib.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -78,56 +76,28 @@ def _fit(p, pts: np.ndarray, d: np.ndarray, up: np.ndarray, size: tuple[int, int
     p.reset_camera_clipping_range()
 
 
-@contextlib.contextmanager
-def plotter() -> Iterator[object]:
-    """One off-screen PyVista plotter for several :func:`render` calls: a plotter is an OpenGL
-    context, and making one cost about as much as drawing a view (a part's six views: 0.87 s with
-    a plotter each, 0.48 s with one; measured in issue 26).  Raises if no OpenGL context can be made."""
+def render(view: FieldView, size: tuple[int, int], direction: np.ndarray, up: np.ndarray,
+           box: tuple[np.ndarray, np.ndarray] | None = None, font: int = 18) -> np.ndarray:
+    """RGB image (h, w, 3) of ``view`` seen along ``-direction``; ``box`` (lo, hi) clips a close-up
+    (mesh edges shown).  Raises if no OpenGL context can be made."""
     import pyvista as pv
 
     pv.OFF_SCREEN = True
-    with pv.vtk_verbosity("error"):  # VTK tries X first and warns on a headless machine
-        p = pv.Plotter(off_screen=True, border=False)
-    try:
-        yield p
-    finally:
-        p.close()
-
-
-def surface(points: np.ndarray, tets: np.ndarray):
-    """The outer surface of a tet mesh (what :func:`render` draws), made once for every view of
-    the same points; it keeps each point's index (``vtkOriginalPointIds``) to take a field."""
-    import pyvista as pv
-
-    grid = pv.UnstructuredGrid({pv.CellType.TETRA: np.asarray(tets, np.int64)}, points)
-    return grid.extract_surface(algorithm="dataset_surface", pass_pointid=True)
-
-
-def render(view: FieldView, size: tuple[int, int], direction: np.ndarray, up: np.ndarray,
-           box: tuple[np.ndarray, np.ndarray] | None = None, font: int = 18, p=None, surf=None) -> np.ndarray:
-    """RGB image (h, w, 3) of ``view`` seen along ``-direction``; ``box`` (lo, hi) clips a close-up
-    (mesh edges shown), rendered once.  ``p``: the :func:`plotter` to draw with (its previous view is
-    cleared; a new one otherwise); ``surf``: the :func:`surface` of ``view.points``, if already made.  Raises
-    if no OpenGL context can be made."""
-    if p is None:
-        with plotter() as p:
-            return render(view, size, direction, up, box, font, p, surf)
-    import pyvista as pv
-
-    surf = (surface(view.points, view.tets) if surf is None else surf).copy(deep=False)
-    surf.point_data["field"] = view.values[surf.point_data["vtkOriginalPointIds"]]
+    grid = pv.UnstructuredGrid({pv.CellType.TETRA: np.asarray(view.tets, np.int64)}, view.points)
+    grid.point_data["field"] = view.values
+    surf = grid.extract_surface(algorithm="dataset_surface")
     inside = (lambda x: True) if box is None else (lambda x: bool(np.all((x >= box[0]) & (x <= box[1]))))
     if box is not None:
         surf = surf.clip_box([box[0][0], box[1][0], box[0][1], box[1][1], box[0][2], box[1][2]], invert=False)
-    p.clear_actors()
-    p.ren_win.SetSize(*size)  # not p.window_size: its setter renders the old view at the new size
+    with pv.vtk_verbosity("error"):  # VTK tries X first and warns on a headless machine
+        p = pv.Plotter(off_screen=True, window_size=list(size), border=False)
     p.set_background("white")
     span = float(np.ptp(view.points, axis=0).max())
     if view.ghost is not None and box is None:
         ghost = pv.UnstructuredGrid({pv.CellType.TETRA: np.asarray(view.tets, np.int64)}, view.ghost)
-        p.add_mesh(ghost.extract_feature_edges(feature_angle=40), color="#9e9e9e", line_width=1, render=False)
+        p.add_mesh(ghost.extract_feature_edges(feature_angle=40), color="#9e9e9e", line_width=1)
     p.add_mesh(surf, scalars="field", cmap=view.cmap, clim=list(view.clim), above_color=view.above,
-               show_edges=box is not None, edge_color="#555555", line_width=0.4, show_scalar_bar=False, render=False)
+               show_edges=box is not None, edge_color="#555555", line_width=0.4, show_scalar_bar=False)
     for tri, name in view.supports:
         patch = pv.PolyData(view.points, np.hstack([np.full((len(tri), 1), 3), tri[:, :3]]).ravel())
         rim = patch.extract_feature_edges(boundary_edges=True, feature_edges=False, manifold_edges=False,
@@ -136,13 +106,13 @@ def render(view: FieldView, size: tuple[int, int], direction: np.ndarray, up: np
         if box is not None:
             rim = rim.clip_box([box[0][0], box[1][0], box[0][1], box[1][1], box[0][2], box[1][2]], invert=False)
         if rim.n_points:
-            p.add_mesh(rim, color=SUPPORT_COLOUR, line_width=4, render=False)
+            p.add_mesh(rim, color=SUPPORT_COLOUR, line_width=4)
         if inside(c):
             s = 0.035 * span if box is None else 0.06 * float(np.max(box[1] - box[0]))
-            p.add_mesh(pv.Cube(center=c, x_length=s, y_length=s, z_length=s), color=SUPPORT_COLOUR, render=False)
+            p.add_mesh(pv.Cube(center=c, x_length=s, y_length=s, z_length=s), color=SUPPORT_COLOUR)
             p.add_point_labels(pv.PolyData(c[None, :]), [name], font_size=font - 4, text_color="white",
                                shape_color=SUPPORT_COLOUR, shape_opacity=0.8, show_points=False,
-                               always_visible=True, render=False)
+                               always_visible=True)
     big = max((float(np.linalg.norm(f)) for _, f, _ in view.arrows), default=0.0)
     for tip, f, text in view.arrows:
         n = float(np.linalg.norm(f))
@@ -152,16 +122,16 @@ def render(view: FieldView, size: tuple[int, int], direction: np.ndarray, up: np
         length = ref * max(n / big, 0.3)
         u = f / n
         p.add_mesh(pv.Arrow(start=tip - length * u, direction=u, scale=length, tip_length=0.3, tip_radius=0.09,
-                            shaft_radius=0.035), color=LOAD_COLOUR, render=False)
+                            shaft_radius=0.035), color=LOAD_COLOUR)
         p.add_point_labels(pv.PolyData((tip - length * u)[None, :]), [text], font_size=font - 2,
                            text_color="white", shape_color=LOAD_COLOUR, shape_opacity=0.85, show_points=False,
-                           always_visible=True, render=False)
+                           always_visible=True)
     for xyz, text in view.marks:
         if inside(xyz):
             p.add_point_labels(pv.PolyData(np.asarray(xyz, float)[None, :]), [text], font_size=font, point_size=16,
                                point_color="black", render_points_as_spheres=True, shape_opacity=0.85,
-                               always_visible=True, render=False)
+                               always_visible=True)
     _fit(p, surf.points if surf.n_points else view.points, direction, up, size, 1.25 if box is None else 1.05)
-    p.render()  # the one render: each addition above skipped its own, and a screenshot does not render
     img = p.screenshot(return_img=True)
+    p.close()
     return np.asarray(img)[..., :3]
