@@ -37,3 +37,27 @@ def test_wheel_runs_from_another_folder(tmp_path):
                            str(elsewhere / "plate.vtu")], cwd=elsewhere, env=env, capture_output=True, text=True)
     assert mesh.returncode == 0, mesh.stderr
     assert (elsewhere / "plate.vtu").stat().st_size > 0
+
+
+def test_every_import_of_the_package_is_a_declared_dependency():
+    """Every third-party module rigfem/ imports comes from a distribution pyproject.toml names
+    directly (the import name may differ from the distribution's: markdown_it is markdown-it-py):
+    a fresh install gets all of them, none only through another package's extra."""
+    import ast
+    import re
+    import tomllib
+    from importlib.metadata import packages_distributions
+
+    norm = lambda name: re.sub(r"[-_.]+", "-", name).lower()  # noqa: E731 - PEP 503
+    deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    declared = {norm(re.match(r"[A-Za-z0-9_.-]+", d).group()) for d in deps}
+    made_by = packages_distributions()
+    missing = set()
+    for path in (ROOT / "rigfem").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else [])
+            for top in {n.split(".")[0] for n in names} - set(sys.stdlib_module_names) - {"rigfem"}:
+                if not {norm(d) for d in made_by.get(top, [])} & declared:
+                    missing.add(f"{top} ({path.relative_to(ROOT)})")
+    assert not missing, f"imported but not declared in pyproject.toml: {sorted(missing)}"
