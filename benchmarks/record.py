@@ -93,10 +93,10 @@ def timed_process(cmd: list[str], env: dict | None = None, cwd: str | Path | Non
     t0 = time.perf_counter()
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         p = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=out, stderr=err, text=True)
+        root, peak = psutil.Process(p.pid), 0  # before the waiter can reap the process
         ended: list[float] = []
         waiter = threading.Thread(target=lambda: (p.wait(), ended.append(time.perf_counter())), daemon=True)
         waiter.start()
-        root, peak = psutil.Process(p.pid), 0
         while waiter.is_alive():
             rss = 0
             try:

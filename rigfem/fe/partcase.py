@@ -258,7 +258,7 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
             level[g] = k + 1
             # the cap's mesh too, after the next level's: a part that climbs once often climbs on,
             # and then its FE would wait for the mesh (made while the other parts solve)
-            prefetch([job(g), group_job(geo[g], levels[last][1])], keep=True)
+            prefetch([job(g)] + ([group_job(geo[g], levels[last][1])] if level[g] < last else []), keep=True)
             queue.append(g)
             out = None  # free this level's model, matrix and factor before the next part's
             continue

@@ -34,10 +34,11 @@ import scipy.sparse as sp
 
 from rigfem.errors import ComputeError, InputError
 
+
 def _mkl_rt() -> str | None:
     """MKL's runtime library where the ``mkl`` wheel installed it, or None.  Told it, pypardiso
-    does not search the whole environment for it when imported (0.5 s of every process that
-    solves; measured in issue 26)."""
+    does not search the whole environment for it when imported (a process's first solve:
+    0.29 -> 0.15 s, measured in issue 26)."""
     from importlib import metadata
 
     try:
