@@ -134,7 +134,8 @@ class LinearSolver:
         else:
             import pyamg
             B = None if near_null is None else np.asarray(near_null, dtype=float)
-            self._ml = pyamg.smoothed_aggregation_solver(self.A, B=B, symmetry="hermitian", max_coarse=500)
+            self._ml = pyamg.smoothed_aggregation_solver(self.A, B=B, symmetry="hermitian", max_coarse=500,
+                                                         smooth=("jacobi", {"weighting": "local"}))
         self.setup_time = time.perf_counter() - t0
         self.solve_time = 0.0
 
