@@ -17,7 +17,9 @@ mode (the critical crank angle), a ParaView ``.pvd`` animation per part over the
 from __future__ import annotations
 
 import dataclasses
+import shutil
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -219,11 +221,30 @@ def _differences(parts: list[dict]) -> list[str]:
     return out
 
 
+def _frames(r: CaseResult, frames: int) -> list[tuple[int, str]]:
+    """(row, file name) of each frame of a cycle case's animation: ``frames`` crank angles, evenly spaced."""
+    if r.mode != "cycle" or not frames:
+        return []
+    rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
+    return [(int(i), f"{r.case.name}_{r.mode}_{k:03d}.vtu") for k, i in enumerate(rows)]
+
+
+def _write_frames(r: CaseResult, frames: int, limit: float, folder: Path) -> list[int]:
+    """Write a case's animation frames (compact VTU) into ``folder`` as soon as its part is final;
+    the rows the report still needs of it: the critical one (:func:`rigfem.fe.partcase.solve_cases`
+    then holds only that combination of the part's unit solutions)."""
+    for i, name in _frames(r, frames):
+        write_vtu(folder / name, r.solution, r.coef[i], allowable=limit, compact=True)
+    return [r.row]
+
+
 def _write_outputs(d: Path, h: ReactionHistory, results: list[CaseResult], parts: list[dict], limit: float,
-                   allowable: str, frames: int, export_inp: bool, pictures: bool = True) -> tuple[list[str], list[str]]:
+                   allowable: str, frames: int, export_inp: bool, pictures: bool,
+                   staged: Path) -> tuple[list[str], list[str]]:
     """Pictures (kept with the report; none without ``pictures``) of the reactions and of every
     part case, and field files (VTU/PVD/INP: ParaView/CalculiX, not kept in the repository's
-    result folders); the pictures' scales go into ``parts``."""
+    result folders; the animation frames moved from ``staged``, where :func:`_write_frames` put
+    them); the pictures' scales go into ``parts``."""
     fields, first = [], []
     worst = {}
     for r in results:  # one set of pictures per part: its mode with the highest peak
@@ -245,7 +266,7 @@ def _write_outputs(d: Path, h: ReactionHistory, results: list[CaseResult], parts
             write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit)
             fields.append(f"{stem}.vtu")
             if export_inp:  # the identical model at the critical crank angle, for CalculiX
-                export_model(r.solution.model, supports_of(r.case), r.solution.F @ c[:, None], d / f"{stem}.inp",
+                export_model(r.solution.model, supports_of(r.case), r.solution.loads(c)[:, None], d / f"{stem}.inp",
                              heading=f"rigfem {r.case.name} {r.mode} crank {r.case.rows[r.row]:.2f} deg")
                 fields.append(f"{stem}.inp")
             if pictures and r.mode == "cycle":
@@ -253,11 +274,9 @@ def _write_outputs(d: Path, h: ReactionHistory, results: list[CaseResult], parts
                                  part_label(entry["name"], entry["part"]), allowable)
                 of[id(r)].append(f"{r.case.name}_utilisation.png")
             if r.mode == "cycle" and frames:
-                rows = np.unique(np.linspace(0, len(r.case.rows), frames, endpoint=False).astype(int))
                 series = []
-                for k, i in enumerate(rows):
-                    name = f"{stem}_{k:03d}.vtu"
-                    write_vtu(d / name, r.solution, r.coef[i], allowable=limit, compact=True)
+                for i, name in _frames(r, frames):
+                    shutil.move(staged / name, d / name)
                     series.append((float(r.case.rows[i]), name))
                 pvd = "\n".join(f'    <DataSet timestep="{t:g}" file="{f}"/>' for t, f in series)
                 (d / f"{stem}.pvd").write_text(
@@ -270,12 +289,14 @@ def _write_outputs(d: Path, h: ReactionHistory, results: list[CaseResult], parts
     return first + [f for r in results for f in of[id(r)]], fields
 
 
-def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None
+def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_stage=None, on_final=None
                 ) -> tuple[ReactionHistory, list[CaseResult], dict]:
     """The scene's reaction history (its dynamics, or an imported CSV), its summary (peaks,
     rules: :func:`rigfem.dynamics.history.summary`) and every part case solved; no cases at a
     toggle, where the reactions are unbounded.  ``on_stage(text)`` hears each stage as it
-    begins (dynamics, meshing part X, solving part X)."""
+    begins (dynamics, meshing part X, solving part X).  Each case's solution holds its critical
+    row's combination only, or the rows ``on_final(result)`` returns as its part is final (None:
+    every unit solution; :func:`rigfem.fe.partcase.solve_cases`)."""
     if on_stage:
         on_stage("reactions from the CSV" if cs.reactions_csv else "dynamics")
     h = (imported_history(cs) if cs.reactions_csv else
@@ -294,7 +315,8 @@ def solve_scene(cs: CheckScene, solver: str = "auto", quiet: bool = True, on_sta
     bar, step = _progress(len(cases), quiet)
     with bar:
         return h, solve_cases(cases, cs.settings, solver=solver, progress=step, on_stage=on_stage,
-                              settled=lambda r, shrink=1.0: settled(r, cs.settings, shrink)), digest
+                              settled=lambda r, shrink=1.0: settled(r, cs.settings, shrink),
+                              on_final=on_final or (lambda r: [r.row])), digest
 
 
 def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None, force: bool = False,
@@ -322,7 +344,20 @@ def run_check(name: str | Path = REFERENCE_SCENE, out: str | Path | None = None,
 def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, export_inp: bool,
            pictures: bool = True, on_verdict=None, on_stage=None) -> dict:
     s = cs.settings
-    h, results, reactions = solve_scene(cs, solver, quiet, on_stage)
+    limit = allowable_stress(s.material.sigma_u, s.limit_factor)
+    # a part's animation frames are written as soon as it is final, and its unit solutions dropped
+    with tempfile.TemporaryDirectory(prefix="rigfem-frames-") as staged:
+        h, results, reactions = solve_scene(cs, solver, quiet, on_stage,
+                                            lambda r: _write_frames(r, cs.frames, limit, Path(staged)))
+        return _report(cs, out, force, h, results, reactions, limit, export_inp, pictures, on_verdict, on_stage,
+                       Path(staged))
+
+
+def _report(cs: CheckScene, out: Path, force: bool, h: ReactionHistory, results: list[CaseResult],
+            reactions: dict, limit: float, export_inp: bool, pictures: bool, on_verdict, on_stage,
+            staged: Path) -> dict:
+    """Verdicts, report and files of a solved scene, written into ``out`` at once."""
+    s = cs.settings
     if h.meta.get("singular"):
         parts = [{"name": p, "part": spec["part"], "mode": m, "verdict": "fail", "peak_mpa": None,
                   "notes": [f"toggle (singular) crank-angle ranges {h.meta['singular']}: reactions grow "
@@ -332,7 +367,6 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
         parts = [verdict_of(r, s) for r in results]
     # a configuration that cannot be mounted never passes, whatever its stresses
     verdict = "fail" if cs.rule_violations else overall(parts)
-    limit = allowable_stress(s.material.sigma_u, s.limit_factor)
     report = {
         "schema": REPORT_SCHEMA, "scene": cs.scene.name, "description": cs.description,
         "rigfem_version": __version__,
@@ -359,7 +393,8 @@ def _check(cs: CheckScene, out: Path, force: bool, quiet: bool, solver: str, exp
     if on_stage:
         on_stage("report")
     with atomic_dir(out, force) as d:
-        pics, fields = _write_outputs(d, h, results, parts, limit, allowable, cs.frames, export_inp, pictures)
+        pics, fields = _write_outputs(d, h, results, parts, limit, allowable, cs.frames, export_inp, pictures,
+                                      staged)
         report["files"] = ["report.json", "report.md", *pics, "report.html"]
         report["field_files"] = fields
         write_json(report, d / "report.json")

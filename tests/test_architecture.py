@@ -18,7 +18,7 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.files", "rigfem.material", "rigfem.geometry"),  # geometry: part files (data)
+    ("rigfem.errors", "rigfem.files", "rigfem.memory", "rigfem.material", "rigfem.geometry"),  # geometry: part files (data)
     ("rigfem.rig",),
     ("rigfem.settings",),
     ("rigfem.linkage",),

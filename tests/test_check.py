@@ -106,3 +106,38 @@ def test_imported_csv_reproduces_the_dynamics(tmp_path):
         assert b["crank_deg"] == pytest.approx(a["crank_deg"], abs=0.01)
     with pytest.raises(InputError, match="reactions_csv = 'nope.csv': no such file"):
         run_check("final-cm", out=tmp_path / "x", overrides={**opts, "reactions_csv": "nope.csv"})
+
+
+def _numbers(entry, prefix=""):
+    """The numbers of a verdict entry, flattened (its timings left out)."""
+    if isinstance(entry, dict):
+        return {k: v for key, val in entry.items() if key not in ("seconds", "ladder")
+                for k, v in _numbers(val, f"{prefix}{key}.").items()}
+    if isinstance(entry, (list, tuple)):
+        return {k: v for i, val in enumerate(entry) for k, v in _numbers(val, f"{prefix}{i}.").items()}
+    return {prefix: entry}
+
+
+def test_a_final_part_holds_only_its_critical_combination():
+    """Once a part is final, a check keeps of its solution only what the report still reads (the
+    critical row's combination; the animation frames are written as it becomes final), not every
+    unit solution; the verdict entries are those of the whole solution."""
+    from rigfem.check import load_check_scene, solve_scene
+    from rigfem.verdict.part import verdict_of
+
+    cs = load_check_scene("final-cm", FAST)
+    _, small, _ = solve_scene(cs)
+    _, every, _ = solve_scene(cs, on_final=lambda r: None)
+    for r, ref in zip(small, every):
+        shared = [o for o in small if o.solution is r.solution]  # the modes that share supports
+        assert r.solution.U.shape[1] == len({tuple(o.coef[o.row]) for o in shared}) < r.solution.cases
+        assert r.solution.cases == ref.solution.cases == ref.coef.shape[1]
+        dropped = [i for i in range(len(r.case.rows)) if not any((r.coef[i] == o.coef[o.row]).all() for o in shared)]
+        assert len(dropped) == len(r.case.rows) - 1 or r.mode == "original"  # a cycle case: all its other angles
+        for i in dropped[:1]:
+            with pytest.raises(ValueError, match="kept"):
+                r.solution.stress(r.coef[i])
+        a, b = _numbers(verdict_of(r, cs.settings)), _numbers(verdict_of(ref, cs.settings))
+        assert a.keys() == b.keys()
+        for k in a:
+            assert a[k] == pytest.approx(b[k], rel=1e-10, abs=1e-9) if isinstance(a[k], float) else a[k] == b[k], k

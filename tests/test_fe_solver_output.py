@@ -216,3 +216,49 @@ def test_pardiso_runs_with_rigfems_settings_and_no_inner_refinement(cantilever):
     assert all(ls._ps.iparm[i - 1] == v for i, v in PARDISO_IPARM.items())
     assert ls._ps.iparm[6] == 0  # iterative refinement steps PARDISO performed
     assert ls.backward_errors.max() < 1e-13 and np.abs(ls.A @ X - F).max() < 1e-8 * np.abs(F).max()
+
+
+def test_kept_combinations_answer_as_before_and_refuse_the_rest(cantilever):
+    """Solution.kept holds only some combinations of the unit cases (what a check keeps of a part
+    once it is final): a kept combination gives the same fields, peak, loads and reactions as the
+    full solution; a combination it dropped raises instead of answering with wrong numbers."""
+    cases = [SurfaceForce("xmax", (0, 0, -100)), SurfaceForce("xmax", (50, 20, 0)), SurfaceForce("xmax", (0, 30, 0))]
+    full = solve(cantilever, [Fixed("xmin")], cases)
+    C = np.array([[1.0, -0.5, 2.0], [0.0, 1.0, 0.0], [1.0, -0.5, 2.0]])  # a repeated row is kept once
+    kept = full.kept(C)
+    assert kept.U.shape[1] == 2 and kept.nodal_stress.shape[0] == 2 and kept.cases == 3
+    for c in C:
+        assert np.allclose(kept.displacement(c), full.displacement(c), rtol=1e-12, atol=0)
+        assert np.allclose(kept.stress(c), full.stress(c), rtol=1e-12, atol=1e-12)
+        assert np.allclose(kept.loads(c), full.loads(c)) and np.allclose(kept.reaction(c), full.reaction(c))
+        assert kept.peak(c) == full.peak(c)
+    assert np.allclose(kept.peak_sweep(C)[0], full.peak_sweep(C)[0], rtol=1e-12)
+    assert np.array_equal(kept.equilibrium_error, full.equilibrium_error)  # the 3 solves' own check
+    again = kept.kept(C[1:2])  # a kept solution kept again copies its cases: the same bytes
+    assert again.U.shape[1] == 1 and np.array_equal(again.stress(C[1]), kept.stress(C[1]))
+    with pytest.raises(ValueError, match="kept 2 combinations of its 3 load cases"):
+        kept.stress([1.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="3 finite numbers"):
+        kept.stress([1.0, 0.0])
+
+
+def test_a_last_solve_frees_the_factors_before_the_stresses(cantilever):
+    """``solve`` (one batch of cases) frees the factorisation before recovering the stresses, so
+    the two largest arrays of a part are never held together; the problem then solves no more."""
+    from rigfem.fe import StaticProblem
+
+    problem = StaticProblem(cantilever, [Fixed("xmin")])
+    sol = problem.solve([SurfaceForce("xmax", (0, 0, -100))], last=True)
+    assert sol.backward_errors.max() < 1e-10 and problem.linear_solver.A is None
+    with pytest.raises(RuntimeError, match="released"):
+        problem.solve([SurfaceForce("xmax", (0, 0, -100))])
+
+
+@pytest.mark.skipif(platform.system() != "Linux", reason="malloc_trim is glibc's")
+def test_the_heap_is_trimmed_on_linux():
+    """rigfem gives freed heap back after each part (rigfem.memory.trim_heap): on Linux (glibc)
+    the call must reach malloc_trim, not silently do nothing."""
+    from rigfem.memory import _libc, trim_heap
+
+    assert _libc() is not None
+    trim_heap()

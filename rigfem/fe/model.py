@@ -169,10 +169,14 @@ class StaticProblem:
             A = (D @ A @ D + sp.diags((1 - d) * A.diagonal().mean())).tocsr()
             self.linear_solver = LinearSolver(A, "amg", near_null=self._R, rtol=rtol)
         else:
-            self.linear_solver = LinearSolver(free_block(A, self.fixed), solver, rtol=rtol)
+            A = free_block(A, self.fixed)  # (the supported stiffness is freed before the factorisation)
+            self.linear_solver = LinearSolver(A, solver, rtol=rtol)
 
-    def solve(self, cases: list) -> Solution:
-        """Displacements, reactions and recovered stresses of every load case (one factorisation)."""
+    def solve(self, cases: list, last: bool = False) -> Solution:
+        """Displacements, reactions and recovered stresses of every load case (one factorisation).
+
+        With ``last`` the factorisation is freed before the stresses are recovered (the two are a
+        part's largest arrays) and this problem solves no more."""
         model, ls = self.model, self.linear_solver
         F = load_matrix(model, cases)
         U = np.zeros_like(F)
@@ -186,6 +190,8 @@ class StaticProblem:
         reactions = model.K @ U - F
         if self.free_body:
             U -= self._R @ np.linalg.lstsq(self._R, U, rcond=None)[0]
+        if last:
+            ls.release()
         t0 = time.perf_counter()
         S = nodal_stress(model.mesh, model.material.E, model.material.nu, U)
         return Solution(model=model, F=F, U=U, reactions=reactions, nodal_stress=S, support_dofs=self.support_dofs,
@@ -196,5 +202,5 @@ class StaticProblem:
 
 
 def solve(model: Model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10) -> Solution:
-    """Solve all load cases with one factorisation: ``StaticProblem(model, supports).solve(cases)``."""
-    return StaticProblem(model, supports, solver, rtol).solve(cases)
+    """Solve all load cases with one factorisation: ``StaticProblem(model, supports).solve(cases, last=True)``."""
+    return StaticProblem(model, supports, solver, rtol).solve(cases, last=True)

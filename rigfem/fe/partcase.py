@@ -28,6 +28,7 @@ from rigfem.fe.model import Model, build_model
 from rigfem.fe.solution import Solution
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
+from rigfem.memory import trim_heap
 from rigfem.mesh import pool
 from rigfem.mesh.cache import array_digest, cached_arrays, code_hash
 from rigfem.mesh.mesher import MeshSettings, estimate_part, mesh_part, mesh_state, prefetch
@@ -203,7 +204,7 @@ def best_shrink(coarse, fine, order: int) -> float:
 
 
 def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto",
-                progress=None, settled=None, on_stage=None) -> list[CaseResult]:
+                progress=None, settled=None, on_stage=None, on_final=None) -> list[CaseResult]:
     """Solve every (mode, case); cases of one part geometry share mesh and stiffness, cases
     with the same supports share one factorisation, identical unit loads are solved once.
 
@@ -218,7 +219,10 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
     solved at ``settings`` only.  Where the ladder stopped is stored
     (:func:`rigfem.fe.cache.save_ladder`, keyed by the cases, the levels and the code): a later
     check of the same cases starts at that level.  ``on_stage(text)`` hears 'meshing part X' and
-    'solving part X' (with the level) as each begins.
+    'solving part X' (with the level) as each begins.  With ``on_final`` (``on_final(result)`` ->
+    the rows of the case the caller still needs, None for all), called for each case as its part
+    is final, the part's solution is then reduced to those rows' combinations (:func:`_keep_only`):
+    the unit solutions of the parts already solved are not held while the next ones are.
     """
     geo = part_geometries(cases)
     levels = settings.levels() if settled is not None else [(getattr(settings, "fidelity", ""), settings)]
@@ -261,17 +265,36 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, solver: str = "auto
             prefetch([job(g)] + ([group_job(geo[g], levels[last][1])] if level[g] < last else []), keep=True)
             queue.append(g)
             out = None  # free this level's model, matrix and factor before the next part's
+            trim_heap()
             continue
         if keys[g] and level[g] != start[g]:
             save_ladder(keys[g], ladders[g])
         stopped = ("fixed mesh (no ladder)" if not last else
                    "decided within the reporting target" if done else "reached the cap")
-        for (mode, case), res in zip(group, out):
+        for res in out:
             res.level, res.stopped, res.ladder = name, stopped, ladders[g]
+        if on_final is not None:
+            _keep_only(out, on_final)
+        trim_heap()  # what the part's solve and the reduction freed goes back to the system
+        for (mode, case), res in zip(group, out):
             results[id(case)] = res
             if progress:
                 progress(case.name, mode)
     return [results[id(case)] for _, case in cases]
+
+
+def _keep_only(results: list[CaseResult], rows_of) -> None:
+    """Reduce each solution of ``results`` to the combinations of the rows ``rows_of(result)`` of
+    the cases that share it (:meth:`~rigfem.fe.solution.Solution.kept`); in place.  A case whose
+    ``rows_of`` is None keeps its solution whole."""
+    rows: dict[int, tuple] = {}
+    for r in results:
+        want = rows_of(r)
+        rows.setdefault(id(r.solution), (r.solution, []))[1].append(None if want is None else
+                                                                    r.coef[np.atleast_1d(want)])
+    small = {k: sol if any(c is None for c in C) else sol.kept(np.vstack(C)) for k, (sol, C) in rows.items()}
+    for r in results:
+        r.solution = small[id(r.solution)]
 
 
 #: how often a part waiting for its mesh looks at the mesher processes, s

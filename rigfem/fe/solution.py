@@ -2,11 +2,14 @@
 
 Stresses are linear in the loads, so a combination of the cases with
 coefficients c (e.g. the load factors of one crank angle) is
-``σ(c) = Σ_k c_k σ_k``: :meth:`Solution.stress` is one tensordot.
+``σ(c) = Σ_k c_k σ_k``: :meth:`Solution.stress` is one tensordot.  Once the
+combinations a report needs are known, :meth:`Solution.kept` holds just those
+(a part's unit solutions are most of a check's memory).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -49,23 +52,66 @@ class Solution:
     free_body: bool
     times: dict[str, float] = field(default_factory=dict)
     key: str = ""  #: the key of its cache entry (rigfem.fe.cache), "" if it has none
+    #: (m, k) after :meth:`kept`: its m cases are these combinations of the k load cases solved
+    #: (None: the solved cases themselves); combinations are still given over the k solved cases
+    basis: np.ndarray | None = None
     _unit_vm: np.ndarray | None = field(default=None, repr=False)  #: (k, N) von Mises of each case
 
-    def _coef(self, c) -> np.ndarray:
-        k = self.U.shape[1]
+    @property
+    def cases(self) -> int:
+        """How many load cases were solved (k): the length of every combination c."""
+        return self.U.shape[1] if self.basis is None else self.basis.shape[1]
+
+    def _coef(self, c) -> np.ndarray | int:
+        """c checked: its coefficients, or for a kept solution the index of the case that is c."""
+        k = self.cases
         c = np.eye(k)[0] if c is None and k == 1 else np.asarray(c, dtype=float)
         if c.shape != (k,) or not np.isfinite(c).all():
             from rigfem.errors import InputError
             raise InputError(f"combination coefficients must be {k} finite numbers")
-        return c
+        if self.basis is None:
+            return c
+        hit = np.flatnonzero((self.basis == c).all(1))
+        if not hit.size:  # a combination the reduction dropped: no numbers rather than wrong ones
+            raise ValueError(f"this solution kept {len(self.basis)} combinations of its {k} load cases, not this one")
+        return int(hit[0])
+
+    def _combine(self, A: np.ndarray, c, axis: int) -> np.ndarray:
+        w = self._coef(c)
+        return np.take(A, w, axis) if isinstance(w, int) else np.tensordot(A, w, (axis, 0))
+
+    def kept(self, C: np.ndarray) -> Solution:
+        """A solution that holds only the combinations C (m, k) of the load cases, as its m cases.
+
+        Everything this class answers for a kept combination is the same number as before (a
+        kept case is a copy or the same product), and a combination not kept raises.  The solves'
+        own checks (residuals, backward and equilibrium errors) are those of the k cases solved."""
+        C = np.unique(np.atleast_2d(np.asarray(C, dtype=float)), axis=0)
+        w = [self._coef(c) for c in C]
+        if self.basis is None:
+            out = dataclasses.replace(self, F=self.F @ C.T, U=self.U @ C.T, reactions=self.reactions @ C.T,
+                                      nodal_stress=np.tensordot(C, self.nodal_stress, 1), basis=C, _unit_vm=None)
+        else:  # already kept: the cases are copied
+            out = dataclasses.replace(self, F=self.F[:, w], U=self.U[:, w], reactions=self.reactions[:, w],
+                                      nodal_stress=self.nodal_stress[w], basis=C, _unit_vm=None)
+        out.__dict__["equilibrium_error"] = self.equilibrium_error  # cached_property: the k solves'
+        return out
 
     def displacement(self, c=None) -> np.ndarray:
         """Nodal displacement (N, 3) of the combination c (default: the only case)."""
-        return (self.U @ self._coef(c)).reshape(-1, 3)
+        return self._combine(self.U, c, 1).reshape(-1, 3)
+
+    def loads(self, c=None) -> np.ndarray:
+        """Applied nodal loads (3N,) of the combination c."""
+        return self._combine(self.F, c, 1)
+
+    def reaction(self, c=None) -> np.ndarray:
+        """Support forces on the part (3N,) of the combination c."""
+        return self._combine(self.reactions, c, 1)
 
     def stress(self, c=None) -> np.ndarray:
         """Recovered nodal stress (N, 6) of the combination c."""
-        return np.tensordot(self._coef(c), self.nodal_stress, 1)
+        return self._combine(self.nodal_stress, c, 0)
 
     def von_mises(self, c=None) -> np.ndarray:
         """Nodal von Mises stress (N,) of the combination c."""
@@ -78,9 +124,11 @@ class Solution:
         call :meth:`peak` on the worst row for location, surface and error estimate.
         """
         C = np.atleast_2d(np.asarray(C, dtype=float))
-        if C.shape[1] != self.U.shape[1] or not np.isfinite(C).all():
+        if C.shape[1] != self.cases or not np.isfinite(C).all():
             from rigfem.errors import InputError
-            raise InputError(f"combination matrix must be (n, {self.U.shape[1]}) and finite, got {C.shape}")
+            raise InputError(f"combination matrix must be (n, {self.cases}) and finite, got {C.shape}")
+        if self.basis is not None:  # as combinations of the kept cases
+            C = np.eye(len(self.basis))[[self._coef(c) for c in C]]
         if self._unit_vm is None:
             self._unit_vm = von_mises(self.nodal_stress)
         return peak_von_mises(C, self.nodal_stress, self._unit_vm)
@@ -95,7 +143,7 @@ class Solution:
         vm = von_mises(s)
         n = int(np.argmax(vm))
         fm, mat = self.model.mesh, self.model.material
-        err = zz_error(fm, mat.E, mat.nu, self.U @ self._coef(c), n, s)
+        err = zz_error(fm, mat.E, mat.nu, self.displacement(c).ravel(), n, s)
         names = self.surfaces_of(n)
         where = names[0] if names else "(unnamed boundary)" if n in self._boundary_nodes() else "(interior)"
         return Peak(float(vm[n]), n, tuple(float(v) for v in fm.nodes[n]), where, names, err,

@@ -139,6 +139,13 @@ class LinearSolver:
         self.setup_time = time.perf_counter() - t0
         self.solve_time = 0.0
 
+    def release(self) -> None:
+        """Free the factors (or hierarchy) and the matrix now, not when this solver is collected;
+        it solves no more."""
+        if self.method == "pardiso":
+            self._ps.free_memory(True)
+        self.A = self._upper = self._lu = self._ml = None
+
     def _raw(self, F: np.ndarray) -> np.ndarray:
         if self.method == "pardiso":
             return np.asarray(self._ps.solve(self._upper, F)).reshape(F.shape)
@@ -166,6 +173,8 @@ class LinearSolver:
 
         One product A·X per pass gives the residual that decides the refinement, the reported
         relative residual and the checked backward error of the returned X."""
+        if self.A is None:
+            raise RuntimeError("this solver's factors were released: it solves no more")
         F = np.asarray(F, dtype=float)
         one = F.ndim == 1
         F2 = np.ascontiguousarray(F.reshape(len(F), -1))

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import functools
+import gc
 import json
 import shutil
 from collections.abc import Callable, Iterator
@@ -28,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.mesh.cache import array_digest, cache_dir, code_hash, entry_key, read_entry, write_entry
+from rigfem.memory import trim_heap
 
 #: the source files that draw the pictures: an edit invalidates every stored picture
 PICTURE_CODE = ("report/pictures.py", "report/views.py", "report/vtu.py", "report/picture_cache.py",
@@ -86,7 +88,7 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
 def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str, zoom_mm: float) -> dict:
     sol, fm = r.solution, r.solution.model.mesh
     groups = sorted(fm.surfaces)
-    return {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.F @ c),
+    return {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.loads(c)),
             "mesh": array_digest(fm.nodes, fm.elements, *(fm.surfaces[g] for g in groups)), "groups": groups,
             "n_vertices": fm.n_vertices, "case": r.case.name, "mode": r.mode,
             "crank_deg": float(r.case.rows[r.row]),
@@ -109,20 +111,23 @@ def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allow
 
 
 def _one_combination(r, c: np.ndarray):
-    """A copy of the case result ``r`` that holds only the combination ``c`` (as its one load case):
-    what its pictures are drawn from, a few MB to send to a child process instead of every unit
-    solution.  Its pictures, and their cache key, are those of ``r`` at ``c``: the fields are the
-    same numbers."""
+    """A copy of the case result ``r`` whose solution holds only the combination ``c``
+    (:meth:`~rigfem.fe.solution.Solution.kept`): what its pictures are drawn from, a few MB to send
+    to a child process instead of every unit solution.  Its pictures, and their cache key, are
+    those of ``r`` at ``c``: the fields are the same numbers."""
     sol = r.solution
     model = dataclasses.replace(sol.model, mesh=dataclasses.replace(sol.model.mesh, cache={}), _K=None)
-    one = dataclasses.replace(sol, model=model, F=sol.F @ c[:, None], U=sol.U @ c[:, None],
-                              reactions=sol.reactions @ c[:, None],
-                              nodal_stress=np.tensordot(c, sol.nodal_stress, 1)[None], _unit_vm=None)
-    return dataclasses.replace(r, solution=one, coef=np.ones((1, 1)), cycle_nodes=None, cycle_stress=None)
+    one = dataclasses.replace(sol.kept(c[None]), model=model)
+    return dataclasses.replace(r, solution=one, cycle_nodes=None, cycle_stress=None)
 
 
 def _draw_all(jobs: list[tuple]) -> list[dict]:
-    return [part_pictures(*job) for job in jobs]
+    out = []
+    for job in jobs:
+        out.append(part_pictures(*job))
+        gc.collect()  # the part's VTK objects and what they hold, before the next part is drawn
+        trim_heap()
+    return out
 
 
 @contextlib.contextmanager
@@ -153,7 +158,7 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
         min(shares, key=lambda sh: sum(size[j] for j in sh)).append(i)
     if not todo or mp.current_process().daemon:
         shares = []
-    slim = [[(_one_combination(jobs[i][0], jobs[i][1]), np.ones(1), *jobs[i][2:]) for i in share] for share in shares]
+    slim = [[(_one_combination(jobs[i][0], jobs[i][1]), *jobs[i][1:]) for i in share] for share in shares]
     keys = [(f"pictures-{id(jobs)}-{share[0]}", share) for share in shares]
 
     def wait() -> list[dict]:

@@ -135,7 +135,7 @@ _VERDICT_COLOUR = {"pass": "#2e7d32", "fail": "#c62828", "undecided": "#ef6c00"}
 
 def _pin_loads(r: CaseResult, c: np.ndarray, fm, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
     """(tip, force N, label) of each loaded hole: the applied nodal forces summed over the hole."""
-    F = (r.solution.F @ c).reshape(-1, 3)
+    F = r.solution.loads(c).reshape(-1, 3)
     out = []
     for g in dict.fromkeys(ld.group for ld in r.case.loads if ld.kind == "bearing" and ld.group):
         nodes = np.unique(fm.surfaces[g]) if g in fm.surfaces else np.zeros(0, int)

@@ -41,7 +41,7 @@ def compare(solution: Any, result: CcxResult, coef: np.ndarray | None = None) ->
     from rigfem.fe.supports import rigid_modes
 
     x = solution.model.mesh.nodes
-    n, k = len(x), solution.U.shape[1]
+    n, k = len(x), solution.cases
     coef = np.eye(k) if coef is None else np.atleast_2d(np.asarray(coef, dtype=float))
     if result.displacement.shape[0] != len(coef):
         raise InputError(f"ccx result has {result.displacement.shape[0]} load cases, expected {len(coef)}")
@@ -72,13 +72,13 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
 
     With ``solution`` and ``coef`` (m, k) — e.g. the critical crank angle of ``rigfem check``,
     ``coef = case_result.coef[[row]]`` — ccx solves the m load combinations
-    ``solution.F @ coef.T`` instead of ``cases``.
+    ``solution.loads(c)`` (c a row of ``coef``) instead of ``cases``.
     """
     if solution is None:
         from rigfem.fe.model import solve
 
         solution = solve(model, supports, cases)
-    loads = cases if coef is None else solution.F @ np.atleast_2d(np.asarray(coef, dtype=float)).T
+    loads = cases if coef is None else np.column_stack([solution.loads(c) for c in np.atleast_2d(coef)])
     with tempfile.TemporaryDirectory(prefix="rigfem-inp-") as tmp:
         deck = export_model(model, supports, loads, Path(workdir or tmp) / "model.inp")
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)

@@ -58,8 +58,9 @@ def balance(sol, c: np.ndarray) -> dict:
     """Free-body balance of the combination ``c``: Σ applied loads (pins and body forces) and Σ support
     reactions, forces (N) and moments about the part frame's origin (N·mm); their sum is ≈ 0."""
     alld = np.arange(len(sol.F))
-    app = sol.resultants(alld, sol.F @ c[:, None])[0]
-    sup = {n: sol.resultants(d, sol.reactions @ c[:, None])[0] for n, d in sol.support_dofs.items()}
+    app = sol.resultants(alld, sol.loads(c)[:, None])[0]
+    reaction = sol.reaction(c)[:, None]
+    sup = {n: sol.resultants(d, reaction)[0] for n, d in sol.support_dofs.items()}
     tot_s = np.sum(list(sup.values()), axis=0) if sup else np.zeros(6)
     v3 = lambda v: [float(t) for t in v]  # noqa: E731
     return {"applied_N": v3(app[:3]), "applied_Nmm": v3(app[3:]), "supports_N": v3(tot_s[:3]),
@@ -114,7 +115,7 @@ def verdict_of(res: CaseResult, settings) -> dict:
                  "straightened": int(sol.model.mesh.straightened),
                  "cache": res.mesh.meta.get("cache", ""),
                  "level": res.level, "stopped": res.stopped, "ladder": res.ladder},
-        "solve": {"method": sol.method, "load_cases": int(sol.U.shape[1]),
+        "solve": {"method": sol.method, "load_cases": int(sol.cases),
                   "rows": int(len(res.case.rows)),
                   "residual_max": float(sol.residuals.max()), "equilibrium_error": eq,
                   "imbalance": {"force_pct": 100 * res.imbalance[0], "moment_pct": 100 * res.imbalance[1],
