@@ -278,6 +278,21 @@ def test_bases_built_in_child_processes_equal_the_ones_built_here(params, bases,
         assert np.allclose(c.vm, b.vm, rtol=1e-5, atol=1e-6 * b.vm.max())
 
 
+def test_bases_mapped_from_a_folder_equal_the_ones_held(params, bases, tmp_path):
+    """With a folder (``rigfem synthesize --rig``), each basis's fields are written there as they
+    are made and memory-mapped, not held: the same numbers as the bases held in memory; a mapped
+    field pickles as its file name (a child process maps the same file)."""
+    import pickle
+
+    mapped = build_bases(params, folder=tmp_path)
+    assert list(mapped) == list(bases)
+    for key, b in bases.items():
+        m = mapped[key]
+        assert isinstance(m.S, np.memmap) and isinstance(m.vm, np.memmap)
+        assert np.array_equal(m.S, b.S) and np.array_equal(m.vm, b.vm) and np.array_equal(m.top, b.top)
+        assert len(pickle.dumps(m.S)) < 1000 and np.array_equal(pickle.loads(pickle.dumps(m.S)), b.S)
+
+
 def test_the_first_error_of_a_bases_child_ends_the_other_at_once(params, monkeypatch):
     """The second child's error is raised at once, without waiting for the first (the largest
     part), which sees its cancel event (a real child is ended within a poll)."""

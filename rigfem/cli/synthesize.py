@@ -241,9 +241,13 @@ def _rig_options(args, motion: bool) -> dict | None:
 def _snap(r: dict, opts: dict, task: str) -> int:
     """Rank the rig configurations into ``r["rig"]``; write the scene; the exit status."""
     from rigfem.studies.rig_design import snap_function, snap_motion, stress_verdicts
+    from rigfem.studies.sweep_bases import mesh_ahead
+    from rigfem.studies.sweep_configs import SweepParams
 
     if r.get("branch") is None:
         raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")
+    if opts["stress"]:  # the unit solutions' meshes are made while the rig four-bars are ranked
+        mesh_ahead(SweepParams(fidelity=opts["fidelity"]))
     stage("ranking the rig four-bars")
     cands = snap_function(r, opts["top"]) if task == "function" else snap_motion(r, opts["top"], opts["scale"])
     if opts["stress"]:

@@ -182,16 +182,26 @@ def _ladder_folder(inputs: dict) -> Path:
 
 
 def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10,
-                 use_cache: bool = True) -> Solution:
-    """:func:`rigfem.fe.model.solve`, through the disk cache when the model's mesh has a key."""
-    from rigfem.fe.model import solve
+                 use_cache: bool = True, factorised: dict | None = None) -> Solution:
+    """:func:`rigfem.fe.model.solve`, through the disk cache when the model's mesh has a key.
+
+    ``factorised`` (a dict the caller keeps): a miss is solved with the factorisation kept there
+    for this model and supports, made and kept there at the first miss; a caller solving one
+    model's cases in batches factorises once, and frees the factors by dropping the dict."""
+    from rigfem.fe.model import StaticProblem, solve
 
     inputs = solution_inputs(model, supports, cases, solver, rtol) if use_cache else None
     if inputs is not None:
         sol = load_solution(model, inputs)
         if sol is not None:
             return sol
-    sol = solve(model, supports, cases, solver=solver, rtol=rtol)
+    if factorised is None:
+        sol = solve(model, supports, cases, solver=solver, rtol=rtol)
+    else:
+        key = (id(model), json.dumps(_plain(supports)), solver, rtol)
+        if key not in factorised:
+            factorised[key] = StaticProblem(model, supports, solver, rtol)
+        sol = factorised[key].solve(cases)
     why = check_energy(sol)
     if why:
         raise ComputeError(f"the solution of part {model.part.name} cannot be right: {why}")

@@ -123,6 +123,8 @@ class LinearSolver:
             self._upper = sp.triu(self.A, format="csr")
             self._upper.sort_indices()
             self._ps.factorize(self._upper)
+            if isinstance(self._ps.factorized_A, sp.csr_matrix):  # pypardiso keeps a copy to know
+                self._upper = self._ps.factorized_A  # its matrix again: solve with that, hold one
         elif self.method == "superlu":
             import scipy.sparse.linalg as spla
 

@@ -89,8 +89,16 @@ def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False
     surface, and with ``normals`` unit normals (K, nq, 3) (orientation: (x1−x0)×(x2−x0)).
 
     6-node triangles are mapped isoparametrically, so a curved triangle's points, area and
-    normals are those of its curved shape.
+    normals are those of its curved shape.  Kept in the mesh's cache: a hole's bearing loads in
+    every direction integrate over the same points.
     """
+    key = ("surface_quadrature", name, degree, normals)
+    if key not in fm.cache:
+        fm.cache[key] = _surface_quadrature(fm, name, degree, normals)
+    return fm.cache[key]
+
+
+def _surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool):
     if name not in fm.surfaces:
         raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
     tri = fm.surfaces[name]

@@ -267,7 +267,7 @@ def slider_crank_motion(b2: float, b3: float, offset: float = 0.0, crank_deg=0.0
         return np.stack([u, np.zeros_like(u)], -1)
 
     B = np.stack([x, np.full_like(x, offset)], -1)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # a dead point (v = 0, or denormal): infinite
         ma = np.abs(b2 * w2 / v)
     return Motion(deg, w2, a2, {"crank": _link(th2, w2, a2), "rod": _link(th3, w3, a3)},
                   {"O2": _point(zero, zero, zero), "A": _point(A, vA, aA), "B": _point(B, on_line(v), on_line(acc))},

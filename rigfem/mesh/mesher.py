@@ -266,17 +266,17 @@ def prefetch(jobs: list[tuple], keep: bool = False) -> int:
     """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
     processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them
     made; returns how many were started.  Jobs of an earlier call never taken (a check that
-    stopped early) are cancelled first, unless ``keep``.  In a daemonic process (a sweep worker,
-    which may not have children) nothing is started."""
+    stopped early) are cancelled first, unless ``keep`` or asked for again (those go on).  In a
+    daemonic process (a sweep worker, which may not have children) nothing is started."""
     import multiprocessing as mp
 
-    if not keep:
-        pool.cancel()
-    if mp.current_process().daemon:
+    if mp.current_process().daemon:  # (nothing can have been started here either)
         return 0
+    keyed = [(part, settings, *mesh_inputs(part, settings)) for part, settings in jobs]
+    if not keep:
+        pool.cancel(spare=frozenset(key for *_, key, _ in keyed))
     started = 0
-    for part, settings in jobs:
-        key, inputs = mesh_inputs(part, settings)
+    for part, settings, key, inputs in keyed:
         if mesh_folder(part, key).exists():  # mesh_part verifies the cached entry
             continue
         started += pool.submit(key, lambda stop, p=part, s=settings, k=key, i=inputs: make_mesh(p, s, k, i,

@@ -68,12 +68,12 @@ def take(key: str) -> Any:
         raise
 
 
-def cancel() -> list[Future]:
-    """End every job not yet taken: queued ones never start, running ones see their ``stop`` set.
-    Returns their futures (done once each job has ended its child)."""
+def cancel(spare: frozenset[str] = frozenset()) -> list[Future]:
+    """End every job not yet taken but those of the keys ``spare``: queued ones never start,
+    running ones see their ``stop`` set.  Returns their futures (done once each job has ended its
+    child)."""
     with _lock:
-        jobs = list(_jobs.values())
-        _jobs.clear()
+        jobs = [_jobs.pop(k) for k in list(_jobs) if k not in spare]
     for fut, stop in jobs:
         stop.set()
         fut.cancel()

@@ -14,7 +14,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
         "convergence": ["RATIO", "H_DIRECTIONS", "TARGETS", "NOISE", "AWAY_MM", "EXTEND", "Extrapolation", "richardson", "StepSpec", "away_from_singular_edges", "run_step", "h_levels", "preset_steps", "study", "needs_finer", "fine_step", "analyse", "scene_cases", "to_json"],
         "le10": ["INNER", "OUTER", "HALF_THICKNESS", "PRESSURE", "POINT_D", "TARGET_SYY", "STEEL", "SURFACES", "supports", "load", "le10_mesh", "node_at", "solve_le10"],
         "sweep_configs": ["TYPES", "GROUND_RAIL_MM", "ORIGINAL_DIRECTIONS", "TOP_NODES", "BOUND_GROUPS", "ROW_CHUNK", "JOINTS", "LENGTHS", "SweepParams", "rig_rail_layout", "rail_lengths", "enumerate_configs", "rules_row"],
-        "sweep_bases": ["UnitBasis", "case_key", "build_bases", "case_peak", "superposed_peaks"],
+        "sweep_bases": ["UnitBasis", "case_key", "mesh_ahead", "build_bases", "case_peak", "superposed_peaks"],
         "sweep": ["evaluate", "run_chunk", "run_sweep", "CONNECT_TIMEOUT_S", "check_scheduler", "reach_scheduler"],
         "shapes": ["FACES", "box", "gmsh_part", "faces_at", "plate_with_hole", "quarter_ring", "bar_with_holes"],
         "sweep_report": ["WORST", "FINAL_DESIGN", "write_maps", "worst_markdown", "write_report", "summary_html"],

@@ -23,6 +23,9 @@ Units: mm, deg (the positions in their own unit, ``scale`` converts).
 
 from __future__ import annotations
 
+import tempfile
+from pathlib import Path
+
 import numpy as np
 
 from rigfem.errors import ComputeError, InputError
@@ -226,17 +229,17 @@ def stress_verdicts(candidates: list[dict], fidelity: str = "draft", p: SweepPar
     p = p or SweepParams(fidelity=fidelity)
     if on_stage:
         on_stage(f"unit solutions at {p.fidelity} (cached after the first run)")
-    bases = build_bases(p)
-    for k, c in enumerate(candidates):
-        if on_stage:
-            on_stage(f"stress verdict {k + 1} of {len(candidates)}")
-        cfg = dict(c["lengths_mm"], branch=c["branch"])
-        row = evaluate(cfg, p, bases)
-        if row.get("status") != "ok":
-            c["stress"] = {"verdict": "undecided", "note": row.get("note") or row.get("status")}
-            continue
-        parts = {k[:-len("_util_pct")]: float(v) for k, v in row.items() if k.endswith("_util_pct")}
-        c["stress"] = {"verdict": row["verdict"], "max_util_pct": float(row["max_util_pct"]),
-                       "limiting_part": row["limiting_part"], "fidelity": p.fidelity,
-                       "error_band_pct": float(row["error_pct"]), "parts_util_pct": parts,
-                       "peak_torque_Nm": float(row["peak_torque_Nm"])}
+    with tempfile.TemporaryDirectory(prefix="rigfem-bases-") as folder:  # the bases mapped, not held
+        bases = build_bases(p, folder=Path(folder))
+        for k, c in enumerate(candidates):
+            if on_stage:
+                on_stage(f"stress verdict {k + 1} of {len(candidates)}")
+            row = evaluate(dict(c["lengths_mm"], branch=c["branch"]), p, bases)
+            if row.get("status") != "ok":
+                c["stress"] = {"verdict": "undecided", "note": row.get("note") or row.get("status")}
+                continue
+            parts = {k[:-len("_util_pct")]: float(v) for k, v in row.items() if k.endswith("_util_pct")}
+            c["stress"] = {"verdict": row["verdict"], "max_util_pct": float(row["max_util_pct"]),
+                           "limiting_part": row["limiting_part"], "fidelity": p.fidelity,
+                           "error_band_pct": float(row["error_pct"]), "parts_util_pct": parts,
+                           "peak_torque_Nm": float(row["peak_torque_Nm"])}

@@ -44,7 +44,7 @@ from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
 from rigfem.verdict.criterion import half_ultimate, overall
 from rigfem.mesh.mesher import MACHINE_GIB
 from rigfem.studies.cost import check_cost, sweep_cost
-from rigfem.studies.sweep_bases import UnitBasis, case_key, build_bases, case_peak
+from rigfem.studies.sweep_bases import UnitBasis, build_bases, case_key, case_peak, mapped
 from rigfem.studies.sweep_configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
 
 
@@ -288,30 +288,6 @@ def _is_scheduler(address: str, timeout: float) -> bool:
         return False
 
 
-class _Mapped(np.memmap):
-    """A read-only memory-mapped array that pickles as its file name: the workers of a local
-    cluster map the same file (one copy in the page cache) instead of each receiving a copy."""
-
-    def __reduce__(self):
-        return _open_mapped, (self.filename,)
-
-
-def _open_mapped(path: str) -> np.ndarray:
-    return np.load(path, mmap_mode="r")
-
-
-def _map_bases(bases: dict[tuple, UnitBasis], folder: Path) -> dict[tuple, UnitBasis]:
-    """``bases`` with their stress fields stored in ``folder`` and memory-mapped from there."""
-    out = {}
-    for i, (key, b) in enumerate(bases.items()):
-        arrays = {}
-        for name in ("S", "vm"):
-            f = folder / f"basis{i}_{name}.npy"
-            np.save(f, getattr(b, name))
-            arrays[name] = np.load(f, mmap_mode="r").view(_Mapped)
-        out[key] = dataclasses.replace(b, **arrays)
-    return out
-
 
 def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> None:
     from contextlib import nullcontext
@@ -330,7 +306,7 @@ def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> Non
     connect = {"timeout": CONNECT_TIMEOUT_S} if scheduler else {}
     with maps as folder, local as cluster, Client(scheduler or cluster, **connect) as client:  # the client closes first
         if folder is not None:  # same machine: the workers map one copy of the unit fields
-            bases = _map_bases(bases, Path(folder))
+            bases = {key: mapped(b, Path(folder)) for key, b in bases.items()}
         [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
         futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
         for fut in as_completed(futures):

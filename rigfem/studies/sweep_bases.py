@@ -8,8 +8,11 @@ Units: mm, N, MPa, deg.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import hashlib
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -44,6 +47,37 @@ class UnitBasis:
     vm: np.ndarray  #: (k, N) float32 von Mises of every unit field (the bound of ``case_peak``)
     top: np.ndarray  #: (k, TOP_NODES) the nodes where each unit field is highest
     fe_mass: float  #: kg, mass of the meshed part
+
+
+class _Mapped(np.memmap):
+    """A read-only memory-mapped array that pickles as its file name: the workers of a local
+    cluster (or the process a child built a basis for) map the same file, one copy in the page
+    cache, instead of each receiving a copy."""
+
+    def __reduce__(self):
+        return _open_mapped, (self.filename,)
+
+
+def _open_mapped(path: str) -> np.ndarray:
+    return np.load(path, mmap_mode="r").view(_Mapped)
+
+
+def _basis_file(folder: Path, key: tuple, field: str) -> Path:
+    return folder / f"basis_{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}_{field}.npy"
+
+
+def mapped(b: UnitBasis, folder: Path) -> UnitBasis:
+    """``b`` with its stress fields stored in ``folder`` and memory-mapped from there (those not
+    mapped yet): a process holds only the pages it reads (a configuration's peak reads its few
+    candidate nodes)."""
+    arrays = {}
+    for field in ("S", "vm"):
+        a = getattr(b, field)
+        if not isinstance(a, _Mapped):
+            np.save(_basis_file(folder, b.key, field), a)
+            a = _open_mapped(str(_basis_file(folder, b.key, field)))
+        arrays[field] = a
+    return dataclasses.replace(b, **arrays)
 
 
 def case_key(case: PartCase) -> tuple:
@@ -102,17 +136,51 @@ def parallel_bases(workers: int, geometries: int) -> int:
     return max(1, min(workers, WORKERS, geometries))
 
 
-def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[tuple, UnitBasis]:
+def _geometries(p: SweepParams, s: CheckSettings) -> tuple[dict, dict, list]:
+    """The bases' specs by part geometry, each geometry's merged case (one mesh), and the
+    geometries largest first (estimated mesh)."""
+    from rigfem.fe.partcase import mesh_job
+    from rigfem.mesh.mesher import estimate_part
+
+    by_geo: dict[tuple, dict[tuple, tuple[PartCase, list[UnitLoad]]]] = {}
+    for key, spec in _basis_specs(p, s).items():
+        by_geo.setdefault(key[:2], {})[key] = spec
+    merged = {geo: dataclasses.replace(next(iter(specs.values()))[0],
+                                       refine=tuple(sorted({g for c, _ in specs.values() for g in c.refine})))
+              for geo, specs in by_geo.items()}
+    order = sorted(by_geo, key=lambda geo: -getattr(estimate_part(*mesh_job(merged[geo], s)), "tets", 0))
+    return by_geo, merged, order
+
+
+def mesh_ahead(p: SweepParams) -> None:
+    """Start meshing the geometries of :func:`build_bases` in the mesher processes, largest first
+    (it finds them made, or being made), and numba compiling the assembly on a first run: a
+    caller with other work first overlaps the two."""
+    from rigfem.fe.assembly import start_compiling
+    from rigfem.fe.partcase import mesh_job
+    from rigfem.mesh.mesher import prefetch
+
+    s = p.settings()
+    _, merged, order = _geometries(p, s)
+    prefetch([mesh_job(merged[geo], s) for geo in order])
+    start_compiling()
+
+
+def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
+                folder: Path | None = None) -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set.
 
-    The geometries are meshed ahead in the mesher processes.  With ``workers`` > 1 their FE runs
-    in child processes (:func:`rigfem.mesh.worker.call`), :func:`parallel_bases` at a time, the
-    largest mesh first: most of a basis's time is single-threaded (stress recovery, load
-    vectors), so two geometries at once use two cores and hold two geometries' FE in memory (a
-    sweep's ``--workers`` chooses this; :func:`rigfem.studies.cost.bases_cost` counts it).  A
+    The geometries are meshed ahead in the mesher processes (:func:`mesh_ahead`), largest first.
+    With ``workers`` > 1 their FE runs in child processes (:func:`rigfem.mesh.worker.call`),
+    :func:`parallel_bases` at a time: most of a basis's time is single-threaded (stress recovery,
+    load vectors), so two geometries at once use two cores and hold two geometries' FE in memory
+    (a sweep's ``--workers`` chooses this; :func:`rigfem.studies.cost.bases_cost` counts it).  A
     child returns only the float32 unit fields.  Otherwise, or in a daemonic process (a sweep
-    worker), the geometries are built here one after another, each model released before the
-    next one's is built."""
+    worker), the geometries are built here one after another, the largest first (while the
+    fewest bases are held), each model released before the next one's is built.  With
+    ``folder`` each basis is stored there as it is made and memory-mapped (:func:`mapped`): the
+    bases built are not held while the next ones are (the caller keeps the folder while it uses
+    them)."""
     import multiprocessing as mp
     import threading
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
@@ -120,21 +188,13 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
     from rigfem.fe.assembly import compiled
     from rigfem.fe.partcase import mesh_case, mesh_job
     from rigfem.mesh import pool
-    from rigfem.mesh.mesher import estimate_part, prefetch
+    from rigfem.mesh.mesher import prefetch
     from rigfem.mesh.worker import call
 
     s = p.settings()
-    by_geo: dict[tuple, dict[tuple, tuple[PartCase, list[UnitLoad]]]] = {}
-    for key, spec in _basis_specs(p, s).items():
-        by_geo.setdefault(key[:2], {})[key] = spec
-    merged = {geo: dataclasses.replace(next(iter(specs.values()))[0],
-                                       refine=tuple(sorted({g for c, _ in specs.values() for g in c.refine})))
-              for geo, specs in by_geo.items()}
+    by_geo, merged, order = _geometries(p, s)
     parallel = workers > 1 and len(by_geo) > 1 and not mp.current_process().daemon
-    order = list(by_geo)
-    if parallel:  # the largest first, so the last child to end has a small part
-        order.sort(key=lambda geo: -getattr(estimate_part(*mesh_job(merged[geo], s)), "tets", 0))
-    prefetch([mesh_job(merged[geo], s) for geo in order])
+    prefetch([mesh_job(merged[geo], s) for geo in order])  # (those mesh_ahead started go on)
 
     if parallel:
         compiled()  # numba compiles the kernels once, while the meshers work, for both children
@@ -144,7 +204,7 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
             if stop.is_set():
                 raise ComputeError("unit bases cancelled")
             pm = mesh_case(merged[g], s)
-            return call(_geo_bases, pm, by_geo[g], s, solver, cancel=stop, what="unit bases")
+            return call(_geo_bases, pm, by_geo[g], s, solver, folder, cancel=stop, what="unit bases")
 
         threads = ThreadPoolExecutor(parallel_bases(workers, len(order)), thread_name_prefix="rigfem-bases")
         try:
@@ -161,18 +221,26 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1) -> dict[
         finally:
             threads.shutdown(wait=True, cancel_futures=True)
     else:
-        done = {geo: _geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver) for geo in order}
+        done = {geo: _geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver, folder) for geo in order}
     return {key: b for geo in by_geo for key, b in done[geo].items()}
 
 
+#: unit loads of a basis solved (and cached) at a time: their float64 solution is held only until
+#: it is reduced to the basis's float32 fields, not the whole basis's at once
+BASIS_BATCH = 32
+
+
 def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: CheckSettings,
-               solver: str) -> dict[tuple, UnitBasis]:
-    """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs``."""
+               solver: str, folder: Path | None = None) -> dict[tuple, UnitBasis]:
+    """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs``: one
+    factorisation per support set, its unit loads solved :data:`BASIS_BATCH` at a time; each
+    mapped from ``folder`` if given (:func:`mapped`)."""
     from rigfem.fe.cache import cached_solve
     from rigfem.fe.model import build_model
     from rigfem.fe.partcase import fe_load, relieved_cases, supports_of
     from rigfem.fe.supports import FreeBody
     from rigfem.fe.tensors import von_mises
+    from rigfem.memory import trim_heap
 
     model = build_model(pm, s.material, s.order)
     out = {}
@@ -181,10 +249,32 @@ def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: Check
         fe_loads = [fe_load(u) for u in loads]
         if any(isinstance(x, FreeBody) for x in supports):
             fe_loads = relieved_cases(model, fe_loads)[0]
-        sol = cached_solve(model, supports, fe_loads, solver=solver)
-        out[key] = _reduce(key, loads, sol.nodal_stress, von_mises(sol.nodal_stress),
-                           model.volume * s.material.density * 1e3)
-        del sol
+        shape = (len(loads), len(model.mesh.nodes), 6)
+        vm = np.empty(shape[:2], np.float32)
+        if folder is None:
+            S, out_file = np.empty(shape, np.float32), None
+        else:  # the fields go to their file batch by batch, never all in memory
+            out_file = open(_basis_file(folder, key, "S"), "wb")
+            np.lib.format.write_array_header_1_0(out_file, {"descr": "<f4", "fortran_order": False, "shape": shape})
+        factorised: dict = {}  # one factorisation for every batch the cache lacks
+        with out_file or contextlib.nullcontext():
+            for b in range(0, len(fe_loads), BASIS_BATCH):
+                sol = cached_solve(model, supports, fe_loads[b:b + BASIS_BATCH], solver=solver,
+                                   factorised=factorised)
+                vm[b:b + BASIS_BATCH] = von_mises(sol.nodal_stress)
+                if out_file is None:
+                    S[b:b + BASIS_BATCH] = sol.nodal_stress
+                else:
+                    sol.nodal_stress.astype("<f4").tofile(out_file)
+                del sol
+        del factorised
+        if out_file is not None:
+            S = _open_mapped(out_file.name)
+        out[key] = _reduce(key, loads, S, vm, model.volume * s.material.density * 1e3)
+        if folder is not None:
+            out[key] = mapped(out[key], folder)
+        del S, vm
+        trim_heap()
     model.release()
     return out
 
@@ -204,7 +294,8 @@ def _reduce(key: tuple, loads: list[UnitLoad], S: np.ndarray, vm: np.ndarray, fe
         g[name] = (np.array([a for a, _ in lst]), np.array([j for _, j in lst]))
     n_top = min(TOP_NODES, vm.shape[1])
     top = np.argpartition(-vm, n_top - 1, axis=1)[:, :n_top]
-    return UnitBasis(key, loads, g, inertia, S.astype(np.float32), vm.astype(np.float32), top, fe_mass)
+    return UnitBasis(key, loads, g, inertia, S.astype(np.float32, copy=False), vm.astype(np.float32, copy=False),
+                     top, fe_mass)
 
 
 def _columns(b: UnitBasis, u: UnitLoad, mass_ratio: float) -> list[tuple[int, float]]:
