@@ -262,3 +262,30 @@ def test_the_heap_is_trimmed_on_linux():
 
     assert _libc() is not None
     trim_heap()
+
+
+def test_a_solution_batch_is_stored_when_its_writer_runs_and_shares_one_factorisation(tmp_path, monkeypatch):
+    """cached_solve hands a new entry's write to ``store`` (the unit bases write one batch in a
+    thread while the next is solved): nothing is stored until it runs; batches of one model and
+    supports share the factorisation kept in ``factorised``."""
+    from fe_shapes import plate_with_hole
+
+    from rigfem.fe import Pressure, Symmetry, build_model, cached_solve
+    from rigfem.fe.cache import load_solution, solution_inputs
+    from rigfem.material import get_material
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
+    pm = plate_with_hole(60.0, 40.0, 2.0, 5.0, size=8.0, h_hole=3.0)
+    pm.meta["hash"] = "test-mesh-batches"
+    model = build_model(pm, get_material("rig_steel"), 2)
+    sup = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
+    writes, factorised = [], {}
+    a = cached_solve(model, sup, [Pressure("xmax", -10.0)], factorised=factorised, store=writes.append)
+    b = cached_solve(model, sup, [Pressure("xmax", -20.0)], factorised=factorised, store=writes.append)
+    assert len(writes) == 2 and len(factorised) == 1  # two entries to write, one factorisation
+    assert np.allclose(b.U, 2 * a.U, rtol=1e-9, atol=0)
+    inputs = solution_inputs(model, sup, [Pressure("xmax", -10.0)], "auto", 1e-10)
+    assert load_solution(model, inputs) is None  # not stored until its write runs
+    writes[0]()
+    stored = load_solution(model, inputs)
+    assert stored is not None and np.array_equal(stored.U, a.U)

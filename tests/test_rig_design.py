@@ -88,6 +88,35 @@ def test_motion_candidates_reach_the_positions():
         assert c["error_pct"] == pytest.approx(100 * c["error_mm"] / (30.0 * span), rel=1e-9)
 
 
+def test_the_motion_fit_uses_the_linkages_own_jacobian(monkeypatch):
+    """The coupler-point fit's Jacobian comes from the linkage's velocities, not from finite
+    differences: it equals central differences of the residual, and the fits are those that
+    scipy's finite-difference Jacobian finds."""
+    import scipy.optimize as so
+
+    P = [(0.0, 0.0), (-15.12, -9.0), (-29.128, -4.0)]
+    r = three_position(P, [-20.0, -35.0], [100.0, 200.0], [30.0, 55.0])
+    r.update(check_three_position(r))
+    least_squares, seen = so.least_squares, []
+
+    def spy(fun, x0, jac=None, **kw):
+        seen.append((fun, jac, np.asarray(x0, float)))
+        return least_squares(fun, x0, jac=jac, **kw)
+
+    monkeypatch.setattr(so, "least_squares", spy)
+    fast = snap_motion(r, top=3, scale=30.0)
+    fun, jac, x0 = seen[0]
+    x = x0 + 0.3
+    h = 1e-4
+    central = np.column_stack([(fun(x + h * e) - fun(x - h * e)) / (2 * h) for e in np.eye(len(x))])
+    assert np.abs(jac(x) - central).max() < 1e-6 * np.abs(central).max()
+    monkeypatch.setattr(so, "least_squares", lambda fun, x0, jac=None, **kw: least_squares(fun, x0, **kw))
+    slow = snap_motion(r, top=3, scale=30.0)
+    assert [(c["lengths_mm"], c["branch"]) for c in fast] == [(c["lengths_mm"], c["branch"]) for c in slow]
+    for a, b in zip(fast, slow):
+        assert a["error_mm"] == pytest.approx(b["error_mm"], rel=1e-5, abs=1e-6)
+
+
 def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():
     from test_sweep import CHECK  # the coarse sweep meshes of the default tests
 

@@ -182,12 +182,14 @@ def _ladder_folder(inputs: dict) -> Path:
 
 
 def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol: float = 1e-10,
-                 use_cache: bool = True, factorised: dict | None = None) -> Solution:
+                 use_cache: bool = True, factorised: dict | None = None, store=None) -> Solution:
     """:func:`rigfem.fe.model.solve`, through the disk cache when the model's mesh has a key.
 
     ``factorised`` (a dict the caller keeps): a miss is solved with the factorisation kept there
     for this model and supports, made and kept there at the first miss; a caller solving one
-    model's cases in batches factorises once, and frees the factors by dropping the dict."""
+    model's cases in batches factorises once, and frees the factors by dropping the dict.
+    ``store(write)`` runs a new entry's ``write()`` (default: here, now); a caller may run it in
+    another thread while it solves the next batch."""
     from rigfem.fe.model import StaticProblem, solve
 
     inputs = solution_inputs(model, supports, cases, solver, rtol) if use_cache else None
@@ -206,6 +208,6 @@ def cached_solve(model, supports: list, cases: list, solver: str = "auto", rtol:
     if why:
         raise ComputeError(f"the solution of part {model.part.name} cannot be right: {why}")
     if inputs is not None:
-        save_solution(sol, inputs)
+        (store or (lambda write: write()))(lambda: save_solution(sol, inputs))
         sol.key = _folder(inputs).name
     return sol

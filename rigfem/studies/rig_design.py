@@ -137,24 +137,38 @@ def _grid_neighbours(x: float) -> list[float]:
 def _fit_coupler_point(lengths: dict, branch: str, O2: np.ndarray, ground_deg: float, targets: np.ndarray,
                        cp0: tuple[float, float], crank0: np.ndarray):
     """Coupler point (distance mm, angle deg) and crank angles (deg) that bring the coupler point
-    closest to ``targets`` (rig mm, global), O2 and the ground line fixed; least squares."""
+    closest to ``targets`` (rig mm, global), O2 and the ground line fixed; least squares, with the
+    Jacobian from the linkage's own motion (a crank angle moves its point by the point's velocity
+    over the crank's, the coupler point's distance and angle move it along and across the line
+    from A), one kinematics call per Jacobian instead of a finite difference's five."""
     from scipy.optimize import least_squares
 
     L = [lengths[k] for k in LENGTH_KEYS]
     c, s = np.cos(np.radians(ground_deg)), np.sin(np.radians(ground_deg))
     R = np.array([[c, -s], [s, c]])
+    rad = np.pi / 180.0
 
-    def position(v):
-        m = fourbar_motion(*L, v[2:], branch=branch, coupler_point=(v[0], v[1]))
-        return O2 + m.points["P"]["position_mm"] @ R.T
+    def motion(v):  # a rig four-bar is a crank-rocker: it closes at every crank angle
+        return fourbar_motion(*L, v[2:], branch=branch, coupler_point=(v[0], v[1]))
 
-    def residual(v):  # a rig four-bar is a crank-rocker: it closes at every crank angle
-        return (position(v) - targets).ravel()
+    def residual(v):
+        return (O2 + motion(v).points["P"]["position_mm"] @ R.T - targets).ravel()
+
+    def jacobian(v):
+        m = motion(v)
+        th = np.radians(m.links["coupler"]["angle_deg"] + v[1])
+        along, across = np.stack([np.cos(th), np.sin(th)], -1), np.stack([-np.sin(th), np.cos(th)], -1)
+        J = np.zeros((len(th), 2, len(v)))
+        J[:, :, 0] = along @ R.T
+        J[:, :, 1] = v[0] * rad * across @ R.T
+        J[np.arange(len(th)), :, 2 + np.arange(len(th))] = m.points["P"]["velocity_mm_s"] @ R.T * (rad / m.omega_rad_s)
+        return J.reshape(-1, len(v))
 
     x0 = np.r_[cp0, crank0]
-    res = least_squares(residual, x0, x_scale=np.r_[max(cp0[0], 1.0), 10.0, 10.0, 10.0, 10.0], method="lm")
+    res = least_squares(residual, x0, jac=jacobian, x_scale=np.r_[max(cp0[0], 1.0), 10.0, 10.0, 10.0, 10.0],
+                        method="lm")
     v = res.x
-    return (float(v[0]), float(v[1])), np.mod(v[2:], 360.0), np.linalg.norm(position(v) - targets, axis=1)
+    return (float(v[0]), float(v[1])), np.mod(v[2:], 360.0), np.linalg.norm(residual(v).reshape(-1, 2), axis=1)
 
 
 def _off_rail(cp: tuple[float, float], p: SweepParams | None) -> float:

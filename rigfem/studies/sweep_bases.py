@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -136,12 +137,19 @@ def parallel_bases(workers: int, geometries: int) -> int:
     return max(1, min(workers, WORKERS, geometries))
 
 
-def _geometries(p: SweepParams, s: CheckSettings) -> tuple[dict, dict, list]:
+def _geometries(p: SweepParams) -> tuple[dict, dict, list]:
     """The bases' specs by part geometry, each geometry's merged case (one mesh), and the
-    geometries largest first (estimated mesh)."""
+    geometries largest first (estimated mesh); worked out once per process (1.3 s) for the
+    parameters and their parts' geometry (:meth:`SweepParams.key`)."""
+    return _geometries_at(p, p.key())
+
+
+@functools.lru_cache(maxsize=4)
+def _geometries_at(p: SweepParams, key: str) -> tuple[dict, dict, list]:
     from rigfem.fe.partcase import mesh_job
     from rigfem.mesh.mesher import estimate_part
 
+    s = p.settings()
     by_geo: dict[tuple, dict[tuple, tuple[PartCase, list[UnitLoad]]]] = {}
     for key, spec in _basis_specs(p, s).items():
         by_geo.setdefault(key[:2], {})[key] = spec
@@ -161,7 +169,7 @@ def mesh_ahead(p: SweepParams) -> None:
     from rigfem.mesh.mesher import prefetch
 
     s = p.settings()
-    _, merged, order = _geometries(p, s)
+    _, merged, order = _geometries(p)
     prefetch([mesh_job(merged[geo], s) for geo in order])
     start_compiling()
 
@@ -192,7 +200,7 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
     from rigfem.mesh.worker import call
 
     s = p.settings()
-    by_geo, merged, order = _geometries(p, s)
+    by_geo, merged, order = _geometries(p)
     parallel = workers > 1 and len(by_geo) > 1 and not mp.current_process().daemon
     prefetch([mesh_job(merged[geo], s) for geo in order])  # (those mesh_ahead started go on)
 
@@ -226,57 +234,79 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
 
 
 #: unit loads of a basis solved (and cached) at a time: their float64 solution is held only until
-#: it is reduced to the basis's float32 fields, not the whole basis's at once
-BASIS_BATCH = 32
+#: it is reduced to the basis's float32 fields and stored in the cache (while the next batch is
+#: solved), not the whole basis's at once
+BASIS_BATCH = 24
 
 
 def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: CheckSettings,
                solver: str, folder: Path | None = None) -> dict[tuple, UnitBasis]:
     """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs``: one
-    factorisation per support set, its unit loads solved :data:`BASIS_BATCH` at a time; each
-    mapped from ``folder`` if given (:func:`mapped`)."""
-    from rigfem.fe.cache import cached_solve
+    factorisation per support set, its unit loads solved :data:`BASIS_BATCH` at a time, each
+    batch's cache entry written in a thread while the next is solved; each basis mapped from
+    ``folder`` if given (:func:`mapped`)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     from rigfem.fe.model import build_model
+
+    model = build_model(pm, s.material, s.order)
+    out = {}
+    writer, pending = ThreadPoolExecutor(1, thread_name_prefix="rigfem-cache-write"), []
+
+    def store(write) -> None:  # one entry written at a time: a batch is held until it is written
+        while pending:
+            pending.pop().result()
+        pending.append(writer.submit(write))
+
+    with writer:
+        for key, (case, loads) in specs.items():
+            out[key] = _basis(model, key, case, loads, s, solver, folder, store)
+        while pending:
+            pending.pop().result()
+    model.release()
+    return out
+
+
+def _basis(model, key: tuple, case: PartCase, loads: list[UnitLoad], s: CheckSettings, solver: str,
+           folder: Path | None, store) -> UnitBasis:
+    """One support set's basis (:func:`_geo_bases`)."""
+    from rigfem.fe.cache import cached_solve
     from rigfem.fe.partcase import fe_load, relieved_cases, supports_of
     from rigfem.fe.supports import FreeBody
     from rigfem.fe.tensors import von_mises
     from rigfem.memory import trim_heap
 
-    model = build_model(pm, s.material, s.order)
-    out = {}
-    for key, (case, loads) in specs.items():
-        supports = supports_of(case)
-        fe_loads = [fe_load(u) for u in loads]
-        if any(isinstance(x, FreeBody) for x in supports):
-            fe_loads = relieved_cases(model, fe_loads)[0]
-        shape = (len(loads), len(model.mesh.nodes), 6)
-        vm = np.empty(shape[:2], np.float32)
-        if folder is None:
-            S, out_file = np.empty(shape, np.float32), None
-        else:  # the fields go to their file batch by batch, never all in memory
-            out_file = open(_basis_file(folder, key, "S"), "wb")
-            np.lib.format.write_array_header_1_0(out_file, {"descr": "<f4", "fortran_order": False, "shape": shape})
-        factorised: dict = {}  # one factorisation for every batch the cache lacks
-        with out_file or contextlib.nullcontext():
-            for b in range(0, len(fe_loads), BASIS_BATCH):
-                sol = cached_solve(model, supports, fe_loads[b:b + BASIS_BATCH], solver=solver,
-                                   factorised=factorised)
-                vm[b:b + BASIS_BATCH] = von_mises(sol.nodal_stress)
-                if out_file is None:
-                    S[b:b + BASIS_BATCH] = sol.nodal_stress
-                else:
-                    sol.nodal_stress.astype("<f4").tofile(out_file)
-                del sol
-        del factorised
-        if out_file is not None:
-            S = _open_mapped(out_file.name)
-        out[key] = _reduce(key, loads, S, vm, model.volume * s.material.density * 1e3)
-        if folder is not None:
-            out[key] = mapped(out[key], folder)
-        del S, vm
-        trim_heap()
-    model.release()
-    return out
+    supports = supports_of(case)
+    fe_loads = [fe_load(u) for u in loads]
+    if any(isinstance(x, FreeBody) for x in supports):
+        fe_loads = relieved_cases(model, fe_loads)[0]
+    shape = (len(loads), len(model.mesh.nodes), 6)
+    vm = np.empty(shape[:2], np.float32)
+    if folder is None:
+        S, out_file = np.empty(shape, np.float32), None
+    else:  # the fields go to their file batch by batch, never all in memory
+        out_file = open(_basis_file(folder, key, "S"), "wb")
+        np.lib.format.write_array_header_1_0(out_file, {"descr": "<f4", "fortran_order": False, "shape": shape})
+    factorised: dict = {}  # one factorisation for every batch the cache lacks
+    with out_file or contextlib.nullcontext():
+        for b in range(0, len(fe_loads), BASIS_BATCH):
+            sol = cached_solve(model, supports, fe_loads[b:b + BASIS_BATCH], solver=solver,
+                               factorised=factorised, store=store)
+            vm[b:b + BASIS_BATCH] = von_mises(sol.nodal_stress)
+            if out_file is None:
+                S[b:b + BASIS_BATCH] = sol.nodal_stress
+            else:
+                sol.nodal_stress.astype("<f4").tofile(out_file)
+            del sol
+    del factorised
+    if out_file is not None:
+        S = _open_mapped(out_file.name)
+    basis = _reduce(key, loads, S, vm, model.volume * s.material.density * 1e3)
+    del S, vm
+    if folder is not None:
+        basis = mapped(basis, folder)
+    trim_heap()
+    return basis
 
 
 def _reduce(key: tuple, loads: list[UnitLoad], S: np.ndarray, vm: np.ndarray, fe_mass: float) -> UnitBasis:
