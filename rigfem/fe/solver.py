@@ -179,7 +179,9 @@ class LinearSolver:
             raise RuntimeError("this solver's factors were released: it solves no more")
         F = np.asarray(F, dtype=float)
         one = F.ndim == 1
-        F2 = np.ascontiguousarray(F.reshape(len(F), -1))
+        F2 = F.reshape(len(F), -1)
+        # PARDISO reads the right-hand sides column by column: handed so, pypardiso copies none
+        F2 = np.asfortranarray(F2) if self.method == "pardiso" else np.ascontiguousarray(F2)
         if not np.isfinite(F2).all():
             raise InputError("load vector contains NaN or inf")
         t0 = time.perf_counter()
