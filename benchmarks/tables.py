@@ -307,8 +307,8 @@ def perf_rows(rec: dict) -> list[str]:
     """Issue 26's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals)."""
     from bench_perf import status  # the one home of the goals (loads no FE code)
 
-    def t(s: float | None) -> str:
-        return "-" if s is None else hms(s) if s >= 10 else f"{s:.2f} s"
+    def t(s: float | None) -> str:  # a tenth of a second under 100 s: a row near its goal reads so
+        return "-" if s is None else hms(s) if s >= 100 else f"{s:.1f} s" if s >= 10 else f"{s:.2f} s"
 
     out = ["| work | goal | cold | warm | peak RSS | |", "|---|---|---:|---:|---:|---|"]
     for v in status(rec):
