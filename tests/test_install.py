@@ -41,7 +41,7 @@ def test_wheel_runs_from_another_folder(tmp_path):
 
 def test_every_import_of_the_package_is_a_declared_dependency():
     """Every third-party module rigfem/ imports comes from a distribution pyproject.toml names
-    directly (the import name may differ from the distribution's: markdown_it is markdown-it-py):
+    directly (the import name may differ from the distribution's: yaml would be PyYAML):
     a fresh install gets all of them, none only through another package's extra."""
     import ast
     import re

@@ -97,3 +97,15 @@ def test_scene_text_shows_as_text_in_every_page(tmp_path):
                        maps=[], explorer="explorer.html")
     assert "<script>x" not in page and "<script>e" not in page and "&lt;script&gt;" in page
     assert "|---|" not in page and "<code>c</code>" in page and "<strong>d</strong>" in page
+
+
+def test_markdown_escapes_raw_html_and_keeps_entities():
+    """The project's Markdown writes ``&lt;`` for a less-than sign (rule tables: mu_max &lt; 145 deg)
+    and ``\\|`` for a bar inside a table cell: both read as the character, while raw HTML, inline
+    or as a block, shows as text."""
+    from rigfem.report.pages import markdown_html
+
+    html = markdown_html("mu &lt; 145 & <b>x</b>\n\n<div>y</div>\n\n| cmd | n |\n|---|---:|\n| `a \\| b` | 1 |\n")
+    assert "mu &lt; 145 &amp; &lt;b&gt;x&lt;/b&gt;" in html and "&amp;lt;" not in html
+    assert "&lt;div&gt;y&lt;/div&gt;" in html and "<div>" not in html
+    assert "<code>a | b</code>" in html and 'style="text-align:right"' in html

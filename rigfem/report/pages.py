@@ -1,8 +1,8 @@
-"""HTML pages from the package's jinja2 templates (``rigfem/templates``), Markdown through markdown-it.
+"""HTML pages from the package's jinja2 templates (``rigfem/templates``), Markdown through mistune.
 
 One home for the page machinery of the check report, the sweep pages and the explorer:
 autoescaping is on, so every text from a user's file shows as text; only the HTML that
-markdown-it made from the project's own Markdown, and the data URIs, are marked safe.
+mistune made from the project's own Markdown, and the data URIs, are marked safe.
 """
 
 from __future__ import annotations
@@ -13,8 +13,10 @@ from functools import lru_cache
 from pathlib import Path
 
 import jinja2
-from markdown_it import MarkdownIt
+import mistune
 from markupsafe import Markup
+from mistune.plugins.table import render_table_cell
+from mistune.util import escape
 
 __all__ = ["render_page", "markdown_html", "png_uri", "json_script"]
 
@@ -33,9 +35,28 @@ def render_page(template: str, **context) -> str:
     return _env().get_template(template).render(**context)
 
 
+class _Escaped(mistune.HTMLRenderer):
+    """Raw HTML in the Markdown shown as text (entities such as ``&lt;`` stay entities, which
+    mistune's own ``escape=True`` would escape again); ``\\|`` in a table cell is a ``|`` (GFM)."""
+
+    def inline_html(self, html: str) -> str:
+        return escape(html)
+
+    def block_html(self, html: str) -> str:
+        return "<p>" + escape(html.strip()) + "</p>\n"
+
+    def table_cell(self, text: str, align: str | None = None, head: bool = False) -> str:
+        return render_table_cell(self, text.replace("\\|", "|"), align, head)
+
+
+@lru_cache(maxsize=1)
+def _markdown():
+    return mistune.create_markdown(renderer=_Escaped(escape=False), plugins=["table"])
+
+
 def markdown_html(text: str) -> Markup:
-    """HTML of the project's Markdown (CommonMark with tables); raw HTML in it is escaped, not passed."""
-    return Markup(MarkdownIt("commonmark", {"html": False}).enable("table").render(text))
+    """HTML of the project's Markdown (CommonMark with GFM tables); raw HTML in it is escaped, not passed."""
+    return Markup(_markdown()(text))
 
 
 def png_uri(path: Path) -> str | None:

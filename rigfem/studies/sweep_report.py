@@ -256,7 +256,7 @@ def _tables(out: Path, table: pd.DataFrame, p: SweepParams) -> dict[str, pd.Data
 
 
 def summary_html(markdown: str, maps: list[str], out: Path, p: SweepParams) -> str:
-    """One self-contained page: the sweep's Markdown (through markdown-it) and its maps embedded."""
+    """One self-contained page: the sweep's Markdown (through mistune) and its maps embedded."""
     from rigfem.report.pages import markdown_html, png_uri, render_page
 
     return render_page("sweep.html.j2", kind=p.linkage_type, body=markdown_html(markdown),
