@@ -84,8 +84,7 @@ def nodal_stress(fm: FEMesh, E: float, nu: float, U: np.ndarray, chunk: int = 16
     The element values at a node are the linear extrapolation of the quadrature-point stresses
     (:func:`element_node_stress`), so extrapolation and averaging are one sparse matrix applied to
     the quadrature stresses of every load column at once (``chunk`` elements and ``mem`` bytes of
-    gradients at a time: on a 64k-node rail with 32 load columns, 16 MB holds the temporaries to
-    about 55 MB in the same time as 64 MB's 180 MB)."""
+    gradients at a time; the temporaries are a few times ``mem``)."""
     U = U.reshape(fm.ndof, -1)
     k, N = U.shape[1], len(fm.nodes)
     lam, mu = lame(E, nu)

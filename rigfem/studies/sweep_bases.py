@@ -75,8 +75,9 @@ def mapped(b: UnitBasis, folder: Path) -> UnitBasis:
     for field in ("S", "vm"):
         a = getattr(b, field)
         if not isinstance(a, _Mapped):
-            np.save(_basis_file(folder, b.key, field), a)
-            a = _open_mapped(str(_basis_file(folder, b.key, field)))
+            f = _basis_file(folder, b.key, field)
+            np.save(f, a)
+            a = _open_mapped(str(f))
         arrays[field] = a
     return dataclasses.replace(b, **arrays)
 
@@ -139,13 +140,13 @@ def parallel_bases(workers: int, geometries: int) -> int:
 
 def _geometries(p: SweepParams) -> tuple[dict, dict, list]:
     """The bases' specs by part geometry, each geometry's merged case (one mesh), and the
-    geometries largest first (estimated mesh); worked out once per process (1.3 s) for the
-    parameters and their parts' geometry (:meth:`SweepParams.key`)."""
+    geometries largest first (estimated mesh); worked out once per process (it simulates a
+    reference configuration) for the parameters and their parts' geometry (:meth:`SweepParams.key`)."""
     return _geometries_at(p, p.key())
 
 
 @functools.lru_cache(maxsize=4)
-def _geometries_at(p: SweepParams, key: str) -> tuple[dict, dict, list]:
+def _geometries_at(p: SweepParams, params_key: str) -> tuple[dict, dict, list]:
     from rigfem.fe.partcase import mesh_job
     from rigfem.mesh.mesher import estimate_part
 
@@ -194,15 +195,14 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
     from rigfem.fe.assembly import compiled
-    from rigfem.fe.partcase import mesh_case, mesh_job
+    from rigfem.fe.partcase import mesh_case
     from rigfem.mesh import pool
-    from rigfem.mesh.mesher import prefetch
     from rigfem.mesh.worker import call
 
     s = p.settings()
     by_geo, merged, order = _geometries(p)
     parallel = workers > 1 and len(by_geo) > 1 and not mp.current_process().daemon
-    prefetch([mesh_job(merged[geo], s) for geo in order])  # (those mesh_ahead started go on)
+    mesh_ahead(p)  # (the jobs an earlier call started go on)
 
     if parallel:
         compiled()  # numba compiles the kernels once, while the meshers work, for both children
