@@ -17,7 +17,7 @@ from rigfem.material import get_material
 from rigfem.mesh import mesh_part
 from rigfem.rig import load_part
 from rigfem.settings import preset
-from rigfem.studies.closed_form import plate_hole_peak_mpa
+from rigfem.verification.closed_form import plate_hole_peak_mpa
 from rigfem.verdict import half_ultimate
 
 SIGMA_MPA, WIDTH_MM, HOLE_MM = 50.0, 100.0, 20.0  # as in plate_with_hole.geo

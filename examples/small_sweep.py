@@ -10,7 +10,7 @@ Run: python examples/small_sweep.py
 
 import pandas as pd
 
-from rigfem.studies import SweepParams, enumerate_configs, evaluate
+from rigfem.sweep import SweepParams, enumerate_configs, evaluate
 
 p = SweepParams(linkage_type="four-bar", samples=90)
 configs = [c for c in enumerate_configs(p) if c["b2"] == 480.0 and c["d"] == 1020.0]

@@ -31,10 +31,11 @@ LAYERS = [
     ("rigfem.io",),
     ("rigfem.schema", "rigfem.scene"),
     ("rigfem.check",),
-    ("rigfem.studies",),
-    ("rigfem.cli", "rigfem.__main__"),
+    ("rigfem.verification", "rigfem.sweep"),
+    ("rigfem.design",),
+    ("rigfem.cli", "rigfem.__main__", "rigfem.studies"),  # studies: the deprecated aliases of the three above
 ]
-SUBPACKAGES = ("rig", "linkage", "dynamics", "loads", "mesh", "fe", "verdict", "report", "io", "studies")
+SUBPACKAGES = ("rig", "linkage", "dynamics", "loads", "mesh", "fe", "verdict", "report", "io", "sweep", "verification", "design")
 
 
 def _modules() -> dict[str, pathlib.Path]:
@@ -219,3 +220,17 @@ with contextlib.redirect_stdout(io.StringIO()):
 def test_the_import_probe_can_fail():
     """The probe sees a dynamics import when there is one."""
     assert "rigfem.dynamics.solver" in _loaded_after("import rigfem.dynamics.solver")
+
+
+def test_studies_aliases_warn_and_resolve():
+    """Scripts written against rigfem.studies (before 0.2) still run, with a DeprecationWarning."""
+    code = ("import warnings; warnings.simplefilter('error', DeprecationWarning)\n"
+            "import rigfem.sweep\n"
+            "try:\n    from rigfem.studies import SweepParams\nexcept DeprecationWarning as w: print(w)\n"
+            "warnings.simplefilter('ignore')\n"
+            "from rigfem.studies import SweepParams as A\nfrom rigfem.studies.closed_form import kt_plate_hole\n"
+            "import rigfem.studies.sweep as s\n"
+            "assert A is rigfem.sweep.SweepParams and s is __import__('rigfem.sweep.run').sweep.run\n"
+            "print(kt_plate_hole(0.2) > 2)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "rigfem.studies.SweepParams moved to rigfem.sweep.configs.SweepParams" in out and out.endswith("True\n")

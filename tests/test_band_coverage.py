@@ -10,7 +10,7 @@ from fe_shapes import box, quarter_ring
 
 from rigfem.fe import BAND_FACTOR, FixedComponents, Gravity, Pressure, Symmetry, build_model, solve
 from rigfem.material import get_material
-from rigfem.studies.band_coverage import (
+from rigfem.verification.band_coverage import (
     PRESETS,
     calibrate,
     closed_form_case,

@@ -267,7 +267,7 @@ def test_cross_check_free_body(tmp_path):
 
     from rigfem.fe import FreeBody, SurfaceForce, build_model
     from rigfem.material import get_material
-    from rigfem.studies import cross_check
+    from rigfem.verification import cross_check
 
     model = build_model(box(60.0, 10.0, 8.0, 12, 2, 2), get_material("rig_steel"), order=2)
     cases = [[SurfaceForce("xmin", (-500.0, 0.0, 0.0)), SurfaceForce("xmax", (500.0, 0.0, 0.0))],
@@ -293,7 +293,7 @@ def test_reference_scene_against_calculix():
     """Every part case of `rigfem verify --against calculix final-cm` (draft): README claims all 12
     within 0.0012 % (results/benchmarks/calculix_verify_final-cm.md); peak 0.002 %, displacement 0.001 %."""
     from rigfem.check import load_check_scene
-    from rigfem.studies import verify_scene
+    from rigfem.verification import verify_scene
 
     rows = verify_scene(load_check_scene("final-cm", {"fidelity": "draft", "frames": 0}))
     assert len(rows) == 12

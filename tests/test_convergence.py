@@ -9,7 +9,7 @@ import pytest
 
 from rigfem.cli import main
 from rigfem.errors import InputError
-from rigfem.studies import (
+from rigfem.verification.convergence import (
     StepSpec,
     analyse,
     away_from_singular_edges,
@@ -114,7 +114,7 @@ def test_cli_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path):
 
 
 def _synthetic_study(peaks: dict[str, list[float]]) -> dict:
-    """A study dict as rigfem.studies.convergence writes it, from given h-sequence peaks per mode."""
+    """A study dict as rigfem.verification.convergence writes it, from given h-sequence peaks per mode."""
     sizes = [(11.3, 1.7), (8.0, 1.2), (5.66, 0.85), (4.0, 0.6)]
     steps = [{"label": f"h{k}", "kind": "h", "order": 2, "size_mm": g, "local_size_mm": loc,
               "bearing_directions": 24, "dofs": 10000 * 3 ** k, "tets": 1000 * 3 ** k, "seconds": 2.0 ** k,
@@ -177,7 +177,7 @@ def test_fine_preset_error_is_measured_against_an_extended_sequence():
 
 def test_levels_beyond_the_finest_continue_the_ratio():
     """The levels a non-converging study may add are the sequence continued past ``finest``."""
-    from rigfem.studies import h_levels
+    from rigfem.verification import h_levels
 
     base = h_levels(4, 2 ** 0.5, (4.0, 0.6))
     more = h_levels(4, 2 ** 0.5, (4.0, 0.6), beyond=1)

@@ -81,7 +81,7 @@ def test_every_benchmark_writes_through_the_record_module():
 
 
 def test_le10_target_is_the_studys():
-    from rigfem.studies.le10 import TARGET_SYY
+    from rigfem.verification.le10 import TARGET_SYY
 
     assert tables.LE10_TARGET == TARGET_SYY
 

@@ -12,8 +12,8 @@ import pytest
 import rigfem.cli.progress as progress
 from rigfem.cli import main
 from rigfem.settings import ALLOW_LARGE_ENV, MAX_JOB_HOURS
-from rigfem.studies.cost import JobCost, check_cost, sweep_cost, turning
-from rigfem.studies.sweep_configs import SweepParams, enumerate_configs
+from rigfem.sweep.cost import JobCost, check_cost, sweep_cost, turning
+from rigfem.sweep.configs import SweepParams, enumerate_configs
 
 FUNCTION = ["synthesize", "function", "x*log(x)", "--x", "1", "3", "--input", "20", "90", "--output", "80", "90",
             "--ground", "2", "--rig"]

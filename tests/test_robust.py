@@ -124,9 +124,9 @@ def test_allow_large_lifts_the_limit(tmp_path, monkeypatch):
 
 # ----------------------------------------------------------------------------- §4 distributed runs
 def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monkeypatch):
-    import rigfem.studies.sweep as sweep
+    import rigfem.sweep.run as sweep
     from rigfem.errors import ComputeError
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.configs import SweepParams
 
     def no_bases(*a, **k):
         raise AssertionError("unit solutions built before the scheduler was contacted")
@@ -144,8 +144,8 @@ def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monke
 @pytest.mark.parametrize("address", ["tcp://127.0.0.1:70000", "tcp://127.0.0.1:0", "http://127.0.0.1:8786",
                                      "tcp://127.0.0.1", "tcp://:8786", "tcp://host name:1"])
 def test_bad_scheduler_address_is_bad_input(tmp_path, monkeypatch, address):
-    import rigfem.studies.sweep as sweep
-    from rigfem.studies.sweep_configs import SweepParams
+    import rigfem.sweep.run as sweep
+    from rigfem.sweep.configs import SweepParams
 
     monkeypatch.setattr(sweep, "build_bases", lambda *a, **k: pytest.fail("bases built for a bad address"))
     with pytest.raises(InputError, match="scheduler"):

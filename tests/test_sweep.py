@@ -15,16 +15,8 @@ from rigfem.errors import InputError
 from rigfem.fe import solve_cases
 from rigfem.loads import part_cases
 from rigfem.rig import fourbar_rules
-from rigfem.studies import (
-    SweepParams,
-    build_bases,
-    case_peak,
-    enumerate_configs,
-    evaluate,
-    run_sweep,
-    superposed_peaks,
-)
-from rigfem.studies.sweep_bases import case_key
+from rigfem.sweep import SweepParams, build_bases, case_peak, enumerate_configs, evaluate, run_sweep
+from rigfem.sweep.bases import case_key, superposed_peaks
 
 #: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
 CHECK = (("order", 1), ("size_mm", 14.0), ("local_size_mm", 7.0), ("bearing_directions", 4),
@@ -124,7 +116,7 @@ def test_bounded_peak_is_exact_for_any_coefficients(bases):
 
 
 def _spec_case(params, key):
-    from rigfem.studies.sweep_bases import _basis_specs
+    from rigfem.sweep.bases import _basis_specs
 
     specs = _basis_specs(params, params.settings())
     refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})
@@ -163,7 +155,7 @@ def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
     assert "nan" not in text and "inf" not in text
     assert len(chunk) == 3
     chunk[1].write_text(chunk[1].read_text()[:40])  # a damaged (truncated) chunk is computed again
-    import rigfem.studies.sweep as sw
+    import rigfem.sweep.run as sw
 
     calls = []
     real = sw.run_chunk
@@ -186,7 +178,7 @@ def test_dask_equals_serial(params, bases, tmp_path):
 
 
 def test_report_files(params, bases, tmp_path):
-    from rigfem.studies import write_report
+    from rigfem.sweep import write_report
 
     table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
     files = write_report(table, params, tmp_path / "out")
@@ -213,7 +205,7 @@ def test_cli_bad_input(capsys):
 def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
     """The CLI keeps finished chunks as cache entries, so a second run into another folder reads
     them; with an unusable cache they go to ``--out``/.work."""
-    import rigfem.studies.sweep
+    import rigfem.sweep.run
     from rigfem.cli import main
     from rigfem.errors import ComputeError
 
@@ -222,7 +214,7 @@ def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
     def record(p, work_dir, **kw):
         seen.append(work_dir)
         raise ComputeError("stop here")
-    monkeypatch.setattr(rigfem.studies.sweep, "run_sweep", record)
+    monkeypatch.setattr(rigfem.sweep.run, "run_sweep", record)
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "a")]) == 3
     assert seen[-1] == tmp_path / "cache" / "sweep_chunks"

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 from test_sweep import CHECK, CONFIGS
 
-from rigfem.studies import SweepParams, build_bases, run_sweep
+from rigfem.sweep import SweepParams, build_bases, run_sweep
 
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 

@@ -42,10 +42,10 @@ def run(args: argparse.Namespace) -> int:
     from rigfem.cli.outputs import mark_folder, new_folder, wrote
     from rigfem.cli.progress import stage
     from rigfem.errors import InputError, check_range
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.configs import SweepParams
 
     if args.scheduler is not None:
-        from rigfem.studies.sweep import check_scheduler
+        from rigfem.sweep.run import check_scheduler
 
         check_scheduler(args.scheduler)  # bad input before anything; run_sweep connects before any work
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
@@ -55,17 +55,17 @@ def run(args: argparse.Namespace) -> int:
     check_range("--chunk-size", args.chunk_size, 1, 100_000)
     if not args.report_only:
         from rigfem.mesh.mesher import MACHINE_GIB
-        from rigfem.studies.cost import check_cost, sweep_cost
-        from rigfem.studies.sweep_configs import enumerate_configs
+        from rigfem.sweep.cost import check_cost, sweep_cost
+        from rigfem.sweep.configs import enumerate_configs
 
         configs = enumerate_configs(p)
         check_cost(sweep_cost(p, configs, args.workers), MACHINE_GIB)  # before the folder is made
         if args.scheduler is not None:
-            from rigfem.studies.sweep import reach_scheduler
+            from rigfem.sweep.run import reach_scheduler
 
             reach_scheduler(args.scheduler)  # a Dask scheduler answers there, in seconds
-    from rigfem.studies.sweep import run_sweep
-    from rigfem.studies.sweep_report import write_report
+    from rigfem.sweep.run import run_sweep
+    from rigfem.sweep.report import write_report
 
     if args.report_only:
         import pandas as pd

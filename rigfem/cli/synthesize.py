@@ -1,7 +1,7 @@
 """``rigfem synthesize function|motion``: a four-bar that generates y = f(x) (Freudenstein's
 equation, Chebyshev precision points) or moves a coupler point through three positions, its
 errors and defects; ``--rig`` then ranks the nearest buildable rig configurations, each with
-its rule table and stress verdict (``rigfem.studies.rig_design``).
+its rule table and stress verdict (``rigfem.design.rig_design``).
 
 Angles in degrees counter-clockwise from the ground line O2→O4; lengths in the unit of
 --ground (function) or of the positions (motion); rig lengths in mm.  Exit status with
@@ -229,8 +229,8 @@ def _rig_options(args, motion: bool) -> dict | None:
     if fidelity not in FIDELITY:
         raise InputError(f"--fidelity = {fidelity!r} must be one of {', '.join(FIDELITY)}")
     from rigfem.mesh.mesher import MACHINE_GIB
-    from rigfem.studies.cost import check_cost, synthesis_cost
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.cost import check_cost, synthesis_cost
+    from rigfem.sweep.configs import SweepParams
 
     check_cost(synthesis_cost(SweepParams(fidelity=fidelity), int(top), not args.no_stress), MACHINE_GIB)
     return dict(top=int(top), fidelity=fidelity, stress=not args.no_stress,
@@ -240,9 +240,9 @@ def _rig_options(args, motion: bool) -> dict | None:
 
 def _snap(r: dict, opts: dict, task: str) -> int:
     """Rank the rig configurations into ``r["rig"]``; write the scene; the exit status."""
-    from rigfem.studies.rig_design import snap_function, snap_motion, stress_verdicts
-    from rigfem.studies.sweep_bases import mesh_ahead
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.design.rig_design import snap_function, snap_motion, stress_verdicts
+    from rigfem.sweep.bases import mesh_ahead
+    from rigfem.sweep.configs import SweepParams
 
     if r.get("branch") is None:
         raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")

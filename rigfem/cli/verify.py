@@ -56,7 +56,7 @@ def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from rigfem.check import load_check_scene
-    from rigfem.studies.verify import verify_scene
+    from rigfem.verification.calculix import verify_scene
 
     # every option and the scene are checked before ccx is looked for and before any computation
     if args.against != "calculix":

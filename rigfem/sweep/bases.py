@@ -1,7 +1,7 @@
 """The rig sweep's FE unit bases: per rail geometry and support set, one factorisation gives
 the unit stress fields of every load a configuration can apply, and a configuration's peak
 von Mises follows by superposition, evaluated only at the nodes whose bound can reach it
-(:mod:`rigfem.studies.sweep`).
+(:mod:`rigfem.sweep.run`).
 
 Units: mm, N, MPa, deg.
 """
@@ -24,7 +24,7 @@ from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import PartCase, UnitLoad, directions, part_cases
 from rigfem.rig.parts import rail_hole_name
 from rigfem.settings import CheckSettings
-from rigfem.studies.sweep_configs import (
+from rigfem.sweep.configs import (
     BOUND_GROUPS,
     ORIGINAL_DIRECTIONS,
     ROW_CHUNK,
@@ -183,7 +183,7 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
     With ``workers`` > 1 their FE runs in child processes (:func:`rigfem.mesh.worker.call`),
     :func:`parallel_bases` at a time: most of a basis's time is single-threaded (stress recovery,
     load vectors), so two geometries at once use two cores and hold two geometries' FE in memory
-    (a sweep's ``--workers`` chooses this; :func:`rigfem.studies.cost.bases_cost` counts it).  A
+    (a sweep's ``--workers`` chooses this; :func:`rigfem.sweep.cost.bases_cost` counts it).  A
     child returns only the float32 unit fields.  Otherwise, or in a daemonic process (a sweep
     worker), the geometries are built here one after another, the largest first (while the
     fewest bases are held), each model released before the next one's is built.  With

@@ -3,7 +3,7 @@
 A synthesised linkage (``rigfem.linkage.synthesis``) has any lengths; the rig builds only
 lengths on the 60 mm hole grid that obey every rig rule (geometry/RIG.md §2).  This module ranks the
 rig's four-bars by how well they do the wanted job and attaches each one's rule table and
-stress verdict (the sweep's superposed unit solutions, ``rigfem.studies.sweep.evaluate``):
+stress verdict (the sweep's superposed unit solutions, ``rigfem.sweep.run.evaluate``):
 
 * function generation (:func:`snap_function`): the structural error does not depend on the
   scale, so *every* mountable, rule-abiding four-bar is evaluated (both assembly branches,
@@ -34,9 +34,9 @@ from rigfem.linkage.kinematics import fourbar_motion
 from rigfem.linkage.loops import BRANCHES, fourbar_angles
 from rigfem.linkage.synthesis import crank_in_order
 from rigfem.rig.rules import HOLE_PITCH_MM, fourbar_rules
-from rigfem.studies.sweep import evaluate
-from rigfem.studies.sweep_bases import build_bases
-from rigfem.studies.sweep_configs import SweepParams, enumerate_configs
+from rigfem.sweep.run import evaluate
+from rigfem.sweep.bases import build_bases
+from rigfem.sweep.configs import SweepParams, enumerate_configs
 
 __all__ = ["rig_fourbars", "snap_function", "snap_motion", "rule_table", "stress_verdicts"]
 

@@ -43,9 +43,9 @@ from rigfem.loads.cases import part_cases
 from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
 from rigfem.verdict.criterion import half_ultimate, overall
 from rigfem.mesh.mesher import MACHINE_GIB
-from rigfem.studies.cost import check_cost, sweep_cost
-from rigfem.studies.sweep_bases import UnitBasis, build_bases, case_key, case_peak, mapped
-from rigfem.studies.sweep_configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
+from rigfem.sweep.cost import check_cost, sweep_cost
+from rigfem.sweep.bases import UnitBasis, build_bases, case_key, case_peak, mapped
+from rigfem.sweep.configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
 
 
 # ----------------------------------------------------------------------------- one configuration
@@ -172,10 +172,10 @@ def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 
     ``distributed``: run chunks on Dask (default: when ``workers > 1`` or a ``scheduler`` is
     given); ``scheduler`` is ``tcp://HOST:PORT`` of an existing cluster, else a LocalCluster
     with ``workers`` processes runs inside this process; with ``workers`` > 1 the unit bases
-    are built two geometries at a time (:func:`~rigfem.studies.sweep_bases.build_bases`).
+    are built two geometries at a time (:func:`~rigfem.sweep.bases.build_bases`).
     ``configs``: only these configurations (default: every mountable one).  ``bases``: unit
     solutions already built for ``p``.
-    The job's cost is estimated from the counts before any work (:mod:`rigfem.studies.cost`;
+    The job's cost is estimated from the counts before any work (:mod:`rigfem.sweep.cost`;
     past ``machine_gib`` or the time limit: InputError).  ``on_stage(text)`` hears each stage.
     """
 

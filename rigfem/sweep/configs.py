@@ -1,5 +1,5 @@
 """The rig sweep's parameters and the configurations it enumerates: every mountable rail
-geometry and hole of a linkage type, with its rig rules (:mod:`rigfem.studies.sweep`).
+geometry and hole of a linkage type, with its rig rules (:mod:`rigfem.sweep.run`).
 
 Units: mm, Hz, deg.
 """
@@ -99,7 +99,7 @@ class SweepParams:
         src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS,
                    parts={n: load_part(n).content_hash() for n in parts},
                    masses=dataclasses.asdict(RIG_MASSES),
-                   code=code_hash(*SOLUTION_CODE, "studies/sweep*.py", "linkage/*.py", "dynamics/*.py", "loads/*.py",
+                   code=code_hash(*SOLUTION_CODE, "sweep/*.py", "linkage/*.py", "dynamics/*.py", "loads/*.py",
                                   "rig/*.py", "verdict/*.py", "settings.py", "schema.py", "fe/partcase.py",
                                   "fe/tensors.py"))
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
