@@ -18,19 +18,24 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.files", "rigfem.memory", "rigfem.material", "rigfem.geometry"),  # geometry: part files (data)
+    ("rigfem.errors", "rigfem.files", "rigfem.memory", "rigfem.material", "rigfem.geometry",
+     "rigfem.observer", "rigfem.tensors"),  # geometry: part files (data)
+    ("rigfem.cache",),
+    ("rigfem.context",),
     ("rigfem.rig",),
     ("rigfem.settings",),
+    ("rigfem.schema", "rigfem.scene"),
     ("rigfem.linkage",),
     ("rigfem.dynamics",),
     ("rigfem.loads",),
+    ("rigfem.verdict",),
     ("rigfem.mesh",),
     ("rigfem.fe",),
-    ("rigfem.verdict",),
-    ("rigfem.report",),
     ("rigfem.io",),
-    ("rigfem.schema", "rigfem.scene"),
-    ("rigfem.check",),
+    ("rigfem.job",),
+    ("rigfem.report",),
+    ("rigfem.pipeline",),
+    ("rigfem.check",),  # the deprecated alias of rigfem.pipeline's run_check
     ("rigfem.verification", "rigfem.sweep"),
     ("rigfem.design",),
     ("rigfem.cli", "rigfem.__main__", "rigfem.studies"),  # studies: the deprecated aliases of the three above
@@ -156,7 +161,7 @@ _HEAVY = ("rigfem.dynamics", "rigfem.fe", "rigfem.mesh", "skfem", "gmsh")
 #: nothing of the verdict, FE or mesh code (only the verified cache, rigfem.mesh.cache, that
 #: records a scene's content as validated)
 _SCENE_HEAVY = ("rigfem.dynamics", "rigfem.mesh", "rigfem.fe", "rigfem.verdict", "skfem", "gmsh")
-_CACHE_ONLY = ["rigfem.mesh", "rigfem.mesh.cache"]
+_CACHE_ONLY: list[str] = []  # the cache (rigfem.cache) is below them all
 
 
 def _loaded_after(code: str, heavy: tuple[str, ...] = _HEAVY) -> list[str]:

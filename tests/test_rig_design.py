@@ -122,7 +122,7 @@ def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():
 
     p = SweepParams(check=CHECK)
     cands = [{"lengths_mm": dict(b2=480.0, b3=840.0, b4=780.0, d=1020.0), "branch": b} for b in ("open", "crossed")]
-    stress_verdicts(cands, p=p)
+    stress_verdicts(cands, p)
     bases = build_bases(p)
     for c in cands:
         row = evaluate(dict(c["lengths_mm"], branch=c["branch"]), p, bases)

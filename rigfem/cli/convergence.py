@@ -15,7 +15,7 @@ from pathlib import Path
 
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import InputError, check_range, plain
 from rigfem import verification  # lazy (lazy_loader): the FE stack loads when a study runs, not for --help
 from rigfem.settings import FIDELITY, MODES, PARTS, REFERENCE_SCENE
@@ -259,14 +259,13 @@ def _command(a: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     if args.mode is not None and args.mode not in MODES:
         raise InputError(f"--mode {args.mode!r} must be one of {', '.join(MODES)}")
-    levels = check_range("--levels", args.levels, 3, 8)
-    if levels != int(levels):
-        raise InputError(f"--levels = {args.levels!r} must be a whole number in [3, 8]")
-    ratio = check_range("--ratio", args.ratio, 1.1, 2.0)
-    max_gib = check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB")
     n_extra = check_range("--extra-levels", args.extra_levels, 0, 3)
     if n_extra != int(n_extra):
         raise InputError(f"--extra-levels = {args.extra_levels!r} must be a whole number in [0, 3]")
+    spec = verification.StudySpec(check_range("--levels", args.levels, 3, 8), check_range("--ratio", args.ratio, 1.1, 2.0),
+                                  (args.mode,) if args.mode else None,
+                                  check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB"),
+                                  presets=not args.no_presets, extend=int(n_extra))
     if args.render and not Path(args.out).is_dir():
         raise InputError(f"--out = {args.out!r}: no such folder to render")
     out = new_folder("--out", args.out, args.force or args.render)
@@ -277,25 +276,26 @@ def run(args: argparse.Namespace) -> int:
                 _write(verification.analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        from rigfem.check import load_check_scene
+        from rigfem.cache import from_environment
+        from rigfem.job import Request
 
-        broken = load_check_scene(scene, None, args.allow_rule_violations).rule_violations
+        request = Request(scene, {"parts": list(parts)} if parts else {}, args.allow_rule_violations)
+        job, by_part = verification.scene_cases(request, from_environment())
+        settings, broken = job.settings, list(job.rule_violations)
         for v in broken:
             print(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)", flush=True)
-        settings, by_part = verification.scene_cases(scene, parts, allow_rule_violations=True)
         mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
             extra = {"scene": scene, "command": _command(args), "rule_violations": broken}
 
-            def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
-                write_text(out / f"{stem}.json", verification.to_json({**partial, **extra, "partial": True}))
+            class Saving(type(OBSERVER)):  # the command line's progress, and each partial study kept
+                def partial(self, result: dict, stem: str = stem, extra: dict = extra) -> None:
+                    write_text(out / f"{stem}.json", verification.to_json({**result, **extra, "partial": True}))
 
-            res = verification.study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
-                        max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
-                        progress=lambda part, step: stage(f"part {part}: step {step}"))
+            res = verification.study(cases_for, settings, spec, Saving())
             print(_write({**res, **extra}, out, stem))
-    stage("summary")
+    OBSERVER.stage("summary")
     done = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     write_text(out / "summary.md", summary([s for s in done if "steps" in s]))
     wrote(out / "summary.md")

@@ -39,8 +39,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigfem.cli.outputs import mark_folder, new_folder, wrote
-    from rigfem.cli.progress import stage
+    from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
+    from rigfem.cli.progress import OBSERVER
     from rigfem.errors import InputError, check_range
     from rigfem.sweep.configs import SweepParams
 
@@ -78,14 +78,20 @@ def run(args: argparse.Namespace) -> int:
         wrote(out)
         return 0
     mark_folder(out)
-    from rigfem.mesh.cache import cache_dir, usable
+    from rigfem.cache import Cache, from_environment
 
     # finished chunks are verified cache entries: any later run of this sweep (into any folder)
-    # reads them instead of computing them (in --out only when the cache cannot be used)
-    work = cache_dir() / "sweep_chunks" if usable() else out / ".work"
-    table = run_sweep(p, work, chunk_size=args.chunk_size, workers=args.workers, configs=configs,
-                      scheduler=args.scheduler, progress=not args.quiet, on_stage=stage)
-    stage("report")
+    # reads them instead of computing them (in --out/.work only when the cache cannot be used)
+    cache = from_environment()
+    if cache.folder is None:
+        cache = Cache(out / ".work", 1 << 62)
+        write_text(out / ".work" / ".gitignore", "*\n", record=False)  # never in a repository
+    from rigfem.context import Context
+    from rigfem.sweep.run import SweepOptions
+
+    table = run_sweep(p, Context(cache, OBSERVER, workers=args.workers),
+                      SweepOptions(args.chunk_size, args.scheduler, configs=tuple(configs)))
+    OBSERVER.stage("report")
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
     ok = table[table["status"] == "ok"]
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "

@@ -15,7 +15,7 @@ import json
 import re
 
 from rigfem.cli.outputs import new_output, write_file, write_text, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.settings import FIDELITY
 
@@ -240,18 +240,21 @@ def _rig_options(args, motion: bool) -> dict | None:
 
 def _snap(r: dict, opts: dict, task: str) -> int:
     """Rank the rig configurations into ``r["rig"]``; write the scene; the exit status."""
+    from rigfem.cache import from_environment
+    from rigfem.context import Context
     from rigfem.design.rig_design import snap_function, snap_motion, stress_verdicts
     from rigfem.sweep.bases import mesh_ahead
     from rigfem.sweep.configs import SweepParams
 
     if r.get("branch") is None:
         raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")
+    ctx = Context(from_environment(), OBSERVER)
     if opts["stress"]:  # the unit solutions' meshes are made while the rig four-bars are ranked
-        mesh_ahead(SweepParams(fidelity=opts["fidelity"]))
-    stage("ranking the rig four-bars")
+        mesh_ahead(SweepParams(fidelity=opts["fidelity"]), ctx.cache)
+    OBSERVER.stage("ranking the rig four-bars")
     cands = snap_function(r, opts["top"]) if task == "function" else snap_motion(r, opts["top"], opts["scale"])
     if opts["stress"]:
-        stress_verdicts(cands, opts["fidelity"], on_stage=stage)
+        stress_verdicts(cands, SweepParams(fidelity=opts["fidelity"]), ctx)
     r["rig"] = {"candidates": cands, "stress_fidelity": opts["fidelity"] if opts["stress"] else None}
     if opts["scene"] is not None:
         write_text(opts["scene"], _scene_toml(cands[0], task))
@@ -301,8 +304,9 @@ def _rig_text(rig: dict, task: str) -> str:
         if st is None:
             continue
         if "max_util_pct" in st:
+            band = st["parts_band_pct"].get(st["limiting_part"].replace(" (", "_").rstrip(")"), 0.0)
             out.append(f"   stress: {st['verdict'].upper()}, worst {st['max_util_pct']:.1f} % of sigma_u/2 "
-                       f"({st['limiting_part']}, error band {st['error_band_pct']:g} %)")
+                       f"({st['limiting_part']}, error band ±{band:.1f} % of its peak)")
         else:
             out.append(f"   stress: {st['verdict'].upper()} ({st['note']})")
     if rig.get("scene"):

@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import shutil
 import tempfile
@@ -23,6 +24,25 @@ from rigfem.errors import InputError, plain
 
 #: the file that marks a folder as written by rigfem (what ``--force`` may replace)
 MARKER = ".rigfem-result"
+
+
+@dataclasses.dataclass(frozen=True)
+class Output:
+    """Where and what a check writes: its result folder (None: ``results/<scene>``; replaced only
+    with ``force``, and only if rigfem wrote it), the PNG pictures, and each part case as a
+    CalculiX deck (``export_inp``)."""
+
+    path: Path | None = None
+    force: bool = False
+    pictures: bool = True
+    export_inp: bool = False
+
+
+def read_report(folder: str | Path) -> dict:
+    """The report dict of a result folder (for pytest limits)."""
+    import json
+
+    return json.loads((Path(folder) / "report.json").read_text())
 
 
 def _existing_parent(p: Path) -> Path:

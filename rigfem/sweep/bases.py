@@ -1,7 +1,6 @@
 """The rig sweep's FE unit bases: per rail geometry and support set, one factorisation gives
-the unit stress fields of every load a configuration can apply, and a configuration's peak
-von Mises follows by superposition, evaluated only at the nodes whose bound can reach it
-(:mod:`rigfem.sweep.run`).
+the unit stress and displacement fields of every load a configuration can apply
+(:mod:`rigfem.sweep.superpose` combines them), stored compact (float32) in the cache.
 
 Units: mm, N, MPa, deg.
 """
@@ -19,15 +18,14 @@ import numpy as np
 
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
+from rigfem.cache import Cache, resolve
 from rigfem.errors import ComputeError, InputError
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import PartCase, UnitLoad, directions, part_cases
 from rigfem.rig.parts import rail_hole_name
 from rigfem.settings import CheckSettings
 from rigfem.sweep.configs import (
-    BOUND_GROUPS,
     ORIGINAL_DIRECTIONS,
-    ROW_CHUNK,
     SweepParams,
     TOP_NODES,
     rig_rail_layout,
@@ -38,15 +36,22 @@ from rigfem.sweep.configs import (
 # ----------------------------------------------------------------------------- FE unit bases
 @dataclass
 class UnitBasis:
-    """Unit stress fields of one part geometry and support set (float32, every node)."""
+    """The unit solutions of one part geometry and support set (float32, every node): what a
+    configuration's peak, its error band and its free-body balance are superposed from."""
 
     key: tuple
     loads: list[UnitLoad]
     groups: dict[str, tuple[np.ndarray, np.ndarray]]  #: group -> (angles rad sorted, columns)
     inertia: dict[tuple, int]  #: (component, origin) -> column
-    S: np.ndarray  #: (k, N, 6) float32 nodal stress of every unit load
-    vm: np.ndarray  #: (k, N) float32 von Mises of every unit field (the bound of ``case_peak``)
+    S: np.ndarray  #: (k, N, 6) nodal stress of every unit load
+    vm: np.ndarray  #: (k, N) von Mises of every unit field (the bound of :func:`case_peak`)
     top: np.ndarray  #: (k, TOP_NODES) the nodes where each unit field is highest
+    U: np.ndarray  #: (k, N, 3) displacement of every unit load (the error band at a peak)
+    R: np.ndarray | None  #: (6, k) resultants of the unit loads of a free body, None when supported
+    scale: np.ndarray | None  #: (k,) their force magnitudes
+    mesh: object  #: the rigfem.fe.assembly.FEMesh the fields live on (nodes, elements, curved)
+    material: tuple[float, float]  #: E (MPa), nu
+    lever: float  #: mm, the part's farthest node from its centroid
     fe_mass: float  #: kg, mass of the meshed part
 
 
@@ -63,19 +68,19 @@ def _open_mapped(path: str) -> np.ndarray:
     return np.load(path, mmap_mode="r").view(_Mapped)
 
 
-def _basis_file(folder: Path, key: tuple, field: str) -> Path:
-    return folder / f"basis_{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}_{field}.npy"
+#: the large fields of a basis: memory-mapped from a folder when there is one
+_FIELDS = ("S", "vm", "U")
 
 
 def mapped(b: UnitBasis, folder: Path) -> UnitBasis:
-    """``b`` with its stress fields stored in ``folder`` and memory-mapped from there (those not
+    """``b`` with its large fields stored in ``folder`` and memory-mapped from there (those not
     mapped yet): a process holds only the pages it reads (a configuration's peak reads its few
     candidate nodes)."""
     arrays = {}
-    for field in ("S", "vm"):
+    for field in _FIELDS:
         a = getattr(b, field)
         if not isinstance(a, _Mapped):
-            f = _basis_file(folder, b.key, field)
+            f = folder / f"basis_{hashlib.sha256(repr(b.key).encode()).hexdigest()[:16]}_{field}.npy"
             np.save(f, a)
             a = _open_mapped(str(f))
         arrays[field] = a
@@ -161,7 +166,7 @@ def _geometries_at(p: SweepParams, params_key: str) -> tuple[dict, dict, list]:
     return by_geo, merged, order
 
 
-def mesh_ahead(p: SweepParams) -> None:
+def mesh_ahead(p: SweepParams, cache: Cache) -> None:
     """Start meshing the geometries of :func:`build_bases` in the mesher processes, largest first
     (it finds them made, or being made), and numba compiling the assembly on a first run: a
     caller with other work first overlaps the two."""
@@ -170,13 +175,20 @@ def mesh_ahead(p: SweepParams) -> None:
     from rigfem.mesh.mesher import prefetch
 
     s = p.settings()
-    _, merged, order = _geometries(p)
-    prefetch([mesh_job(merged[geo], s) for geo in order])
-    start_compiling()
+    by_geo, merged, order = _geometries(p)
+    todo = [geo for geo in order if not _cached(mesh_job(merged[geo], s), by_geo[geo], p, cache)]
+    if todo:
+        prefetch([mesh_job(merged[geo], s) for geo in todo], cache)
+        start_compiling(cache)
+
+
+def _cached(job: tuple, specs: dict, p: SweepParams, cache: Cache, solver: str = "auto") -> bool:
+    """Whether every basis of a geometry seems stored (a cheap look: no mesh is needed then)."""
+    return all(cache.has("bases", inputs) for inputs in _geo_keys(job, specs, p.settings(), solver).values())
 
 
 def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
-                folder: Path | None = None) -> dict[tuple, UnitBasis]:
+                folder: Path | None = None, cache: Cache | None = None) -> dict[tuple, UnitBasis]:
     """One mesh, one factorisation and the unit solutions of every part geometry and support set.
 
     The geometries are meshed ahead in the mesher processes (:func:`mesh_ahead`), largest first.
@@ -195,24 +207,32 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
     from rigfem.fe.assembly import compiled
-    from rigfem.fe.partcase import mesh_case
+    from rigfem.fe.partcase import mesh_job
     from rigfem.mesh import pool
+    from rigfem.mesh.mesher import mesh_part
     from rigfem.mesh.worker import call
 
     s = p.settings()
     by_geo, merged, order = _geometries(p)
+    jobs = {geo: mesh_job(merged[geo], s) for geo in order}
+    keys = {geo: _geo_keys(jobs[geo], by_geo[geo], s, solver) for geo in order}
     parallel = workers > 1 and len(by_geo) > 1 and not mp.current_process().daemon
-    mesh_ahead(p)  # (the jobs an earlier call started go on)
+    cache = resolve(cache)
+    mesh_ahead(p, cache)  # (the jobs an earlier call started go on)
 
     if parallel:
-        compiled()  # numba compiles the kernels once, while the meshers work, for both children
+        compiled(cache)  # numba compiles the kernels once, while the meshers work, for both children
         stop = threading.Event()  # an error or an interruption here ends the children
 
         def child(g: tuple) -> dict[tuple, UnitBasis]:
             if stop.is_set():
                 raise ComputeError("unit bases cancelled")
-            pm = mesh_case(merged[g], s)
-            return call(_geo_bases, pm, by_geo[g], s, solver, folder, cancel=stop, what="unit bases")
+            stored = _stored(keys[g], cache, folder)
+            if stored is not None:
+                return stored
+            pm = mesh_part(*jobs[g], cache=cache)  # here: the mesher processes made it ahead
+            return call(_solve_geo, pm, (by_geo[g], keys[g]), s, solver, folder, cache, cancel=stop,
+                        what="unit bases")
 
         threads = ThreadPoolExecutor(parallel_bases(workers, len(order)), thread_name_prefix="rigfem-bases")
         try:
@@ -229,88 +249,176 @@ def build_bases(p: SweepParams, solver: str = "auto", workers: int = 1,
         finally:
             threads.shutdown(wait=True, cancel_futures=True)
     else:
-        done = {geo: _geo_bases(mesh_case(merged[geo], s), by_geo[geo], s, solver, folder) for geo in order}
+        done = {}
+        for geo in order:
+            done[geo] = _stored(keys[geo], cache, folder)
+            if done[geo] is None:
+                done[geo] = _solve_geo(mesh_part(*jobs[geo], cache=cache), (by_geo[geo], keys[geo]), s, solver,
+                                       folder, cache)
     return {key: b for geo in by_geo for key, b in done[geo].items()}
 
 
-#: unit loads of a basis solved (and cached) at a time: their float64 solution is held only until
-#: it is reduced to the basis's float32 fields and stored in the cache (while the next batch is
-#: solved), not the whole basis's at once
+#: unit loads of a basis solved at a time: their float64 solution is held only until it is reduced
+#: to the basis's float32 fields, written to the basis's files, not the whole basis's at once
 BASIS_BATCH = 24
 
 
-def _geo_bases(pm, specs: dict[tuple, tuple[PartCase, list[UnitLoad]]], s: CheckSettings,
-               solver: str, folder: Path | None = None) -> dict[tuple, UnitBasis]:
-    """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs``: one
-    factorisation per support set, its unit loads solved :data:`BASIS_BATCH` at a time, each
-    batch's cache entry written in a thread while the next is solved; each basis mapped from
-    ``folder`` if given (:func:`mapped`)."""
-    from concurrent.futures import ThreadPoolExecutor
+def _basis_inputs(mesh_key: str, case: PartCase, loads: list[UnitLoad], s: CheckSettings, solver: str) -> dict:
+    """Everything a basis depends on (its cache key; the package's code is in every key)."""
+    from rigfem.fe.cache import _plain
+    from rigfem.fe.partcase import supports_of
+
+    return {"mesh": mesh_key, "order": s.order, "material": _plain(s.material),
+            "supports": _plain(supports_of(case)), "loads": _plain(loads), "solver": solver}
+
+
+def _geo_keys(pm_job: tuple, specs: dict, s: CheckSettings, solver: str) -> dict[tuple, dict]:
+    from rigfem.mesh.mesher import mesh_inputs
+
+    mesh_key = mesh_inputs(*pm_job)[0]
+    return {key: _basis_inputs(mesh_key, case, loads, s, solver) for key, (case, loads) in specs.items()}
+
+
+def _stored(keys: dict[tuple, dict], cache: Cache, folder: Path | None) -> dict[tuple, UnitBasis] | None:
+    """Every basis of a geometry from the cache (mapped into ``folder`` if given), or None."""
+    got = {}
+    for key, inputs in keys.items():
+        b = cache.get("bases", inputs, lambda entry, key=key: _load(entry, key, folder))
+        if b is None:
+            return None
+        got[key] = b
+    return got
+
+
+def _solve_geo(pm, specs: tuple[dict, dict], s: CheckSettings, solver: str, folder: Path | None,
+               cache: Cache) -> dict[tuple, UnitBasis]:
+    """The unit bases of one part geometry's mesh ``pm``, one per support set of ``specs`` (the
+    specs and their cache inputs): one model, one factorisation per support set, the unit loads
+    solved :data:`BASIS_BATCH` at a time and streamed to the basis's files, stored in the cache;
+    each basis mapped from ``folder`` if given (:func:`mapped`), else held in memory."""
+    import tempfile
 
     from rigfem.fe.model import build_model
 
-    model = build_model(pm, s.material, s.order)
+    specs, keys = specs
+    model = build_model(pm, s.material, s.order, cache)
     out = {}
-    writer, pending = ThreadPoolExecutor(1, thread_name_prefix="rigfem-cache-write"), []
-
-    def store(write) -> None:  # one entry written at a time: a batch is held until it is written
-        while pending:
-            pending.pop().result()
-        pending.append(writer.submit(write))
-
-    with writer:
-        for key, (case, loads) in specs.items():
-            out[key] = _basis(model, key, case, loads, s, solver, folder, store)
-        while pending:
-            pending.pop().result()
+    for key, (case, loads) in specs.items():
+        with tempfile.TemporaryDirectory(prefix="rigfem-basis-", dir=folder) as tmp:
+            _build(model, case, loads, s, solver, Path(tmp))
+            cache.put("bases", keys[key], lambda entry: _link_all(Path(tmp), entry))
+            out[key] = _load(_Folder(Path(tmp)), key, folder)
     model.release()
     return out
 
 
-def _basis(model, key: tuple, case: PartCase, loads: list[UnitLoad], s: CheckSettings, solver: str,
-           folder: Path | None, store) -> UnitBasis:
-    """One support set's basis (:func:`_geo_bases`)."""
-    from rigfem.fe.cache import cached_solve
-    from rigfem.fe.partcase import fe_load, relieved_cases, supports_of
+class _Folder:
+    """A freshly built basis's folder read as a cache entry is (:class:`rigfem.cache.Entry`)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+
+    def json(self, name: str):
+        import json
+
+        return json.loads((self.folder / name).read_text())
+
+    def array(self, name: str) -> np.ndarray:
+        return np.load(self.folder / f"{name}.npy")
+
+    def copy(self, name: str, dest: Path) -> None:
+        import shutil
+
+        shutil.copyfile(self.folder / name, dest)
+
+
+def _link_all(src: Path, dest: Path) -> None:
+    """Every file of ``src`` into ``dest``: hard links where the file system allows, else copies."""
+    import os
+    import shutil
+
+    for f in src.iterdir():
+        try:
+            os.link(f, dest / f.name)
+        except OSError:
+            shutil.copyfile(f, dest / f.name)
+
+
+def _build(model, case: PartCase, loads: list[UnitLoad], s: CheckSettings, solver: str, tmp: Path) -> None:
+    """Solve one support set's unit loads into ``tmp``: the float32 fields S, vm and U streamed
+    batch by batch, the free body's resultants, the mesh and the numbers of the basis."""
+    import json
+
+    from rigfem.errors import ComputeError
+    from rigfem.fe.cache import check_energy
+    from rigfem.fe.model import StaticProblem
+    from rigfem.fe.partcase import fe_load, lever_mm, relieved_cases, supports_of
     from rigfem.fe.supports import FreeBody
-    from rigfem.fe.tensors import von_mises
+    from rigfem.tensors import von_mises
     from rigfem.memory import trim_heap
 
     supports = supports_of(case)
     fe_loads = [fe_load(u) for u in loads]
-    if any(isinstance(x, FreeBody) for x in supports):
-        fe_loads = relieved_cases(model, fe_loads)[0]
-    shape = (len(loads), len(model.mesh.nodes), 6)
-    vm = np.empty(shape[:2], np.float32)
-    if folder is None:
-        S, out_file = np.empty(shape, np.float32), None
-    else:  # the fields go to their file batch by batch, never all in memory
-        out_file = open(_basis_file(folder, key, "S"), "wb")
-        np.lib.format.write_array_header_1_0(out_file, {"descr": "<f4", "fortran_order": False, "shape": shape})
-    factorised: dict = {}  # one factorisation for every batch the cache lacks
-    with out_file or contextlib.nullcontext():
+    free = any(isinstance(x, FreeBody) for x in supports)
+    R = scale = None
+    if free:
+        fe_loads, R, scale = relieved_cases(model, fe_loads)
+    fm, n = model.mesh, len(model.mesh.nodes)
+    problem = StaticProblem(model, supports, solver)
+    vm = np.empty((len(loads), n), np.float32)
+    files = {name: open(tmp / f"{name}.npy", "wb") for name in ("S", "U")}
+    with contextlib.ExitStack() as stack:
+        for name, shape in (("S", (len(loads), n, 6)), ("U", (len(loads), n, 3))):
+            stack.enter_context(files[name])
+            np.lib.format.write_array_header_1_0(files[name], {"descr": "<f4", "fortran_order": False, "shape": shape})
         for b in range(0, len(fe_loads), BASIS_BATCH):
-            sol = cached_solve(model, supports, fe_loads[b:b + BASIS_BATCH], solver=solver,
-                               factorised=factorised, store=store)
+            sol = problem.solve(fe_loads[b:b + BASIS_BATCH], last=b + BASIS_BATCH >= len(fe_loads))
+            why = check_energy(sol)
+            if why:
+                raise ComputeError(f"the unit solutions of part {model.part.name} cannot be right: {why}")
             vm[b:b + BASIS_BATCH] = von_mises(sol.nodal_stress)
-            if out_file is None:
-                S[b:b + BASIS_BATCH] = sol.nodal_stress
-            else:
-                sol.nodal_stress.astype("<f4").tofile(out_file)
+            sol.nodal_stress.astype("<f4").tofile(files["S"])
+            np.ascontiguousarray(sol.U.T.reshape(-1, n, 3), dtype="<f4").tofile(files["U"])
             del sol
-    del factorised
-    if out_file is not None:
-        S = _open_mapped(out_file.name)
-    basis = _reduce(key, loads, S, vm, model.volume * s.material.density * 1e3)
-    del S, vm
-    if folder is not None:
-        basis = mapped(basis, folder)
+    del problem
+    arrays = {"vm": vm, "nodes": fm.nodes, "elements": fm.elements.astype(np.int32),
+              "curved": fm.curved if fm.curved is not None else np.zeros(len(fm.elements), bool)}
+    if free:
+        arrays.update(R=R, scale=scale)
+    for name, a in arrays.items():
+        np.save(tmp / f"{name}.npy", a, allow_pickle=False)
+    (tmp / "basis.json").write_text(json.dumps({
+        "fe_mass": model.volume * s.material.density * 1e3, "lever": lever_mm(model), "order": fm.order,
+        "n_vertices": fm.n_vertices, "E": s.material.E, "nu": s.material.nu, "free": free,
+        "loads": [dataclasses.asdict(u) for u in loads]}))
     trim_heap()
-    return basis
 
 
-def _reduce(key: tuple, loads: list[UnitLoad], S: np.ndarray, vm: np.ndarray, fe_mass: float) -> UnitBasis:
-    """Index the unit loads and keep float32 fields and each field's top nodes."""
+def _load(entry, key: tuple, folder: Path | None) -> UnitBasis:
+    """The basis of an entry (a cache entry, or a freshly built folder): its large fields
+    memory-mapped from copies in ``folder`` if given, else read into memory."""
+    from rigfem.fe.assembly import FEMesh
+
+    info = entry.json("basis.json")
+    if folder is None:
+        big = {name: entry.array(name) for name in _FIELDS}
+    else:
+        big = {}
+        for name in _FIELDS:
+            dest = Path(folder) / f"basis_{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}_{name}.npy"
+            entry.copy(f"{name}.npy", dest)
+            big[name] = _open_mapped(str(dest))
+    mesh = FEMesh(entry.array("nodes"), entry.array("elements").astype(np.int64), {}, info["order"],
+                  info["n_vertices"], entry.array("curved"))
+    loads = [UnitLoad(u["kind"], u["group"], None if u["direction"] is None else tuple(u["direction"]),
+                      u["component"]) for u in info["loads"]]
+    free = info["free"]
+    return _reduce(key, loads, big, mesh, info, entry.array("R") if free else None,
+                   entry.array("scale") if free else None)
+
+
+def _reduce(key: tuple, loads: list[UnitLoad], big: dict, mesh, info: dict, R, scale) -> UnitBasis:
+    """Index the unit loads and keep each field's top nodes."""
     groups: dict[str, list] = {}
     inertia = {}
     for j, u in enumerate(loads):
@@ -322,76 +430,8 @@ def _reduce(key: tuple, loads: list[UnitLoad], S: np.ndarray, vm: np.ndarray, fe
     for name, lst in groups.items():
         lst.sort()
         g[name] = (np.array([a for a, _ in lst]), np.array([j for _, j in lst]))
+    vm = big["vm"]
     n_top = min(TOP_NODES, vm.shape[1])
-    top = np.argpartition(-vm, n_top - 1, axis=1)[:, :n_top]
-    return UnitBasis(key, loads, g, inertia, S.astype(np.float32, copy=False), vm.astype(np.float32, copy=False),
-                     top, fe_mass)
-
-
-def _columns(b: UnitBasis, u: UnitLoad, mass_ratio: float) -> list[tuple[int, float]]:
-    """Basis columns and weights that reproduce unit load ``u`` (direction split if needed)."""
-    if u.kind == "inertia":
-        return [(b.inertia[(u.component, tuple(u.direction))], mass_ratio)]
-    ang, cols = b.groups[u.group]
-    a = np.mod(np.arctan2(u.direction[1], u.direction[0]), 2 * np.pi)
-    diff = np.abs((ang - a + np.pi) % (2 * np.pi) - np.pi)
-    i = int(np.argmin(diff))
-    if diff[i] < 1e-9:
-        return [(int(cols[i]), 1.0)]
-    lo = int(np.searchsorted(ang, a)) - 1
-    i0, i1 = lo % len(ang), (lo + 1) % len(ang)
-    e0, e1 = np.array([np.cos(ang[i0]), np.sin(ang[i0])]), np.array([np.cos(ang[i1]), np.sin(ang[i1])])
-    w = np.linalg.solve(np.c_[e0, e1], [np.cos(a), np.sin(a)])
-    if (w < -1e-12).any() or (diff[i0] + diff[i1]) > np.pi / 2 + 1e-9:
-        raise InputError(f"bearing direction on {u.group} is not between two basis directions")
-    return [(int(cols[i0]), float(w[0])), (int(cols[i1]), float(w[1]))]
-
-
-def _row_peaks(C: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """Peak von Mises of every row of coefficients C (n, k) over the nodes of S (k, P, 6)."""
-    from rigfem.fe.tensors import von_mises
-
-    return np.concatenate([von_mises(np.tensordot(C[s:s + ROW_CHUNK], S, 1)).max(axis=1)
-                           for s in range(0, len(C), ROW_CHUNK)])
-
-
-def case_peak(b: UnitBasis, case: PartCase, exact: bool = False) -> tuple[float, float]:
-    """Peak von Mises (MPa) of a case over all rows, and its crank angle (deg): exact, by bounds.
-
-    Von Mises is a norm of the stress deviator, so at node p and any row of coefficients c,
-    vm(Σ c_k σ_k) ≤ Σ |c_k| vm(σ_k).  The rows are split into :data:`BOUND_GROUPS` groups,
-    each bounded per node with its largest |c_k|; the combination is evaluated at the
-    :data:`TOP_NODES` highest nodes of every unit field it uses (a lower bound of the peak),
-    then only at the nodes whose bound reaches that lower bound, group by group.  No node that
-    can hold the peak is skipped; ``exact=True`` evaluates every node (the tests' reference).
-    """
-    M = np.zeros((len(case.loads), len(b.loads)))
-    for i, u in enumerate(case.loads):
-        ratio = case.mass_kg / b.fe_mass if (u.kind == "inertia" and case.mass_kg) else 1.0
-        for j, w in _columns(b, u, ratio):
-            M[i, j] += w
-    C = case.coef @ M
-    used = np.flatnonzero(np.abs(C).max(axis=0) > 0)
-    if used.size == 0:
-        return 0.0, float(case.rows[0])
-    rows_peak = superposed_peaks(b, C[:, used].astype(np.float32), used, exact)
-    r = int(np.argmax(rows_peak))
-    return float(rows_peak[r]), float(case.rows[r])
-
-
-def superposed_peaks(b: UnitBasis, C: np.ndarray, used: np.ndarray, exact: bool = False) -> np.ndarray:
-    """Peak von Mises of each row of ``C`` (rows, len(used)) over the basis fields ``used``;
-    with bounds (see :func:`case_peak`) only the largest row's value is guaranteed exact."""
-    if exact:
-        return _row_peaks(C, b.S[used])
-    cand = np.unique(b.top[used])
-    rows_peak = _row_peaks(C, b.S[np.ix_(used, cand)])
-    floor = rows_peak.max() * (1 - 1e-4)  # float32 round-off margin
-    edges = np.linspace(0, len(C), min(BOUND_GROUPS, len(C)) + 1).astype(int)
-    cmax = np.stack([np.abs(C[a:e]).max(axis=0) for a, e in zip(edges[:-1], edges[1:])])
-    bound = cmax @ b.vm[used]  # (groups, N)
-    for g, (a, e) in enumerate(zip(edges[:-1], edges[1:])):
-        more = np.setdiff1d(np.flatnonzero(bound[g] >= floor), cand, assume_unique=True)
-        if more.size:
-            rows_peak[a:e] = np.maximum(rows_peak[a:e], _row_peaks(C[a:e], b.S[np.ix_(used, more)]))
-    return rows_peak
+    top = np.argpartition(-np.asarray(vm), n_top - 1, axis=1)[:, :n_top]
+    return UnitBasis(key, loads, g, inertia, big["S"], vm, top, big["U"], R, scale, mesh,
+                     (info["E"], info["nu"]), info["lever"], info["fe_mass"])

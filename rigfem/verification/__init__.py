@@ -8,9 +8,9 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "convergence": ["RATIO", "EXTEND", "AWAY_MM", "TARGETS", "StepSpec", "richardson", "h_levels", "run_step", "scene_cases", "study", "analyse",
+        "convergence": ["RATIO", "EXTEND", "AWAY_MM", "TARGETS", "StepSpec", "StudySpec", "richardson", "h_levels", "run_step", "scene_cases", "study", "analyse",
                         "to_json"],
-        "calculix": ["Comparison", "compare", "cross_check", "verify_scene"],
+        "calculix": ["Comparison", "compare", "cross_check", "verify_job"],
         "closed_form": ["kt_plate_hole", "plate_hole_peak_mpa"],
         "le10": ["solve_le10"],
     },
