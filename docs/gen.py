@@ -320,7 +320,8 @@ def moved_names() -> str:
              "from rigfem.sweep import SweepParams as New", "",
              "assert SweepParams is New",
              "print(caught[0].category.__name__, caught[0].message)", "```", "", "```text",
-             "DeprecationWarning rigfem.studies.SweepParams moved to rigfem.sweep.configs.SweepParams",
+             "DeprecationWarning rigfem.studies.SweepParams moved to rigfem.sweep.configs.SweepParams; "
+             "the old name goes in rigfem 0.3",
              "```", "", "## Modules", "", "| old module | new module |", "|---|---|",
              *(f"| `rigfem.studies.{a}` | `rigfem.{b}` |" for a, b in sorted(old.MODULES.items())), "",
              "## Names", "", "| `from rigfem.studies import …` | now in |", "|---|---|",
