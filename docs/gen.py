@@ -301,7 +301,7 @@ def scene_reference(notes: dict[str, str] | None = None) -> tuple[str, list[str]
         if path in seen:
             continue
         seen.add(path)
-        lines += [f'<a id="{_anchor(path)}"></a>', "", f"## [{path}]", "", _rst(d.get("description", "")), "",
+        lines += [f'<a id="{_anchor(path)}"></a>', "", f"## [{html.escape(path)}]", "",  # <name>: text, not a tag _rst(d.get("description", "")), "",
                   *_table(path, d, defs, list(d["properties"]), notes, missing), ""]
     return "\n".join(lines), missing
 

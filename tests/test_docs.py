@@ -78,6 +78,8 @@ def test_site_builds_strict(site):
         assert (site / page).is_file(), f"the site lacks {page}"
     cli = (site / "reference/cli/index.html").read_text()
     assert "rigfem check" in cli and "--fidelity" in cli
+    scene = (site / "reference/scene/index.html").read_text()
+    assert re.search(r"<h2[^>]*>\[linkage\.bodies\.&lt;name&gt;\]", scene), "a heading lost its <name>"
 
 
 def test_no_page_shows_raw_markup(site):
