@@ -375,10 +375,11 @@ def gallery() -> dict[str, str]:
     return pages
 
 
-def pages() -> dict[str, str]:
-    """Every generated page: path under docs/ -> Markdown."""
+def pages(strict: bool = True) -> dict[str, str]:
+    """Every generated page: path under docs/ -> Markdown (``strict``: a scene key without a note is an error,
+    as the build has it; the tests read the pages without it and name the key in their own test)."""
     scene, missing = scene_reference()
-    if missing:
+    if missing and strict:
         raise RuntimeError("docs/gen.py: the scene schema has keys without a note in SCENE_NOTES: "
                            + ", ".join(missing))
     return {"reference/cli.md": cli_reference(), "reference/scene.md": scene, "reference/moved.md": moved_names(),
