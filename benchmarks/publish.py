@@ -290,7 +290,9 @@ def spans(recs: dict[str, dict]) -> dict[str, str]:
     p, mt, k, conv = recs.get("perf", {}), recs.get("malloc_trim"), recs.get("kinematics"), recs.get("convergence")
     out = {"sweep-2": _missing("perf"), "malloc-trim": _missing("malloc_trim"),
            "kinematics-ms": f"({_missing('kinematics')})",
-           "p1-low": "(not measured yet: run `rigfem convergence PART` for each reference part)"}
+           "p1-low": "(not measured yet: run `rigfem convergence PART` for each reference part)",
+           "coupler-cycle": "(not measured yet: run `rigfem convergence coupler_rail`)",
+           "coupler-levels": "(not measured yet: run `rigfem convergence coupler_rail`)"}
     if {"sweep cold", "sweep warm"} <= set(p.get("summary", {})):  # the performance table's figure, quoted
         out["sweep-2"] = (f"{hms(med(p, 'sweep cold'))} cold, {med(p, 'sweep warm'):.1f} s with warm caches "
                           f"([performance](../performance.md#goals))")
@@ -302,7 +304,22 @@ def spans(recs: dict[str, dict]) -> dict[str, str]:
         out["kinematics-ms"] = f"{k['derived']['total ms']:.1f} ms"
     if conv:
         out["p1-low"] = _p1_low(conv)
+        out |= _not_converging(conv)
+    b = recs.get("band_coverage")
+    out["band-draft-factor"] = (f"{b['coverage']['draft']['largest_required_factor']:.2f}" if b else
+                                f"(not measured yet: run `{COMMANDS['band_coverage']}`)")
     return out
+
+
+def _not_converging(conv: dict[str, dict]) -> dict[str, str]:
+    """The coupler rail's cycle-mode peak, which does not converge: its finest value against the limit, and
+    the sequence over the h levels (results/convergence/coupler_rail.json)."""
+    from rigfem.material import get_material  # the limit: σu/2 of the rig steel
+
+    hs = [st["modes"]["cycle"]["peak_mpa"] for st in conv["coupler_rail"]["steps"] if st["kind"] == "h"]
+    limit = get_material("rig_steel").sigma_u / 2
+    return {"coupler-cycle": f"{hs[-1]:.1f} MPa, {100 * hs[-1] / limit:.0f} % of the limit",
+            "coupler-levels": " → ".join(f"{v:.2f}" for v in hs) + " MPa"}
 
 
 def blocks(recs: dict[str, dict]) -> dict[str, str]:
