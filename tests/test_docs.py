@@ -140,16 +140,38 @@ def test_a_key_without_a_note_is_caught():
 BLOCKS = all_blocks()
 PYTHON = [b for b in BLOCKS if b.lang == "python"]
 TOML = [b for b in BLOCKS if b.lang == "toml"]
-#: a stand-in for dask-jobqueue's SLURMCluster (no batch system here): a local cluster of at most 2 workers
-SLURM_STUB = '''from distributed import LocalCluster
+#: a stand-in for dask-jobqueue's SLURMCluster (no batch system here): a scheduler on loopback in the snippet's
+#: process, and each "job" a `dask worker` process, as a batch job would start it (at most 2 here)
+SLURM_STUB = '''import atexit, os, shutil, signal, subprocess, sys
+from pathlib import Path
+
+from distributed import LocalCluster
+
+DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 
 
 class SLURMCluster(LocalCluster):
     def __init__(self, cores=1, processes=1, memory="4GiB", walltime=None):
-        super().__init__(n_workers=0, processes=False, threads_per_worker=cores, memory_limit=memory)
+        super().__init__(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1", dashboard_address=None)
+        self.cores, self.memory, self.jobs = cores, memory, []
+        atexit.register(self.end_jobs)
 
-    def scale(self, n=None, jobs=0, **kw):
-        return super().scale(min(jobs or n or 0, 2))
+    def scale(self, n=None, jobs=0, **kw):  # the jobs have started: their workers are there when it returns
+        k = min(jobs or n or 0, 2)
+        for i in range(len(self.jobs), k):
+            self.jobs.append(subprocess.Popen(
+                [DASK, "worker", self.scheduler_address, "--nthreads", str(self.cores), "--memory-limit",
+                 self.memory, "--host", "127.0.0.1", "--no-dashboard", "--name", f"job{i}"],
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
+        if k:
+            self.wait_for_workers(k, timeout=120)
+        return k
+
+    def end_jobs(self):
+        for p in self.jobs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+                p.wait(timeout=30)
 '''
 #: snippets that need more than a temporary folder: (first line that names the snippet) -> (why, files it needs,
 #: heavy). A heavy snippet runs with the heavy tests (CI's second run), never skipped.
