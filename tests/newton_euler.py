@@ -34,13 +34,10 @@ def _bar(L_mm, particles, e, w, al, a_pivot, g):
     return force, moment + m_rail * (L_mm / 1000.0) ** 2 / 12 * al
 
 
-def fourbar_newton_euler(b2, b3, b4, d, theta2_deg, speed_hz=1.0, gravity=(0.0, 0.0), branch=+1,
-                         rails_mm=RAILS_MM):
-    """Pin forces (N, complex x + iy) and motor torque (N·m) of the rig four-bar at one crank angle.
-
-    Forces: ``O2``/``O4`` of the ground on the crank/rocker, ``A`` of the crank on the coupler,
-    ``B`` of the coupler on the rocker.  Also the joints' positions (mm, complex).  ``branch`` +1
-    is the open assembly."""
+def fourbar_motion(b2, b3, b4, d, theta2_deg, speed_hz=1.0, branch=+1) -> dict:
+    """The rig four-bar's motion at one crank angle (SI: m, rad/s, rad/s², m/s², complex x + iy):
+    unit vectors ``e`` of the crank, coupler and rocker (O2→A, A→B, O4→B), their ``w`` and ``al``,
+    the joints ``A``, ``B``, ``O4`` and the acceleration ``aA`` of A.  ``branch`` +1 is the open assembly."""
     b2, b3, b4, d = (x / 1000.0 for x in (b2, b3, b4, d))
     th2, w2, a2 = np.radians(theta2_deg), 2 * np.pi * speed_hz, 0.0
     e2 = np.exp(1j * th2)
@@ -56,10 +53,25 @@ def fourbar_newton_euler(b2, b3, b4, d, theta2_deg, speed_hz=1.0, gravity=(0.0, 
     w3, w4 = np.linalg.solve(M, [rhs.real, rhs.imag])
     rhs = -(1j * a2 - w2**2) * b2 * e2 + w3**2 * b3 * e3 - w4**2 * b4 * e4
     a3, a4 = np.linalg.solve(M, [rhs.real, rhs.imag])
+    return {"e": (e2, e3, e4), "w": (w2, w3, w4), "al": (a2, a3, a4), "A": A, "B": B, "O4": O4,
+            "aA": b2 * (1j * a2 - w2**2) * e2, "lengths": (b2, b3, b4)}
+
+
+def fourbar_newton_euler(b2, b3, b4, d, theta2_deg, speed_hz=1.0, gravity=(0.0, 0.0), branch=+1,
+                         rails_mm=RAILS_MM):
+    """Pin forces (N, complex x + iy) and motor torque (N·m) of the rig four-bar at one crank angle.
+
+    Forces: ``O2``/``O4`` of the ground on the crank/rocker, ``A`` of the crank on the coupler,
+    ``B`` of the coupler on the rocker.  Also the joints' positions (mm, complex).  ``branch`` +1
+    is the open assembly."""
+    k = fourbar_motion(b2, b3, b4, d, theta2_deg, speed_hz, branch)
+    (e2, e3, e4), (w2, w3, w4), (a2, a3, a4) = k["e"], k["w"], k["al"]
+    A, B, O4 = k["A"], k["B"], k["O4"]
+    b2, b3, b4 = k["lengths"]
     g = complex(*gravity) / 1000.0
     L2, L3, L4 = rails_mm
     crank = _bar(L2, [(PLATE + CARRIAGE, b2)], e2, w2, a2, 0, g)
-    coupler = _bar(L3, [(COUPLING, 0.0), (PLATE + CARRIAGE, b3)], e3, w3, a3, b2 * (1j * a2 - w2**2) * e2, g)
+    coupler = _bar(L3, [(COUPLING, 0.0), (PLATE + CARRIAGE, b3)], e3, w3, a3, k["aA"], g)
     rocker = _bar(L4, [(COUPLING, b4)], e4, w4, a4, 0, g)
     rA, rB3, rB4 = b2 * e2, b3 * e3, b4 * e4
     K = np.zeros((9, 9))  # unknowns O2x O2y Ax Ay Bx By O4x O4y T
