@@ -122,3 +122,43 @@ def newton_euler_peak(solution, lengths, joint, speed_hz=1.0):
     t0 = grid[int(np.argmax([f(t) for t in grid]))]
     r = minimize_scalar(lambda t: -f(t), bounds=(t0 - 0.5, t0 + 0.5), method="bounded", options={"xatol": 1e-9})
     return -r.fun, float(r.x % 360.0)
+
+
+STUDY_RAIL_KG_M = 2.7  # the 2013 study's rail linear mass (RIG.md §3)
+
+
+def study_program(b2, b3, b4, d, theta2_deg, speed_hz=1.0, rails_mm=RAILS_MM, branch=+1):
+    """The 2013 study's dynamics program at one crank angle, written from RIG.md §3's description,
+    quirks included: each guide mass m_i = 2.7 kg/m · L_i is given the acceleration of the bar's
+    combined centre of mass xG_i = (L_i/2 m_i + b_i mp_i)/(m_i + mp_i) (mp_i the point mass at its
+    far end), the point masses are added again with their joints' accelerations; bar 3's moment
+    balance about xG... with lever arms L3/2 (R23) and b3 − L3/2 (R34) and (m3 b3²/12 + coupling·xG3²
+    + (plate + carriage)(b3 − xG3)²)·α3; bar 4 about O4 with (m4 b4²/3 + coupling·b4²)·α4; bar 2
+    without inertial moment.  Returns the forces (N, complex): ``O2`` ground on crank, ``A`` crank
+    on coupler, ``B`` coupler on rocker, ``O4`` ground on rocker, and the motor torque (N·m)."""
+    k = fourbar_motion(b2, b3, b4, d, theta2_deg, speed_hz, branch)
+    (e2, e3, e4), (w2, w3, w4), (_, a3, a4) = k["e"], k["w"], k["al"]
+    b2, b3, b4 = k["lengths"]
+    L2, L3, L4 = (x / 1000.0 for x in rails_mm)
+    m2, m3, m4 = (STUDY_RAIL_KG_M * L for L in (L2, L3, L4))
+    mp2, mA3, mp3, mp4 = PLATE + CARRIAGE, COUPLING, PLATE + CARRIAGE, COUPLING
+    xg2, xg3, xg4 = ((L / 2 * m + b * mp) / (m + mp) for L, m, b, mp in ((L2, m2, b2, mp2), (L3, m3, b3, mp3),
+                                                                      (L4, m4, b4, mp4)))
+    aA = k["aA"]
+    aB = aA + b3 * (1j * a3 - w3**2) * e3
+    F2 = m2 * xg2 * (-(w2**2)) * e2 + mp2 * aA
+    F3 = m3 * (aA + xg3 * (1j * a3 - w3**2) * e3) + mA3 * aA + mp3 * aB
+    F4 = m4 * xg4 * (1j * a4 - w4**2) * e4 + mp4 * aB
+    I3 = m3 * b3**2 / 12 + mA3 * xg3**2 + mp3 * (b3 - xg3) ** 2
+    I4 = m4 * b4**2 / 3 + mp4 * b4**2
+    rA3, rB3, rA2, rB4 = -L3 / 2 * e3, (b3 - L3 / 2) * e3, b2 * e2, b4 * e4
+    K = np.zeros((9, 9))  # unknowns O2x O2y Ax Ay Bx By O4x O4y T
+    K[0, [0, 2]], K[1, [1, 3]], K[2, [2, 3, 8]] = (1, -1), (1, -1), (rA2.imag, -rA2.real, 1.0)  # M2 + rA2 × (−A) = 0
+    K[3, [2, 4]], K[4, [3, 5]] = (1, -1), (1, -1)
+    K[5, [2, 3, 4, 5]] = (-rA3.imag, rA3.real, rB3.imag, -rB3.real)  # rA3 × A + rB3 × (−B) = I3 α3
+    K[6, [4, 6]], K[7, [5, 7]], K[8, [4, 5]] = (1, 1), (1, 1), (-rB4.imag, rB4.real)  # rB4 × B = I4 α4
+    f = np.array([F2.real, F2.imag, 0.0, F3.real, F3.imag, I3 * a3, F4.real, F4.imag, I4 * a4])
+    x = np.linalg.solve(K, f)
+    return ({"O2": complex(x[0], x[1]), "A": complex(x[2], x[3]), "B": complex(x[4], x[5]),
+             "O4": complex(x[6], x[7])}, float(x[8]), {"O2": 0j, "A": k["A"] * 1000, "B": k["B"] * 1000,
+                                                       "O4": k["O4"] * 1000})
