@@ -58,7 +58,7 @@ FE_TESTS = ["tests/test_fe_closed_form.py", "tests/test_fe_cantilever.py", "test
 PACKAGES = {
     "verdict": {"mutate": ["rigfem/verdict/*"],
                 "tests": ["tests/test_verdict.py", "tests/test_trust.py::test_criterion_never_passes_unloaded_or_unbalanced",
-                          "tests/test_verdict_truths.py",
+                          "tests/test_verdict_truths.py", "tests/test_report_entry_truths.py",
                           "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures[plates]"]},
     "loads": {"mutate": ["rigfem/loads/*"],
               "tests": ["tests/test_loadcases.py", "tests/test_physics_truths.py", "tests/test_load_cases_truths.py"]},
@@ -80,21 +80,30 @@ def mutmut_table(pkg: str) -> str:
     return "[tool.mutmut]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())
 
 
-def run_package(pkg: str, work: Path, children: int) -> dict:
+def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> dict:
     d = work / pkg
+    if resume and (d / "mutants").is_dir():  # mutmut keeps the results it has: it runs the rest
+        return _mutmut(d, children)
     scratch_copy(d)
     text = (d / "pyproject.toml").read_text()
     text = re.sub(r"\n\[tool\.mutmut\]\n(?:(?!\n\[).)*", "\n", text, flags=re.S)  # the package's table instead
     (d / "pyproject.toml").write_text(text.rstrip("\n") + "\n\n" + mutmut_table(pkg))
+    return _mutmut(d, children)
+
+
+def _mutmut(d: Path, children: int) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    env.update(RIGFEM_CACHE=NO_CACHE, NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg")
+    env.update(RIGFEM_CACHE=NO_CACHE, NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
+               **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"))
     t0 = time.time()
-    with open(d / "mutmut.log", "w") as log:
+    with open(d / "mutmut.log", "a") as log:
         rc = subprocess.run(["nice", "-n", "10", "mutmut", "run", "--max-children", str(children)],
                             cwd=d, env=env, stdout=log, stderr=subprocess.STDOUT).returncode
-    seconds = time.time() - t0
+    spent = d / "seconds.txt"  # an interrupted run's time counts too
+    seconds = time.time() - t0 + (float(spent.read_text()) if spent.exists() else 0.0)
+    spent.write_text(f"{seconds:.1f}")
     if rc != 0:
-        raise SystemExit(f"mutmut run failed for {pkg} (exit {rc}): see {d / 'mutmut.log'}")
+        raise SystemExit(f"mutmut run failed in {d} (exit {rc}): see {d / 'mutmut.log'}")
     return {"seconds": round(seconds, 1)}
 
 
@@ -192,7 +201,8 @@ def summarise(pkg: str, d: Path, meta: dict) -> dict:
         if status == "killed":
             continue
         cat = category(patch)
-        why = fates.get("equivalent", {}).get(name, "") or equivalent_edit(patch)
+        why = (fates.get("equivalent", {}).get(name, "") or equivalent_edit(patch)
+               or next((w for f, w in fates.get("dead_code", {}).items() if name.startswith(f + "__mutmut_")), ""))
         fate = "text" if cat == "text" else ("equivalent" if why else "open")
         not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
     text = sum(1 for m in not_killed if m["fate"] == "text")
@@ -260,6 +270,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workdir", type=Path, default=Path("/tmp/rigfem-mutmut"))
     ap.add_argument("--max-children", type=int, default=1)
     ap.add_argument("--report", action="store_true", help="rewrite the record from the last runs in --workdir")
+    ap.add_argument("--resume", action="store_true", help="continue an interrupted run in --workdir (its copy as it is)")
     a = ap.parse_args(argv)
     pkgs = a.packages or list(PACKAGES)
     if set(pkgs) - set(PACKAGES):
@@ -268,7 +279,7 @@ def main(argv: list[str] | None = None) -> int:
     for pkg in pkgs:
         meta = {}
         if not a.report:
-            meta = run_package(pkg, a.workdir, a.max_children)
+            meta = run_package(pkg, a.workdir, a.max_children, a.resume)
         else:
             prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
             meta = {"seconds": prev.get("seconds")}
