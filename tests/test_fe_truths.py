@@ -101,7 +101,7 @@ def test_the_peak_sweep_is_the_brute_force_maximum(chunk):
     assert np.array_equal(peak_von_mises(np.zeros((2, 5)), S)[0], [0.0, 0.0])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test: mutation testing credits the mesh to every test that builds it
 def holed():
     part = bar_with_holes(60.0, 30.0, 8.0, 5.0, [30.0], size=4.0, h_hole=1.0)
     return part, fe_mesh(part, 2)

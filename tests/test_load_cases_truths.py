@@ -39,7 +39,7 @@ def hole(x_mm: float) -> str:
     return f"hole_{int(round((x_mm - FIRST) / PITCH)):02d}"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture  # per test (not per module): mutation testing credits a load case to every test that builds it
 def cases():
     h = simulate(four_bar(*FINAL_CM), samples=36)
     s = check_settings({"bearing_directions": N_DIR}, "four-bar", list(RAILS_MM))
@@ -137,6 +137,7 @@ def test_original_cases_say_what_the_study_did(cases):
     assert [ld.direction for ld in post.loads] == [pytest.approx((2**-0.5, 2**-0.5, 0.0))] * 4
     for c in (crank, plate, post):
         assert c.notes == [NOTES[c.name]], c.name
+        assert {ld.kind for ld in c.loads} == {"bearing"}, c.name
     assert abs(peak - 420.06304793087634) < 1e-6  # the committed report's peak A reaction
 
 
@@ -146,15 +147,22 @@ def test_a_history_without_evaluator_loads_the_nearest_sample():
     h = simulate(four_bar(*FINAL_CM), samples=72)
     bare = dataclasses.replace(h, evaluator=None)
     pk = peaks(h)
-    s = check_settings({"modes": ["original"], "parts": ["crank_rail", "plate_A"]}, "four-bar", list(RAILS_MM))
+    s = check_settings({"modes": ["original"], "parts": ["crank_rail", "plate_A", "rocker_rail"]}, "four-bar",
+                       list(RAILS_MM))
     got = {c.name: c for _, c in part_cases(bare, pk, s)}
-    near = h.crank_deg[np.argmin(np.abs((h.crank_deg - pk["A"]["crank_deg"] + 180) % 360 - 180))]
-    F, _, _ = fourbar_newton_euler(*FINAL_CM, near)
-    d = -F["A"] * np.conj(fourbar_motion(*FINAL_CM, near)["e"][0])
-    for c in got.values():
-        assert list(c.rows) == [near], c.name
-        assert np.allclose(c.loads[0].direction, [d.real / abs(d), d.imag / abs(d), 0.0], atol=1e-12), c.name
+    for name, joint, bar in (("crank_rail", "A", 0), ("plate_A", "A", 0), ("rocker_rail", "B", 2)):
+        near = h.crank_deg[np.argmin(np.abs((h.crank_deg - pk[joint]["crank_deg"] + 180) % 360 - 180))]
+        F, _, _ = fourbar_newton_euler(*FINAL_CM, near)
+        d = (F[joint] if name == "rocker_rail" else -F[joint]) * np.conj(fourbar_motion(*FINAL_CM, near)["e"][bar])
+        c = got[name]
+        assert list(c.rows) == [near], name
+        assert np.allclose(c.loads[0].direction, [d.real / abs(d), d.imag / abs(d), 0.0], atol=1e-12), name
     assert np.allclose(got["plate_A"].coef, 1.4 * pk["A"]["force_N"], rtol=1e-12)
+    c = part_cases(bare, {**pk, "A": {**pk["A"], "crank_deg": 2.6}}, s)[0][1]
+    assert list(c.rows) == [5.0]  # 2.4° from 5°, 2.6° from 0°
+    nowhere = dataclasses.replace(bare, joints={n: dataclasses.replace(j, position_mm=None) for n, j in bare.joints.items()})
+    with pytest.raises(InputError, match="no joint positions"):
+        part_cases(nowhere, pk, s)
     near_zero = dataclasses.replace(h, evaluator=None, crank_deg=(h.crank_deg + 355.0) % 360.0)  # wraps round 360°
     c = part_cases(near_zero, {**pk, "A": {**pk["A"], "crank_deg": 1.0}}, s)[0][1]
     assert list(c.rows) == [0.0]
