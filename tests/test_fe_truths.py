@@ -26,6 +26,7 @@ from rigfem.fe.tensors import peak_von_mises, principal
 from rigfem.material import get_material
 
 STEEL = get_material("rig_steel")
+E_NU_LAME = (STEEL.E * STEEL.nu / ((1 + STEEL.nu) * (1 - 2 * STEEL.nu)), STEEL.E / (2 * (1 + STEEL.nu)))  # λ, μ
 
 
 @pytest.mark.parametrize("degree", [1, 2, 3, 4])  # the rules rigfem uses: 2 (order − 1), 3
@@ -169,3 +170,34 @@ def test_boundary_nodes_of_a_box_are_those_on_its_faces():
     assert set(sol.surfaces_of(corner)) == {"xmax", "ymax", "zmax"}
     inner = np.flatnonzero(~on_face)
     assert len(inner) and sol.surfaces_of(int(inner[0])) == ()
+
+
+def test_principal_stresses_of_stacked_fields():
+    """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
+    rng = np.random.default_rng(11)
+    s = rng.normal(0, 50, (3, 40, 6))
+    p = principal(s)
+    assert p.shape == (3, 40, 3)
+    flat = principal(s.reshape(-1, 6)).reshape(3, 40, 3)
+    assert np.allclose(p, flat) and np.all(np.diff(p, axis=-1) <= 0)
+    assert np.allclose(von_mises(s), von_mises(s.reshape(-1, 6)).reshape(3, 40))
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_stress_at_the_quadrature_points_of_a_uniform_strain(order):
+    """u = ε x (two strain states at once): Hooke's uniform stress at each of the stiffness rule's
+    points (degree 2(order − 1): 1 point for P1, 4 for P2), which lie where the rule puts them."""
+    from rigfem.fe.stress import element_node_stress, quadrature_stress
+
+    fm = fe_mesh(box(20.0, 10.0, 10.0, 2, 1, 1, jitter=0.2), order)
+    eps = [np.array([[1e-3, 2e-4, 0], [2e-4, -3e-4, 1e-4], [0, 1e-4, 5e-4]]), np.diag([0.0, 0.0, 1e-3])]
+    U = np.stack([(fm.nodes @ e.T).ravel() for e in eps], axis=1)
+    lam, mu = E_NU_LAME
+    S, X = quadrature_stress(fm, STEEL.E, STEEL.nu, U)
+    L, _ = tet_quadrature(2 * (order - 1))
+    assert S.shape == (len(fm.elements), len(L), 2, 6) and np.allclose(X, points_at(fm, L))
+    for k, e in enumerate(eps):
+        sig = lam * np.trace(e) * np.eye(3) + 2 * mu * e
+        voigt = [sig[0, 0], sig[1, 1], sig[2, 2], sig[0, 1], sig[1, 2], sig[0, 2]]
+        assert np.allclose(S[:, :, k], voigt, rtol=1e-10, atol=1e-9)
+        assert np.allclose(element_node_stress(fm, STEEL.E, STEEL.nu, U)[:, :, k], voigt, rtol=1e-10, atol=1e-9)
