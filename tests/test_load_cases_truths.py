@@ -175,7 +175,7 @@ def test_mirrored_peaks_are_all_loaded_and_a_toggle_is_refused():
     (_, rod), = part_cases(h, peaks(h), s)
     assert len(rod.rows) == 2 and rod.rows[0] + rod.rows[1] == pytest.approx(360.0)
     assert rod.coef.shape == (2, 4) and np.count_nonzero(rod.coef) == 4
-    assert "(equal peaks: the worst is checked)" in rod.notes[0]
+    assert f"at crank {rod.rows[0]:.2f}° and {rod.rows[1]:.2f}° (equal peaks: the worst is checked), split" in rod.notes[0]
     pk = peaks(h)
     for bad in ({**pk["B"], "singular": True}, {**pk["B"], "force_N": None}):
         with pytest.raises(InputError, match="toggle"):

@@ -210,9 +210,11 @@ def summarise(pkg: str, d: Path, meta: dict) -> dict:
         cat = category(patch)
         why = (fates.get("equivalent", {}).get(name, "") or equivalent_edit(patch)
                or next((w for f, w in fates.get("dead_code", {}).items() if name.startswith(f + "__mutmut_")), ""))
-        fate = "text" if cat == "text" else ("equivalent" if why else "open")
+        infra = next((w for f, w in fates.get("not_numerical", {}).items() if name.startswith(f + "__mutmut_")), "")
+        fate = "text" if cat == "text" else "equivalent" if why else "not numerical" if infra else "open"
+        why = why or infra
         not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
-    text = sum(1 for m in not_killed if m["fate"] == "text")
+    text = sum(1 for m in not_killed if m["fate"] in ("text", "not numerical"))
     total = len(res)
     killed = counts.get("killed", 0) + counts.get("timeout", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
@@ -221,6 +223,7 @@ def summarise(pkg: str, d: Path, meta: dict) -> dict:
             "counts": counts, "total": total,
             "score_mutmut_pct": round(100 * killed / total, 1) if total else None,
             "text_mutants": text, "equivalent": equivalent,
+            "open": sum(1 for m in not_killed if m["fate"] == "open"),
             "score_physics_pct": round(100 * killed / physics_total, 1) if physics_total else None,
             "not_killed": not_killed}
 
@@ -250,9 +253,13 @@ def _version(pkg: str) -> str | None:
 def markdown(rec: dict) -> str:
     lines = ["# Mutation testing of the numerical core (mutmut)", "",
              "Written by `tools/mutation_testing.py` from its runs (the command of each package below); "
-             "the raw record is `mutmut.json`.  *physics score* = killed / (all − message-text mutants − "
-             "mutants argued equivalent); every mutant not killed is listed with its fate.", "",
-             "| package | mutated | mutants | killed | survived | no tests | timeout | text | equivalent | mutmut score | physics score | date, commit | command |",
+             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout) / all, mutmut's own.  "
+             "*physics score* = killed / (all − mutants that only change a message's text − mutants of "
+             "code no number depends on (tools/mutation_fates.toml [not_numerical]) − mutants argued "
+             "equivalent).  Every mutant not killed but for message text is listed below with its fate: "
+             "`equivalent` (with the argument), `not numerical` (why), or `open` (a test could kill it; "
+             "none does yet).", "",
+             "| package | mutated | mutants | killed | survived | no tests | timeout | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
     for pkg, p in rec["packages"].items():
         c = p["counts"]
