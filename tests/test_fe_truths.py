@@ -1,0 +1,203 @@
+"""FE building blocks against mathematics and closed forms (issue 39: the fe package's mutants).
+
+* Quadrature: the tetrahedron and triangle rules integrate monomials exactly (∫ L1^a L2^b L3^c
+  = a! b! c! / (a+b+c+n)! · n! |T|, the barycentric moment formula); P2 shape functions are 1
+  at their node, 0 at the others, and sum to 1; a mesh's volume and its quadrature points are
+  the box's.
+* Invariants: von Mises from the principal stresses, principal stresses' sum and product are the
+  trace and determinant; the chunked peak sweep equals the brute-force maximum over every node.
+* A shaft in a hole (elastic foundation, radial modulus E/r, tangential and axial 1e-3 of it):
+  a rigid translation u of the wall is resisted by (k_r + k_t)·π r h·u across the axis and
+  k_a·2π r h·u along it; a rigid rotation about the axis by k_t·2π r³ h.
+* Boundary corner nodes of a box are those on its faces (and every mid-edge node on a face); a solution kept to some combinations answers
+  every figure of them as before; resultants are Σ f and Σ x × f.
+"""
+
+from math import factorial
+
+import numpy as np
+import pytest
+from fe_shapes import bar_with_holes, box
+
+from rigfem.fe import Fixed, FreeBody, ShaftInHole, SurfaceForce, build_model, fe_mesh, solve
+from rigfem.fe.assembly import NODE_BARY, points_at, shape_values, tet_quadrature, tri_quadrature, volume
+from rigfem.fe.supports import shaft_springs, surface_quadrature
+from rigfem.tensors import peak_von_mises, principal, von_mises
+from rigfem.material import get_material
+
+STEEL = get_material("rig_steel")
+E_NU_LAME = (STEEL.E * STEEL.nu / ((1 + STEEL.nu) * (1 - 2 * STEEL.nu)), STEEL.E / (2 * (1 + STEEL.nu)))  # λ, μ
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 4])  # the rules rigfem uses: 2 (order − 1), 3
+def test_tetrahedron_rules_integrate_monomials_exactly(degree):
+    L, W = tet_quadrature(degree)
+    assert W.sum() == pytest.approx(1 / 6, rel=1e-13) and np.allclose(L.sum(1), 1.0)
+    for a in range(degree + 1):
+        for b in range(degree + 1 - a):
+            c = degree - a - b
+            exact = factorial(a) * factorial(b) * factorial(c) * factorial(3) / factorial(a + b + c + 3) / 6
+            assert (L[:, 1] ** a * L[:, 2] ** b * L[:, 3] ** c) @ W == pytest.approx(exact, rel=1e-12), (a, b, c)
+
+
+@pytest.mark.parametrize("degree", [1, 2, 4, 6])
+def test_triangle_rules_integrate_monomials_exactly(degree):
+    L, W = tri_quadrature(degree)
+    assert W.sum() == pytest.approx(0.5, rel=1e-13) and np.allclose(L.sum(1), 1.0)
+    for a in range(degree + 1):
+        b = degree - a
+        exact = factorial(a) * factorial(b) * factorial(2) / factorial(a + b + 2) / 2
+        assert (L[:, 1] ** a * L[:, 2] ** b) @ W == pytest.approx(exact, rel=1e-12), (a, b)
+
+
+def test_p2_shape_functions_are_nodal_and_a_partition_of_unity():
+    assert np.allclose(shape_values(NODE_BARY, 2), np.eye(10), atol=1e-15)
+    assert np.allclose(shape_values(NODE_BARY[:4], 1), np.eye(4))
+    L, _ = tet_quadrature(4)
+    assert np.allclose(shape_values(L, 2).sum(1), 1.0)
+    tri = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0.5, 0.5, 0], [0, 0.5, 0.5], [0.5, 0, 0.5]], float)
+    assert np.allclose(shape_values(tri, 2), np.eye(6), atol=1e-15)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_a_box_mesh_has_the_box_volume_and_points_inside(order):
+    fm = fe_mesh(box(30.0, 20.0, 10.0, 3, 2, 1, jitter=0.2), order)
+    assert volume(fm) == pytest.approx(6000.0, rel=1e-12)
+    L, W = tet_quadrature(2)
+    pts = points_at(fm, L)
+    assert pts.min() >= -1e-12 and (pts.max(axis=(0, 1)) <= [30.0 + 1e-12, 20.0 + 1e-12, 10.0 + 1e-12]).all()
+    centroid = (pts * W[None, :, None]).sum((0, 1)) / W.sum() / len(fm.elements)
+    assert centroid == pytest.approx([15.0, 10.0, 5.0], rel=1e-9)  # equal-volume elements' mean: not exact
+
+
+def test_principal_stresses_and_von_mises_are_the_invariants():
+    rng = np.random.default_rng(7)
+    s = rng.normal(0, 100, (50, 6))
+    p = principal(s)
+    T = np.stack([np.stack([s[:, 0], s[:, 3], s[:, 5]], -1), np.stack([s[:, 3], s[:, 1], s[:, 4]], -1),
+                  np.stack([s[:, 5], s[:, 4], s[:, 2]], -1)], -2)
+    assert np.all(p[:, 0] >= p[:, 1]) and np.all(p[:, 1] >= p[:, 2])
+    assert np.allclose(p.sum(1), s[:, :3].sum(1)) and np.allclose(p.prod(1), np.linalg.det(T))
+    vm = np.sqrt(((p[:, 0] - p[:, 1]) ** 2 + (p[:, 1] - p[:, 2]) ** 2 + (p[:, 2] - p[:, 0]) ** 2) / 2)
+    assert np.allclose(von_mises(s), vm)
+    assert von_mises(np.array([0.0, 0, 0, 0, 0, 40.0])) == pytest.approx(40 * np.sqrt(3))
+    assert von_mises(np.array([0.0, 0, 0, 0, 40.0, 0])) == pytest.approx(40 * np.sqrt(3))
+    assert von_mises(np.array([0.0, 50.0, 0, 0, 0, 0])) == pytest.approx(50.0)
+    assert von_mises(np.array([0.0, 0, 60.0, 0, 0, 0])) == pytest.approx(60.0)
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 8])
+def test_the_peak_sweep_is_the_brute_force_maximum(chunk):
+    rng = np.random.default_rng(3)
+    S = rng.normal(0, 1, (5, 400, 6))
+    S[2] *= 10  # one dominant field
+    C = rng.normal(0, 1, (23, 5))
+    C[4] = 0.0  # a row without load
+    C[:, 3] = 0.0  # a load no row uses
+    vals, nodes = peak_von_mises(C, S, chunk=chunk)
+    brute = von_mises(np.tensordot(C, S, 1))
+    assert np.allclose(vals, brute.max(1), rtol=1e-12) and np.array_equal(nodes[C.any(1)], brute.argmax(1)[C.any(1)])
+    assert vals[4] == 0.0
+    assert np.allclose(peak_von_mises(C, S, von_mises(S), chunk)[0], vals)
+    assert np.array_equal(peak_von_mises(np.zeros((2, 5)), S)[0], [0.0, 0.0])
+
+
+@pytest.fixture  # per test: mutation testing credits the mesh to every test that builds it
+def holed():
+    part = bar_with_holes(60.0, 30.0, 8.0, 5.0, [30.0], size=4.0, h_hole=1.0)
+    return part, fe_mesh(part, 2)
+
+
+def test_a_shaft_in_a_hole_resists_rigid_motions_as_its_foundation(holed):
+    part, fm = holed
+    hole = part.holes["h0"]
+    r, h, E = hole.radius, 8.0, STEEL.E
+    kr = E / r
+    K = shaft_springs(fm, hole, ShaftInHole("h0"), E)
+    c = np.asarray(hole.center, float)
+
+    def force(u_of_x):
+        U = u_of_x(fm.nodes).ravel()
+        return (K @ U).reshape(-1, 3)
+
+    across = force(lambda x: np.broadcast_to([1.0, 0.0, 0.0], x.shape)).sum(0)
+    assert across == pytest.approx([(kr + 1e-3 * kr) * np.pi * r * h, 0.0, 0.0], rel=2e-3, abs=1e-6 * kr * r * h)
+    along = force(lambda x: np.broadcast_to([0.0, 0.0, 1.0], x.shape)).sum(0)
+    assert along == pytest.approx([0.0, 0.0, 1e-3 * kr * 2 * np.pi * r * h], rel=2e-3, abs=1e-9 * kr * r * h)
+    twist = force(lambda x: np.stack([-(x[:, 1] - c[1]), x[:, 0] - c[0], 0 * x[:, 0]], 1))  # unit rotation about z
+    moment = np.cross(fm.nodes - c, twist).sum(0)[2]
+    assert moment == pytest.approx(1e-3 * kr * 2 * np.pi * r**3 * h, rel=5e-3)
+    soft = shaft_springs(fm, hole, ShaftInHole("h0", k_radial=2.0, k_tangential=0.0, k_axial=0.0), E)
+    U = np.tile([1.0, 0.0, 0.0], len(fm.nodes))
+    assert (soft @ U).reshape(-1, 3).sum(0)[0] == pytest.approx(2.0 * np.pi * r * h, rel=2e-3)
+    pts, w, N, tri = surface_quadrature(fm, "h0", 4)
+    assert w.sum() == pytest.approx(2 * np.pi * r * h, rel=1e-4)  # curved P2 wall: its true area
+    assert np.allclose(np.hypot(*(pts[..., :2] - c[:2]).transpose(2, 0, 1)), r, atol=1e-3)
+
+
+def test_a_solution_kept_to_its_combinations_answers_the_same(holed):
+    part, _ = holed
+    model = build_model(part, STEEL, 2)
+    sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0)), SurfaceForce("xmax", (50.0, 0, 0)),
+                                         SurfaceForce("xmax", (0, 0, 10.0))])
+    C = np.array([[1.0, 0.5, 0.0], [0.0, 2.0, 1.0]])
+    kept = sol.kept(C)
+    assert kept.cases == 3
+    for c in C:
+        for f in ("displacement", "stress", "loads", "reaction", "von_mises", "principal"):
+            assert np.allclose(getattr(kept, f)(c), getattr(sol, f)(c), rtol=1e-12, atol=1e-12), f
+        assert kept.peak(c) == sol.peak(c)
+    assert np.allclose(kept.peak_sweep(C)[0], sol.peak_sweep(C)[0])
+    assert np.array_equal(kept.equilibrium_error, sol.equilibrium_error)
+    again = kept.kept(C[:1])
+    assert np.allclose(again.stress(C[0]), sol.stress(C[0]))
+    with pytest.raises(ValueError, match="kept"):
+        kept.stress(np.array([1.0, 0.0, 0.0]))
+    R = sol.support_reactions["Fixed(xmin)"]  # statics: the clamp carries every load
+    assert R[:, :3] == pytest.approx(-np.array([[0, 100.0, 0], [50.0, 0, 0], [0, 0, 10.0]]), abs=1e-6)
+
+
+def test_boundary_nodes_of_a_box_are_those_on_its_faces():
+    model = build_model(box(30.0, 20.0, 10.0, 3, 2, 2), STEEL, 2)
+    sol = solve(model, [FreeBody()], [SurfaceForce("xmax", (1.0, 0, 0)), SurfaceForce("xmin", (-1.0, 0, 0))])
+    x = model.mesh.nodes
+    on_face = (np.isclose(x, 0.0) | np.isclose(x, [30.0, 20.0, 10.0])).any(1)
+    b = sol._boundary_nodes()
+    nv = model.mesh.n_vertices
+    assert {n for n in b if n < nv} == set(np.flatnonzero(on_face[:nv]).tolist())  # corners: exactly the faces'
+    assert set(np.flatnonzero(on_face).tolist()) <= b  # mid-edge nodes: every one on a face (and chords between)
+    corner = int(np.flatnonzero(np.all(np.isclose(x, [30.0, 20.0, 10.0]), 1))[0])
+    assert set(sol.surfaces_of(corner)) == {"xmax", "ymax", "zmax"}
+    inner = np.flatnonzero(~on_face)
+    assert len(inner) and sol.surfaces_of(int(inner[0])) == ()
+
+
+def test_principal_stresses_of_stacked_fields():
+    """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
+    rng = np.random.default_rng(11)
+    s = rng.normal(0, 50, (3, 40, 6))
+    p = principal(s)
+    assert p.shape == (3, 40, 3)
+    flat = principal(s.reshape(-1, 6)).reshape(3, 40, 3)
+    assert np.allclose(p, flat) and np.all(np.diff(p, axis=-1) <= 0)
+    assert np.allclose(von_mises(s), von_mises(s.reshape(-1, 6)).reshape(3, 40))
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_stress_at_the_quadrature_points_of_a_uniform_strain(order):
+    """u = ε x (two strain states at once): Hooke's uniform stress at each of the stiffness rule's
+    points (degree 2(order − 1): 1 point for P1, 4 for P2), which lie where the rule puts them."""
+    from rigfem.fe.stress import element_node_stress, quadrature_stress
+
+    fm = fe_mesh(box(20.0, 10.0, 10.0, 2, 1, 1, jitter=0.2), order)
+    eps = [np.array([[1e-3, 2e-4, 0], [2e-4, -3e-4, 1e-4], [0, 1e-4, 5e-4]]), np.diag([0.0, 0.0, 1e-3])]
+    U = np.stack([(fm.nodes @ e.T).ravel() for e in eps], axis=1)
+    lam, mu = E_NU_LAME
+    S, X = quadrature_stress(fm, STEEL.E, STEEL.nu, U)
+    L, _ = tet_quadrature(2 * (order - 1))
+    assert S.shape == (len(fm.elements), len(L), 2, 6) and np.allclose(X, points_at(fm, L))
+    for k, e in enumerate(eps):
+        sig = lam * np.trace(e) * np.eye(3) + 2 * mu * e
+        voigt = [sig[0, 0], sig[1, 1], sig[2, 2], sig[0, 1], sig[1, 2], sig[0, 2]]
+        assert np.allclose(S[:, :, k], voigt, rtol=1e-10, atol=1e-9)
+        assert np.allclose(element_node_stress(fm, STEEL.E, STEEL.nu, U)[:, :, k], voigt, rtol=1e-10, atol=1e-9)

@@ -1,0 +1,309 @@
+"""Mutation testing of rigfem's numerical core with mutmut 3, and the dated record of its scores.
+
+    python tools/mutation_testing.py verdict loads dynamics fe        # run, then write the record
+    python tools/mutation_testing.py --report                         # the record again from the last runs
+
+Each package is mutated in a scratch copy of this work tree (``--workdir``, default
+``/tmp/rigfem-mutmut/<package>``): the copy's pyproject.toml gets the package's ``[tool.mutmut]``
+table (:data:`PACKAGES`: what to mutate, and the fast tests against independent truths that may kill
+a mutant; mutmut runs, for each mutant, only those of them that reach the mutated function).  The
+run has no rigfem cache (``RIGFEM_CACHE`` under /proc, which rigfem refuses and then runs
+without one): mutmut's copy holds every mutant at once, selected at run time, so every mutant has
+the same source hash and a cached mesh or solution would hide it.
+
+The record (``results/mutation/mutmut.json`` and ``.md``) holds, per package, the date, commit,
+dirty flag, machine, command, mutmut's counts and score, and every mutant that was not killed with
+its diff and its fate: ``text`` (only the text of a message changes: a string literal, or a string
+argument that only names a value in an error message, replaced), ``equivalent`` (with the argument
+why, from ``tools/mutation_fates.toml``) or ``open``.  The physics score leaves the ``text``
+mutants out: killed / (killed + survived + no tests + timeout) of the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import io
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import time
+import tokenize
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "results" / "mutation"
+FATES = ROOT / "tools" / "mutation_fates.toml"
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import record  # noqa: E402  (benchmarks/record.py: machine(), commit())
+
+sys.path.insert(0, str(ROOT / "tools"))
+from physics_mutations import scratch_copy  # noqa: E402
+
+FE_TESTS = ["tests/test_fe_closed_form.py", "tests/test_fe_cantilever.py", "tests/test_fe_patch.py",
+            "tests/test_fe_loads.py", "tests/test_fe_freebody.py", "tests/test_fe_components.py",
+            "tests/test_fe_assembly.py::test_stiffness_equals_skfem_generic",
+            "tests/test_fe_assembly.py::test_curved_stiffness_equals_skfem_isoparametric",
+            "tests/test_band_coverage.py::test_band_covers_the_bending_stress_of_a_beam",
+            "tests/test_band_coverage.py::test_band_covers_the_lame_bore_stress",
+            "tests/test_band_coverage.py::test_peak_error_pct_is_the_calibrated_zz_estimate_in_percent",
+            "tests/test_physics_truths.py", "tests/test_fe_truths.py", "tests/test_report_entry_truths.py",
+            "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures[plates]"]
+#: package -> what mutmut mutates (globs) and the tests it may run (fast, against independent truths)
+PACKAGES = {
+    "verdict": {"mutate": ["rigfem/verdict/*"],
+                "tests": ["tests/test_verdict.py", "tests/test_trust.py::test_criterion_never_passes_unloaded_or_unbalanced",
+                          "tests/test_verdict_truths.py", "tests/test_report_entry_truths.py",
+                          "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures[plates]"]},
+    "loads": {"mutate": ["rigfem/loads/*"],
+              "tests": ["tests/test_loadcases.py", "tests/test_physics_truths.py", "tests/test_load_cases_truths.py"]},
+    "dynamics": {"mutate": ["rigfem/dynamics/*"],
+                 "tests": ["tests/test_dynamics_closed.py", "tests/test_original.py", "tests/test_reactions.py",
+                           "tests/test_mechanisms.py", "tests/test_loadcases.py", "tests/test_partial_turn.py",
+                           "tests/test_physics_truths.py", "tests/test_load_cases_truths.py", "tests/test_dynamics_truths.py"]},
+    # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
+    "fe-stress": {"mutate": [f"rigfem/fe/{m}.py" for m in ("stress", "tensors", "solution")], "tests": FE_TESTS},
+    "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")], "tests": FE_TESTS},
+    "fe-assembly": {"mutate": ["rigfem/fe/assembly.py"], "tests": FE_TESTS},
+}
+NO_CACHE = "/proc/rigfem-mutmut-no-cache"  # rigfem refuses a cache folder under /proc and runs without one
+
+
+def mutmut_table(pkg: str) -> str:
+    """The ``[tool.mutmut]`` table of a package's run (pyproject.toml's own, with the package's paths and tests)."""
+    base = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mutmut"]
+    cfg = {**base, "only_mutate": PACKAGES[pkg]["mutate"],
+           "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"]}
+    if pkg.startswith("fe"):
+        # a mutant's pytest forks from a server that has only collected the tests: forked from the
+        # main process, which has run them, it hangs in MKL/OpenMP (every fe/ mutant timed out); the
+        # other packages fork from the main process, ten times faster
+        cfg["process_isolation"] = "forkserver"
+    return "[tool.mutmut]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())
+
+
+def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> dict:
+    d = work / pkg
+    if resume and (d / "mutants").is_dir():  # mutmut keeps the results it has: it runs the rest
+        return _mutmut(d, children)
+    scratch_copy(d)
+    text = (d / "pyproject.toml").read_text()
+    text = re.sub(r"\n\[tool\.mutmut\]\n(?:(?!\n\[).)*", "\n", text, flags=re.S)  # the package's table instead
+    (d / "pyproject.toml").write_text(text.rstrip("\n") + "\n\n" + mutmut_table(pkg))
+    return _mutmut(d, children)
+
+
+def _mutmut(d: Path, children: int) -> dict:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env.update(RIGFEM_CACHE=NO_CACHE, NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
+               **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"))
+    t0 = time.time()
+    with open(d / "mutmut.log", "a") as log:
+        rc = subprocess.run(["nice", "-n", "10", "mutmut", "run", "--max-children", str(children)],
+                            cwd=d, env=env, stdout=log, stderr=subprocess.STDOUT).returncode
+    spent = d / "seconds.txt"  # an interrupted run's time counts too
+    seconds = time.time() - t0 + (float(spent.read_text()) if spent.exists() else 0.0)
+    spent.write_text(f"{seconds:.1f}")
+    if rc != 0:
+        raise SystemExit(f"mutmut run failed in {d} (exit {rc}): see {d / 'mutmut.log'}")
+    return {"seconds": round(seconds, 1)}
+
+
+#: run in a package's scratch folder: every mutant's status and, for those not killed, its diff (one
+#: process: ``mutmut show`` per mutant costs a second each)
+_READ = """
+import json
+from mutmut.mutation.data import SourceFileMutationData
+from mutmut.mutation.diff_apply import get_diff_for_mutant
+from mutmut.stats import status_by_exit_code
+from mutmut.utils.file_utils import walk_mutatable_files
+out = {}
+for path in walk_mutatable_files():
+    m = SourceFileMutationData(path=path)
+    m.load()
+    for name, code in m.exit_code_by_key.items():
+        status = status_by_exit_code[code]
+        out[name] = [status, "" if status == "killed" else get_diff_for_mutant(name, path=path)]
+print(json.dumps(out))
+"""
+
+
+def results(d: Path) -> dict[str, tuple[str, str]]:
+    """mutant -> (status, diff of the mutant if not killed)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    out = subprocess.run([sys.executable, "-c", _READ], cwd=d, env=env, capture_output=True, text=True, check=True).stdout
+    return {k: (s, "\n".join(ln for ln in p.splitlines() if ln[:1] in "-+" and ln[:3] not in ("---", "+++")))
+            for k, (s, p) in json.loads(out).items()}
+
+
+def _tokens(line: str) -> list[tuple[int, str]]:
+    try:
+        toks = list(tokenize.generate_tokens(io.StringIO(line.strip() + "\n").readline))
+    except (tokenize.TokenError, IndentationError, SyntaxError):
+        return [(-1, line)]
+    return [(t.type, t.string) for t in toks if t.type not in (tokenize.NEWLINE, tokenize.NL, tokenize.ENDMARKER,
+                                                                 tokenize.INDENT, tokenize.DEDENT)]
+
+
+#: where a string literal is only text a person reads: an exception, a note or reason, a warning, the
+#: field name and unit ``check_range`` puts in its message
+MESSAGE = re.compile(r"raise |Error\(|notes|reason|warn|print\(|check_range\(|_refuse|InputError|ComputeError")
+
+
+def category(patch: str) -> str:
+    """``text`` when the mutant only changes what a message says: every changed token is a string
+    literal (an f-string, or any string on a line that builds a message: :data:`MESSAGE`) replaced by
+    another string or by None, or an exception's message replaced by None; else ``code`` (a changed
+    dictionary key or compared string is code: something reads it)."""
+    old = [ln[1:] for ln in patch.splitlines() if ln.startswith("-")]
+    new = [ln[1:] for ln in patch.splitlines() if ln.startswith("+")]
+    m = re.fullmatch(r"\s*raise (\w+)\(None\)", new[0]) if len(new) == 1 else None
+    if m and old and old[0].strip().startswith(f"raise {m.group(1)}("):
+        return "text"
+    if len(old) != 1 or len(new) != 1:
+        return "code"
+    a, b = _tokens(old[0]), _tokens(new[0])
+    if len(a) != len(b):
+        return "code"
+    changed = [(x, y) for x, y in zip(a, b) if x != y]
+    strings = all(x[0] == tokenize.STRING and (y[0] == tokenize.STRING or y == (tokenize.NAME, "None")) for x, y in changed)
+    message = MESSAGE.search(old[0]) or all(x[1].lower().startswith(("f'", 'f"')) for x, _ in changed)
+    return "text" if changed and strings and message else "code"
+
+
+#: mutants equivalent by construction, recognised from their diff: (the line with this text replaced
+#: by that one, why).  Listed with each such mutant in the record.
+EQUIVALENT_EDITS = [
+    ((", dtype=float)", ", dtype=None)"), "dtype: every value reaching it is a float already (numpy float arrays, "
+     "Python floats), so asking for float changes nothing"),
+    ((", dtype=float)", ", )"), "dtype: every value reaching it is a float already, so asking for float changes nothing"),
+    ((", float)", ", None)"), "dtype: every value reaching it is a float already, so asking for float changes nothing"),
+    ((", float)", ", )"), "dtype: every value reaching it is a float already, so asking for float changes nothing"),
+]
+
+
+def equivalent_edit(patch: str) -> str:
+    old = [ln[1:] for ln in patch.splitlines() if ln.startswith("-")]
+    new = [ln[1:] for ln in patch.splitlines() if ln.startswith("+")]
+    if len(old) == 1 and len(new) == 1:
+        for (a, b), why in EQUIVALENT_EDITS:
+            if a in old[0] and old[0].replace(a, b, 1) == new[0]:
+                return why
+    return ""
+
+
+def summarise(pkg: str, d: Path, meta: dict) -> dict:
+    fates = tomllib.loads(FATES.read_text()) if FATES.exists() else {}
+    res = results(d)
+    counts: dict[str, int] = {}
+    for s, _ in res.values():
+        counts[s] = counts.get(s, 0) + 1
+    not_killed = []
+    for name, (status, patch) in sorted(res.items()):
+        if status == "killed":
+            continue
+        cat = category(patch)
+        why = (fates.get("equivalent", {}).get(name, "") or equivalent_edit(patch)
+               or next((w for f, w in fates.get("dead_code", {}).items() if name.startswith(f + "__mutmut_")), ""))
+        infra = next((w for f, w in fates.get("not_numerical", {}).items() if name.startswith(f + "__mutmut_")), "")
+        fate = "text" if cat == "text" else "equivalent" if why else "not numerical" if infra else "open"
+        why = why or infra
+        not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
+    text = sum(1 for m in not_killed if m["fate"] in ("text", "not numerical"))
+    total = len(res)
+    killed = counts.get("killed", 0) + counts.get("timeout", 0)
+    equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
+    physics_total = total - text - equivalent
+    return {"package": pkg, "mutate": PACKAGES[pkg]["mutate"], "tests": PACKAGES[pkg]["tests"], **meta,
+            "counts": counts, "total": total,
+            "score_mutmut_pct": round(100 * killed / total, 1) if total else None,
+            "text_mutants": text, "equivalent": equivalent,
+            "open": sum(1 for m in not_killed if m["fate"] == "open"),
+            "score_physics_pct": round(100 * killed / physics_total, 1) if physics_total else None,
+            "not_killed": not_killed}
+
+
+def write(record_by_pkg: dict, command: str) -> None:
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / "mutmut.json"
+    old = json.loads(path.read_text()) if path.exists() else {"packages": {}}
+    stamp = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+             "commit": record.commit(), "machine": record.machine(), "command": command,
+             "mutmut": _version("mutmut")}
+    for pkg, rec in record_by_pkg.items():
+        old["packages"][pkg] = {**stamp, **rec}
+    old["name"] = "mutmut"
+    path.write_text(json.dumps(old, indent=1, ensure_ascii=False) + "\n")
+    (OUT / "mutmut.md").write_text(markdown(old))
+
+
+def _version(pkg: str) -> str | None:
+    from importlib import metadata
+    try:
+        return metadata.version(pkg)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def markdown(rec: dict) -> str:
+    lines = ["# Mutation testing of the numerical core (mutmut)", "",
+             "Written by `tools/mutation_testing.py` from its runs (the command of each package below); "
+             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout) / all, mutmut's own.  "
+             "*physics score* = killed / (all − mutants that only change a message's text − mutants of "
+             "code no number depends on (tools/mutation_fates.toml [not_numerical]) − mutants argued "
+             "equivalent).  Every mutant not killed but for message text is listed below with its fate: "
+             "`equivalent` (with the argument), `not numerical` (why), or `open` (a test could kill it; "
+             "none does yet).", "",
+             "| package | mutated | mutants | killed | survived | no tests | timeout | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
+    for pkg, p in rec["packages"].items():
+        c = p["counts"]
+        lines.append(f"| {pkg} | {', '.join(p['mutate'])} | {p['total']} | {c.get('killed', 0)} | {c.get('survived', 0)} | "
+                     f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {p['text_mutants']} | {p['equivalent']} | "
+                     f"{p['score_mutmut_pct']} % | **{p['score_physics_pct']} %** | {p['date'][:10]}, "
+                     f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}` |")
+    for pkg, p in rec["packages"].items():
+        open_ = [m for m in p["not_killed"] if m["fate"] != "text"]
+        lines += ["", f"## {pkg}: mutants not killed, but for message text ({len(open_)})", "",
+                  f"Tests: {', '.join(p['tests'])}", ""]
+        for m in open_:
+            why = f" — {m['why']}" if m["why"] else ""
+            lines += [f"- `{m['mutant']}` ({m['status']}, {m['fate']}){why}", "", "  ```diff",
+                      *("  " + ln for ln in m["diff"].splitlines()), "  ```"]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("packages", nargs="*", help=f"of {', '.join(PACKAGES)} (default: all)")
+    ap.add_argument("--workdir", type=Path, default=Path("/tmp/rigfem-mutmut"))
+    ap.add_argument("--max-children", type=int, default=1)
+    ap.add_argument("--report", action="store_true", help="rewrite the record from the last runs in --workdir")
+    ap.add_argument("--resume", action="store_true", help="continue an interrupted run in --workdir (its copy as it is)")
+    a = ap.parse_args(argv)
+    pkgs = a.packages or list(PACKAGES)
+    if set(pkgs) - set(PACKAGES):
+        ap.error(f"unknown package(s) {sorted(set(pkgs) - set(PACKAGES))}: choose from {', '.join(PACKAGES)}")
+    recs = {}
+    for pkg in pkgs:
+        meta = {}
+        if not a.report:
+            meta = run_package(pkg, a.workdir, a.max_children, a.resume)
+        else:
+            prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
+            meta = {"seconds": prev.get("seconds")}
+        recs[pkg] = summarise(pkg, a.workdir / pkg, meta)
+        p = recs[pkg]
+        print(f"{pkg}: {p['total']} mutants, {p['counts']}, mutmut score {p['score_mutmut_pct']} %, "
+              f"physics score {p['score_physics_pct']} %", flush=True)
+        write({pkg: p}, record.command_line())  # each package's record as soon as it is done
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
