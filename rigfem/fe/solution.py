@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,6 +35,13 @@ class Peak:
     surfaces: tuple[str, ...]  #: every named surface the node lies on
     zz_error: float  #: raw ZZ estimate, a fraction of ``value`` (recovered vs raw stress on the node's patch)
     error_pct: float  #: the error band's half-width, % of ``value``: ``zz_error`` × the order's calibrated factor
+
+    @property
+    def error(self) -> float:
+        """The raw ZZ estimate under its pre-0.1 name (deprecated, goes in rigfem 0.3): ``zz_error``."""
+        warnings.warn("Peak.error is deprecated, use Peak.zz_error (the raw estimate, a fraction) or Peak.error_pct "
+                      "(the calibrated band, %); the old name goes in rigfem 0.3", DeprecationWarning, stacklevel=2)
+        return self.zz_error
 
 
 @dataclass
