@@ -75,8 +75,8 @@ class Solution:
         k = self.cases
         c = np.eye(k)[0] if c is None and k == 1 else np.asarray(c, dtype=float)
         if c.shape != (k,) or not np.isfinite(c).all():
-            from rigfem.errors import InputError
-            raise InputError(f"combination coefficients must be {k} finite numbers")
+            from rigfem.errors import ComputeError
+            raise ComputeError(f"combination coefficients must be {k} finite numbers")
         if self.basis is None:
             return c
         hit = np.flatnonzero((self.basis == c).all(1))
@@ -133,8 +133,8 @@ class Solution:
         """
         C = np.atleast_2d(np.asarray(C, dtype=float))
         if C.shape[1] != self.cases or not np.isfinite(C).all():
-            from rigfem.errors import InputError
-            raise InputError(f"combination matrix must be (n, {self.cases}) and finite, got {C.shape}")
+            from rigfem.errors import ComputeError
+            raise ComputeError(f"combination matrix must be (n, {self.cases}) and finite, got {C.shape}")
         if self.basis is not None:  # as combinations of the kept cases
             C = np.eye(len(self.basis))[[self._coef(c) for c in C]]
         if self._unit_vm is None:
