@@ -23,6 +23,11 @@ class InputError(ValueError):
     """Bad user input: the message names the field, the value and the allowed range."""
 
 
+class ClosureError(InputError):
+    """A linkage's lengths cannot close its loop (at all, or at the crank angles asked): the message
+    names the lengths and the angles where it closes (:mod:`rigfem.linkage` raises it)."""
+
+
 class ComputeError(RuntimeError):
     """Valid input that rigfem could not compute (mesher, solver, external program)."""
 

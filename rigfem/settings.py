@@ -27,7 +27,9 @@ handed down to the load cases.
 from __future__ import annotations
 
 import difflib
+import functools
 import os
+import warnings
 from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING
 
@@ -99,12 +101,44 @@ class MeshSettings:
                 "concentrate": sorted(self.concentrate)}
 
 
+#: MeshSettings' keywords before 0.1 (README's "Your own part"), still taken until rigfem 0.3
+_OLD_MESH_KEYWORDS = {"size": "size_mm", "refine_size": "local_size_mm", "refine_dist": "refine_dist_mm"}
+
+
+def _old_keywords(init):
+    """MeshSettings' constructor taking its pre-0.1 keywords (``size``, ``refine_size``,
+    ``refine_dist``) with a DeprecationWarning, so scripts written against them still run."""
+
+    @functools.wraps(init)
+    def __init__(self, *args, **kwargs):
+        for old, new in _OLD_MESH_KEYWORDS.items():
+            if old in kwargs:
+                warnings.warn(f"MeshSettings({old}=...) is deprecated, use {new}=...; the old name goes in "
+                              f"rigfem 0.3", DeprecationWarning, stacklevel=2)
+                kwargs[new] = kwargs.pop(old)
+        init(self, *args, **kwargs)
+
+    return __init__
+
+
+MeshSettings.__init__ = _old_keywords(MeshSettings.__init__)  # type: ignore[method-assign]
+
+
 @dataclass(frozen=True)
 class Preset(MeshSettings):
     """A fidelity preset: mesh settings plus the FE fields, element order and bearing directions."""
 
     order: int = 2  #: element order (1 | 2)
     bearing_directions: int = 8  #: directions of the unit bearing loads (cycle mode)
+
+    def __getitem__(self, key: str):
+        """``FIDELITY["standard"]["order"]``: the mapping access of the presets before 0.1
+        (deprecated, goes in rigfem 0.3; read the attribute)."""
+        if key not in {f.name for f in fields(Preset)}:
+            raise KeyError(key)
+        warnings.warn(f"preset[{key!r}] is deprecated, use preset.{key}; the mapping access goes in rigfem 0.3",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(self, key)
 
 
 #: fidelity presets: element order, global and local mesh size (mm), bearing directions

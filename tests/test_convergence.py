@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigfem.cli import main
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.cache import from_environment
 from rigfem.job import Request
 from rigfem.verification.convergence import (
@@ -63,11 +63,11 @@ def test_noise_limited_only_when_small_and_not_growing():
 
 
 def test_richardson_refuses_bad_sequences():
-    with pytest.raises(InputError, match="at least 3"):
+    with pytest.raises(ComputeError, match="at least 3"):
         richardson([1.0, 0.5], [1.0, 2.0])
-    with pytest.raises(InputError, match="decreasing"):
+    with pytest.raises(ComputeError, match="decreasing"):
         richardson([0.5, 1.0, 2.0], [1.0, 2.0, 3.0])
-    with pytest.raises(InputError):
+    with pytest.raises(ComputeError, match="finite"):
         richardson([1.0, 0.5, 0.25], [1.0, math.nan, 2.0])
 
 

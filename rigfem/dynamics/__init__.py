@@ -10,12 +10,10 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "history": ["JointHistory", "ReactionHistory", "DynamicsOptions", "Reactions", "reactions_of", "merge_ranges", "spline_evaluator", "peaks", "summary"],
-        "forces": ["cross", "inertia_load", "applied", "body_loads", "compressor_gas_force", "loaded_linkage"],
+        "history": ["JointHistory", "ReactionHistory", "DynamicsOptions", "Reactions", "peaks", "summary"],
+        "forces": ["cross", "applied", "compressor_gas_force", "loaded_linkage"],
         "cycle": ["MODELS", "simulate", "cycle_history", "react"],
-        "original": ["fourbar_kinematics", "program_kinematics", "original_reactions", "program_reactions", "simulate_original", "original_program"],
-        "closed": ["closed_reactions"],
+        "original": ["fourbar_kinematics", "original_reactions", "original_program"],
         "solver": ["solve", "reactions"],
-        "inverse": ["general_reactions"],
     },
 )

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,6 +35,13 @@ class Peak:
     surfaces: tuple[str, ...]  #: every named surface the node lies on
     zz_error: float  #: raw ZZ estimate, a fraction of ``value`` (recovered vs raw stress on the node's patch)
     error_pct: float  #: the error band's half-width, % of ``value``: ``zz_error`` × the order's calibrated factor
+
+    @property
+    def error(self) -> float:
+        """The raw ZZ estimate under its pre-0.1 name (deprecated, goes in rigfem 0.3): ``zz_error``."""
+        warnings.warn("Peak.error is deprecated, use Peak.zz_error (the raw estimate, a fraction) or Peak.error_pct "
+                      "(the calibrated band, %); the old name goes in rigfem 0.3", DeprecationWarning, stacklevel=2)
+        return self.zz_error
 
 
 @dataclass
@@ -67,8 +75,8 @@ class Solution:
         k = self.cases
         c = np.eye(k)[0] if c is None and k == 1 else np.asarray(c, dtype=float)
         if c.shape != (k,) or not np.isfinite(c).all():
-            from rigfem.errors import InputError
-            raise InputError(f"combination coefficients must be {k} finite numbers")
+            from rigfem.errors import ComputeError
+            raise ComputeError(f"combination coefficients must be {k} finite numbers")
         if self.basis is None:
             return c
         hit = np.flatnonzero((self.basis == c).all(1))
@@ -125,8 +133,8 @@ class Solution:
         """
         C = np.atleast_2d(np.asarray(C, dtype=float))
         if C.shape[1] != self.cases or not np.isfinite(C).all():
-            from rigfem.errors import InputError
-            raise InputError(f"combination matrix must be (n, {self.cases}) and finite, got {C.shape}")
+            from rigfem.errors import ComputeError
+            raise ComputeError(f"combination matrix must be (n, {self.cases}) and finite, got {C.shape}")
         if self.basis is not None:  # as combinations of the kept cases
             C = np.eye(len(self.basis))[[self._coef(c) for c in C]]
         if self._unit_vm is None:

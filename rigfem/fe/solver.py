@@ -183,7 +183,7 @@ class LinearSolver:
         # PARDISO reads the right-hand sides column by column: handed so, pypardiso copies none
         F2 = np.asfortranarray(F2) if self.method == "pardiso" else np.ascontiguousarray(F2)
         if not np.isfinite(F2).all():
-            raise InputError("load vector contains NaN or inf")
+            raise ComputeError("load vector contains NaN or inf")
         t0 = time.perf_counter()
         X = self._raw(F2) if F2.size else np.zeros_like(F2)
         for step in range(3 if self.method != "amg" else 1):  # up to 2 refinements on the same factors

@@ -8,7 +8,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "calculix": ["CalculixError", "FrdResult", "CcxResult", "write_inp", "export_model", "read_frd", "run_ccx"],
-        "reactions_csv": ["write_csv", "MAX_STEP_DEG", "MAX_MIDPOINT_PCT", "FORCE_RANGE_N", "read_csv"],
+        "calculix": ["CalculixError", "CcxResult", "write_inp", "export_model", "read_frd", "run_ccx"],
+        "reactions_csv": ["write_csv", "read_csv"],
     },
 )

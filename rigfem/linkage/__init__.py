@@ -13,12 +13,12 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "closed": ["closed_motion"],
         "state": ["linkage_state"],
-        "loops": ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "slider_crank_angles", "singular_ranges", "is_full_turn"],
-        "kinematics": ["Motion", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "inverted_slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
-        "model": ["GROUND", "ClosureError", "AssemblyError", "BodyHistory", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage", "BodyState", "GeneralState", "LinkageState", "state_of"],
+        "loops": ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles", "singular_ranges", "is_full_turn"],
+        "kinematics": ["Motion", "fourbar_motion", "grashof_class", "fourbar_turn", "slider_crank_motion", "slider_crank_turn", "motion_from_history", "linkage_motion", "linkage_turn"],
+        "model": ["GROUND", "ClosureError", "AssemblyError", "BodyHistory", "Body", "Revolute", "Prismatic", "CrankDriver", "SliderDriver", "Load", "Linkage", "BodyState", "LinkageState"],
         "mechanisms": ["four_bar", "transmission_angle", "coupler_point_path", "slider_crank", "inverted_slider_crank", "quick_return", "BUILDERS", "build", "crank_angles"],
-        "general": ["RCOND_SINGULAR", "STEP_CORRECTION", "SAMPLE_CORRECTION", "MIN_STEP", "move"],
-        "expression": ["parse_function", "check_interval"],
+        "general": ["RCOND_SINGULAR", "move"],
+        "expression": ["parse_function"],
         "synthesis": ["chebyshev_points", "synthesize_function", "three_position", "crank_in_order", "check_three_position", "optimise_three_position"],
     },
 )

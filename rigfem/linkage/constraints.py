@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.linkage.model import GROUND, CrankDriver, Linkage, Prismatic, Revolute, SliderDriver, perp
 
 __all__ = ["Constraints", "dot"]
@@ -30,7 +30,7 @@ class Constraints:
         self.lk = lk
         names = [b.name for b in lk.bodies]
         if GROUND in names or len(set(names)) != len(names):
-            raise InputError("body names must be unique and not 'ground'")
+            raise ComputeError("body names must be unique and not 'ground'")
         self.index = {n: i for i, n in enumerate(names)}
         self.nb = len(names)
         self.m = 3 * self.nb
@@ -38,22 +38,22 @@ class Constraints:
         for j in lk.joints:
             for b in (j.body_a, j.body_b):
                 if b != GROUND and b not in self.index:
-                    raise InputError(f"joint {j.name}: unknown body {b!r}")
+                    raise ComputeError(f"joint {j.name}: unknown body {b!r}")
             rows.append(r)
             r += 2
         self.rows = rows
         self.drow = r
         if r + 1 != self.m:
-            raise InputError(f"linkage has {self.nb} bodies and {r} joint constraints + 1 driver: "
+            raise ComputeError(f"linkage has {self.nb} bodies and {r} joint constraints + 1 driver: "
                              f"not a one-degree-of-freedom linkage")
         self.jidx = {j.name: k for k, j in enumerate(lk.joints)}
         self.loc = {j.name: (np.asarray(j.local_a_mm, float) / 1000, np.asarray(j.local_b_mm, float) / 1000)
                     for j in lk.joints}
         if isinstance(lk.driver, SliderDriver):
             if lk.driver.joint not in self.jidx or not isinstance(lk.joints[self.jidx[lk.driver.joint]], Prismatic):
-                raise InputError(f"slider driver: {lk.driver.joint!r} is not a prismatic joint")
+                raise ComputeError(f"slider driver: {lk.driver.joint!r} is not a prismatic joint")
         elif lk.driver.body not in self.index:
-            raise InputError(f"crank driver: unknown body {lk.driver.body!r}")
+            raise ComputeError(f"crank driver: unknown body {lk.driver.body!r}")
         pts = [np.asarray(p, float) for j in lk.joints for p in (j.local_a_mm, j.local_b_mm)]
         self.scale = max(1e-3, max((np.hypot(*p) for p in pts), default=1.0) / 1000, *(
             np.hypot(g[0], g[1]) / 1000 for g in lk.guess.values()))

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.linkage.constraints import Constraints
 from rigfem.linkage.loops import is_full_turn
 from rigfem.linkage.model import (
@@ -91,7 +91,7 @@ def _guess_vector(model: Constraints) -> np.ndarray:
     q = np.zeros(model.m)
     for b in model.lk.bodies:
         if b.name not in model.lk.guess:
-            raise InputError(f"no initial pose for body {b.name!r}")
+            raise ComputeError(f"no initial pose for body {b.name!r}")
         x, y, p = model.lk.guess[b.name]
         i = 3 * model.index[b.name]
         q[i:i + 3] = x / 1000, y / 1000, p

@@ -27,7 +27,8 @@ from rigfem.linkage.loops import (
     slider_crank_angles,
     transmission_angle_deg,
 )
-from rigfem.errors import InputError, check_range
+from rigfem.errors import ClosureError
+from rigfem.linkage.dims import Drive, Lengths, Options
 from rigfem.linkage.general import move
 from rigfem.linkage.model import GROUND, Prismatic
 
@@ -73,15 +74,6 @@ def _link(th, w, a) -> dict[str, np.ndarray]:
             "alpha_rad_s2": np.broadcast_to(a, n).astype(float)}
 
 
-def _lengths(**kw: float) -> None:
-    for k, v in kw.items():
-        check_range(k, v, 0.0, 1e5, "mm", lo_open=True)
-
-
-def _driver(omega: float, alpha: float) -> tuple[float, float]:
-    return (check_range("omega", omega, -1e4, 1e4, "rad/s"), check_range("alpha", alpha, -1e7, 1e7, "rad/s²"))
-
-
 def _ranges_text(ok: np.ndarray, deg: np.ndarray) -> str:
     idx = np.flatnonzero(ok)
     if idx.size == 0:
@@ -100,12 +92,11 @@ def fourbar_motion(b2: float, b3: float, b4: float, d: float, crank_deg, omega: 
     Mechanical advantage = omega2 / omega4: the output torque over the input torque of an
     ideal (massless, frictionless) linkage; it grows without bound at the rocker's limit
     positions.  ``coupler_point`` (distance mm from A, angle deg from the coupler line A->B)
-    adds point ``P``.  InputError if the loop cannot close at some of the angles.
+    adds point ``P``.  ClosureError (an InputError) if the loop cannot close at some of the angles.
     """
-    _lengths(b2=b2, b3=b3, b4=b4, d=d)
-    w2, a2 = _driver(omega, alpha)
-    if branch not in BRANCHES:
-        raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
+    Lengths({"b2": b2, "b3": b3, "b4": b4, "d": d}, lo=0.0, hi=1e5)
+    drive, _ = Drive(omega, alpha), Options(branch)
+    w2, a2 = drive.omega, drive.alpha
     deg = np.atleast_1d(np.asarray(crank_deg, float))
     th2 = np.radians(deg)
     k = fourbar_angles(b2, b3, b4, d, th2, w2, a2, BRANCHES[branch])
@@ -113,7 +104,7 @@ def fourbar_motion(b2: float, b3: float, b4: float, d: float, crank_deg, omega: 
     bad = np.isnan(th3)
     if bad.any():
         grid = np.arange(0.0, 360.0, 0.1)
-        raise InputError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled at crank "
+        raise ClosureError(f"four-bar b2={b2:g} b3={b3:g} b4={b4:g} d={d:g} mm cannot be assembled at crank "
                          f"{deg[bad][0]:g} deg; it closes for crank angles "
                          f"{_ranges_text(fourbar_closes(b2, b3, b4, d, grid), grid)}")
     zero = np.zeros((deg.size, 2))
@@ -174,10 +165,8 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
     ``time_ratio`` (the slower over the faster stroke at constant crank speed) follow when
     both toggles lie on the crank's path.
     """
-    _lengths(b2=b2, b3=b3, b4=b4, d=d)
-    sgn = BRANCHES.get(branch)
-    if sgn is None:
-        raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
+    Lengths({"b2": b2, "b3": b3, "b4": b4, "d": d}, lo=0.0, hi=1e5)
+    sgn = BRANCHES[Options(branch).branch]
     full = bool((abs(d - b2) >= abs(b3 - b4)) and (d + b2 <= b3 + b4))
     dead = []
     for f in (b3 + b4, abs(b3 - b4)):
@@ -245,16 +234,16 @@ def slider_crank_motion(b2: float, b3: float, offset: float = 0.0, crank_deg=0.0
     Mechanical advantage = b2·omega2 / v_B: the slider force over the tangential force at
     the crank pin of an ideal linkage (dimensionless; unbounded at the dead centres).
     """
-    _lengths(b2=b2, b3=b3)
-    check_range("offset", offset, -1e5, 1e5, "mm")
-    w2, a2 = _driver(omega, alpha)
+    Lengths({"b2": b2, "b3": b3}, lo=0.0, hi=1e5, signed={"offset": offset})
+    drive = Drive(omega, alpha)
+    w2, a2 = drive.omega, drive.alpha
     deg = np.atleast_1d(np.asarray(crank_deg, float))
     th2 = np.radians(deg)
     s3 = (offset - b2 * np.sin(th2)) / b3
     if np.any(np.abs(s3) > 1.0):
         grid = np.arange(0.0, 360.0, 0.1)
         ok = np.abs(offset - b2 * np.sin(np.radians(grid))) <= b3
-        raise InputError(f"slider-crank b2={b2:g} b3={b3:g} offset={offset:g} mm cannot be assembled at "
+        raise ClosureError(f"slider-crank b2={b2:g} b3={b3:g} offset={offset:g} mm cannot be assembled at "
                          f"crank {deg[np.abs(s3) > 1][0]:g} deg; it closes for crank angles {_ranges_text(ok, grid)}")
     k = slider_crank_angles(b2, b3, offset, th2, w2, a2)
     th3, w3, a3, x, v, acc = (k[n] for n in ("theta3", "omega3", "alpha3", "x", "v", "acc"))
@@ -284,7 +273,7 @@ def slider_crank_turn(b2: float, b3: float, offset: float = 0.0) -> dict:
     """Limit positions (dead centres, crank and rod collinear), stroke and time ratio of a
     slider-crank (mm, deg; exact).  If b2 + |offset| >= b3 the crank cannot turn fully:
     ``dead_points_deg`` are then the crank angles with the rod across the slide."""
-    _lengths(b2=b2, b3=b3)
+    Lengths({"b2": b2, "b3": b3}, lo=0.0, hi=1e5)
     full = b2 + abs(offset) < b3
     dead = []
     for yb in (offset - b3, offset + b3):
@@ -378,15 +367,13 @@ def linkage_motion(lk, crank_deg, omega: float, alpha: float = 0.0) -> Motion:
     block sliding on a moving link (inverted slider-crank) gets its position along the link
     as ``slider``."""
     m, L = lk.meta, lk.meta.get("lengths_mm", {})
+    Drive(omega, alpha, m.get("type"))
     if m.get("type") == "four-bar":
         cp = m.get("coupler_point")
         return fourbar_motion(L["b2"], L["b3"], L["b4"], L["d"], crank_deg, omega, alpha, m.get("branch", "open"),
                               None if cp is None else (cp["distance_mm"], cp["angle_deg"]))
     if m.get("type") == "slider-crank":
         return slider_crank_motion(L["b2"], L["b3"], L.get("offset", 0.0), crank_deg, omega, alpha)
-    if alpha != 0.0:
-        raise InputError(f"a driver acceleration (alpha = {alpha:g} rad/s²) is supported for the four-bar and "
-                         f"slider-crank only, not {m.get('type')!r}")
     deg = np.atleast_1d(np.asarray(crank_deg, float))
     order = np.argsort(deg)
     bodies = move(lk, deg[order], omega / (2 * np.pi))

@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from rigfem.errors import InputError
 from rigfem.linkage.loops import (
     BRANCHES,
     MU_TOGGLE_DEG,
@@ -31,6 +30,7 @@ from rigfem.linkage.loops import (
     singular_ranges,
     transmission_angle_deg,
 )
+from rigfem.linkage.dims import Lengths, Options, Rails
 from rigfem.linkage.model import GROUND, Body, BodyHistory, ClosureError, CrankDriver, Linkage, Load, Prismatic, Revolute
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses
 
@@ -49,30 +49,6 @@ def _massless(name: str, overrides: dict | None) -> Body:
     kw = dict((overrides or {}).get(name, {}))
     pts = [(lab, float(pm), tuple(pos)) for lab, pm, pos in kw.pop("point_masses", [])]
     return Body(name, point_masses=pts, **kw)
-
-
-def _check_lengths(**lengths: float) -> None:
-    for k, v in lengths.items():
-        if not np.isfinite(v) or v <= 0:
-            raise InputError(f"{k} = {v!r} mm must be a positive length in mm")
-        if v < 10:
-            raise InputError(f"{k} = {v:g} looks like metres: lengths are in mm (allowed 10 to 10000 mm)")
-        if v > 10000:
-            raise InputError(f"{k} = {v:g} mm is outside the allowed range [10, 10000] mm")
-
-
-def _check_rails(rails_mm, bars: dict[str, float], behind_mm: float) -> None:
-    """Each rail a valid length (mm) that reaches the far joint of its bar from ``behind_mm``
-    behind the first."""
-    if len(rails_mm) != len(bars):
-        raise InputError(f"rails_mm needs {len(bars)} lengths (mm), one per bar ({', '.join(bars)}); "
-                         f"got {len(rails_mm)}")
-    for i, ((name, b), L) in enumerate(zip(bars.items(), rails_mm)):
-        _check_lengths(**{f"rails_mm[{i}]": L})
-        if L - behind_mm < b:
-            raise InputError(f"{name} = {b:g} mm does not fit on its rail: rails_mm[{i}] = {L:g} mm "
-                             f"reaches {L - behind_mm:g} mm past the pivot ({behind_mm:g} mm of it "
-                             f"lies behind); allowed {name} <= {L - behind_mm:g} mm")
 
 
 def _ranges_text(deg: np.ndarray, bad: np.ndarray) -> str:
@@ -97,9 +73,10 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
     crank-angle range where the loop cannot close, unless ``whole_turn`` is False (a kinematics
     run over the crank's range of motion): then it is built at an angle where it closes.
     """
-    _check_lengths(b2=b2, b3=b3, b4=b4, d=d)
+    Lengths({"b2": b2, "b3": b3, "b4": b4, "d": d})
+    Options(branch, masses)
     if masses == "rig":
-        _check_rails(rails_mm, {"b2": b2, "b3": b3, "b4": b4}, catalogue.rail_behind_mm)
+        Rails(tuple(rails_mm), {"b2": b2, "b3": b3, "b4": b4}, catalogue.rail_behind_mm)
     grid = np.linspace(0.0, 360.0, 3601)
     ok = fourbar_closes(b2, b3, b4, d, grid)
     if not ok.all() and (whole_turn or not ok.any()):
@@ -107,8 +84,6 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
                             f"for crank angles {_ranges_text(grid, ~ok)}")
     if not fourbar_closes(b2, b3, b4, d, np.array([start_deg]))[0]:
         start_deg = float(grid[np.flatnonzero(ok)[0]])
-    if branch not in ("open", "crossed"):
-        raise InputError(f"branch = {branch!r} must be 'open' or 'crossed'")
     th = np.radians(start_deg)
     k = fourbar_angles(b2, b3, b4, d, np.array([th]), 1.0, 0.0, BRANCHES[branch])
     A, th3, th4 = b2 * np.array([np.cos(th), np.sin(th)]), k["theta3"][0], k["theta4"][0]
@@ -119,10 +94,8 @@ def four_bar(b2: float, b3: float, b4: float, d: float, *, masses: str | None = 
                   _rail("coupler", L3, c, [("A", c.coupling, (0.0, 0.0)),
                                            ("B", c.plate + c.carriage, (b3, 0.0))]),
                   _rail("rocker", L4, c, [("B", c.coupling, (b4, 0.0))])]
-    elif masses is None:
+    else:  # None (Options)
         bodies = [_massless(n, body_masses) for n in ("crank", "coupler", "rocker")]
-    else:
-        raise InputError(f"masses = {masses!r} must be 'rig' or none")
     joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
               Revolute("A", "crank", "coupler", (b2, 0.0), (0.0, 0.0)),
               Revolute("B", "coupler", "rocker", (b3, 0.0), (b4, 0.0)),
@@ -172,11 +145,10 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
     ``whole_turn`` is False (a kinematics run over the crank's range of motion): then it is built
     at an angle where it closes.
     """
-    _check_lengths(b2=b2, b3=b3)
+    Lengths({"b2": b2, "b3": b3}, signed={"offset": offset})
+    Options(masses=masses)
     if masses == "rig":
-        _check_rails(rails_mm, {"b2": b2, "b3": b3}, catalogue.rail_behind_mm)
-    if not np.isfinite(offset) or abs(offset) > 10000:
-        raise InputError(f"offset = {offset!r} mm is outside the allowed range [-10000, 10000] mm")
+        Rails(tuple(rails_mm), {"b2": b2, "b3": b3}, catalogue.rail_behind_mm)
     grid = np.linspace(0.0, 360.0, 3601)
     ok = np.abs(offset - b2 * np.sin(np.radians(grid))) <= b3
     if not ok.all() and (whole_turn or not ok.any()):
@@ -192,10 +164,8 @@ def slider_crank(b2: float, b3: float, offset: float = 0.0, *, masses: str | Non
         bodies = [_rail("crank", rails_mm[0], c, [("A", c.plate + c.carriage, (b2, 0.0))]),
                   _rail("rod", rails_mm[1], c, [("A", c.coupling, (0.0, 0.0)), ("B", c.plate, (b3, 0.0))]),
                   Body("slider", 0.0, (0.0, 0.0), 0.0, [("B", c.carriage + c.coupling, (0.0, 0.0))])]
-    elif masses is None:
+    else:  # None (Options)
         bodies = [_massless(n, body_masses) for n in ("crank", "rod", "slider")]
-    else:
-        raise InputError(f"masses = {masses!r} must be 'rig' or none")
     joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
               Revolute("A", "crank", "rod", (b2, 0.0), (0.0, 0.0)),
               Revolute("B", "rod", "slider", (b3, 0.0), (0.0, 0.0)),
@@ -228,9 +198,8 @@ def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None
     of the arm, plus a plate at O4.  ``whole_turn`` False: built at an angle where it closes
     even if the crank cannot turn fully (as :func:`four_bar`).
     """
-    _check_lengths(d=d, b2=b2)
-    if not np.isfinite(arm) or arm < 0 or arm > 10000:
-        raise InputError(f"arm = {arm!r} mm is outside the allowed range [0, 10000] mm")
+    Lengths({"d": d, "b2": b2}, arm={"arm": arm})
+    Options(masses=masses)
     grid = np.linspace(0.0, 360.0, 3601)
     f = np.sqrt(b2**2 + d**2 - 2 * b2 * d * np.cos(np.radians(grid)))
     ok = f >= arm
@@ -249,10 +218,8 @@ def inverted_slider_crank(d: float, b2: float, arm: float, *, masses: str | None
         bodies = [_rail("crank", rails_mm[0], c, [("A", c.plate, (b2, 0.0))]),
                   Body("block", 0.0, (0.0, 0.0), 0.0, [("A", c.carriage + c.coupling, (0.0, 0.0))]),
                   Body("rocker", m4, (arm, 0.0), m4 * rails_mm[1] ** 2 / 12, [("O4", c.plate, (0.0, 0.0))])]
-    elif masses is None:
+    else:  # None (Options)
         bodies = [_massless(n, body_masses) for n in ("crank", "block", "rocker")]
-    else:
-        raise InputError(f"masses = {masses!r} must be 'rig' or none")
     joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
               Revolute("A", "crank", "block", (b2, 0.0), (0.0, 0.0)),
               Prismatic("slide", "rocker", "block", (arm, 0.0), (0.0, 1.0), (0.0, 0.0), 0.0),
@@ -276,13 +243,14 @@ def quick_return(b2: float, pivot_below: float, ram_height: float, *, masses: st
     Rig masses (assumption): crank rail + plate at A; carriage + coupling as each block;
     rocker rail of length rails_mm[1] from O4; the ram a carriage + plate.
     """
-    _check_lengths(b2=b2, pivot_below=pivot_below, ram_height=ram_height)
+    Lengths({"b2": b2, "pivot_below": pivot_below, "ram_height": ram_height})
+    Options(masses=masses)
     if pivot_below <= b2:
         raise ClosureError(f"quick-return: pivot_below = {pivot_below:g} mm must exceed the crank "
                             f"b2 = {b2:g} mm or the crank pin reaches the rocker pivot (0-360 deg)")
     if ram_height <= pivot_below + b2:
-        raise InputError(f"ram_height = {ram_height:g} mm must exceed pivot_below + b2 = "
-                         f"{pivot_below + b2:g} mm")
+        raise ClosureError(f"ram_height = {ram_height:g} mm must exceed pivot_below + b2 = "
+                           f"{pivot_below + b2:g} mm or the rocker cannot reach the ram")
     th = np.radians(start_deg)
     A = np.array([b2 * np.cos(th), b2 * np.sin(th)])
     O4 = np.array([0.0, -pivot_below])
@@ -296,10 +264,8 @@ def quick_return(b2: float, pivot_below: float, ram_height: float, *, masses: st
                   _rail("rocker", rails_mm[1], c, [("O4", c.plate, (0.0, 0.0))]),
                   Body("ram_block", point_masses=[("C", c.carriage + c.coupling, (0.0, 0.0))]),
                   Body("ram", point_masses=[("C", c.carriage + c.plate, (0.0, 0.0))])]
-    elif masses is None:
+    else:  # None (Options)
         bodies = [_massless(n, body_masses) for n in ("crank", "block", "rocker", "ram_block", "ram")]
-    else:
-        raise InputError(f"masses = {masses!r} must be 'rig' or none")
     joints = [Revolute("O2", GROUND, "crank", (0.0, 0.0), (0.0, 0.0)),
               Revolute("A", "crank", "block", (b2, 0.0), (0.0, 0.0)),
               Prismatic("slot", "rocker", "block", (0.0, 0.0), (1.0, 0.0), (0.0, 0.0), 0.0),

@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ClosureError, ComputeError  # noqa: F401  (ClosureError: rigfem.linkage names it here)
 from rigfem.linkage.loops import is_full_turn, transmission_angle_deg
 
 GROUND = "ground"
@@ -36,10 +36,6 @@ def perp(v: np.ndarray) -> np.ndarray:
     out[..., 0] = -v[..., 1]
     out[..., 1] = v[..., 0]
     return out
-
-
-class ClosureError(InputError):
-    """The given lengths cannot close the loop at all (message names the lengths and the rule)."""
 
 
 class AssemblyError(ComputeError):

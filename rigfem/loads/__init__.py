@@ -8,6 +8,6 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "cases": ["INERTIA", "UnitLoad", "PartCase", "direction_weights", "directions", "rotate_into", "screw_forces", "bearing_cases", "Bar", "Fitting", "bar_body", "force_on", "rail_angle", "original_rail", "POST_SUPPORTS", "POST_HELD", "original_fitting", "cycle_rail", "cycle_fitting", "part_cases"],
+        "cases": ["UnitLoad", "PartCase", "direction_weights", "directions", "rotate_into", "screw_forces", "Bar", "bar_body", "rail_angle", "cycle_rail", "part_cases"],
     },
 )

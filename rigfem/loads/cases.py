@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigfem.dynamics.history import BodyHistory, ReactionHistory
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError, InputError
 from rigfem.rig.layout import RailLayout
 from rigfem.rig.parts import rail_hole_name
 
@@ -75,7 +75,7 @@ class PartCase:
             raise ValueError(f"{self.name}: coef shape {self.coef.shape} != "
                              f"({len(self.rows)}, {len(self.loads)})")
         if not np.all(np.isfinite(self.coef)):
-            raise InputError(f"{self.name}: load coefficients contain NaN or infinity")
+            raise ComputeError(f"{self.name}: load coefficients contain NaN or infinity")
 
 
 def direction_weights(v: np.ndarray, n_dir: int = 12) -> np.ndarray:
@@ -170,7 +170,7 @@ def bar_body(h: ReactionHistory, bar: Bar) -> str:
     a, b = h.joints[bar.pivot], h.joints[bar.far]
     common = {a.body_a, a.body_b} & {b.body_a, b.body_b}
     if len(common) != 1:
-        raise InputError(f"{bar.name}: joints {bar.pivot} and {bar.far} do not share exactly one body")
+        raise ComputeError(f"{bar.name}: joints {bar.pivot} and {bar.far} do not share exactly one body")
     return common.pop()
 
 
@@ -181,7 +181,7 @@ def force_on(h: ReactionHistory, joint: str, body: str) -> np.ndarray:
         return j.force_N
     if body == j.body_a:
         return -j.force_N
-    raise InputError(f"joint {joint} does not act on body {body}")
+    raise ComputeError(f"joint {joint} does not act on body {body}")
 
 
 def rail_angle(h: ReactionHistory, bar: Bar) -> np.ndarray:

@@ -10,8 +10,8 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "geometry": ["gmsh_session", "build", "occ_volume_mm3"],
         "volume": ["volume_mm3", "mass_kg"],
-        "mesher": ["MACHINE_GIB", "TETS_PER_H3", "CURVATURE_MM", "MeshSettings", "curvature_n", "DEFAULT_SIZE", "Estimate", "estimate_tets", "estimate", "estimate_part", "check_estimate", "TETS_PER_S", "SMOOTHED_KINDS", "second_order", "mesh_part", "mesh_inputs", "make_mesh", "prefetch"],
+        "mesher": ["MACHINE_GIB", "MeshSettings", "curvature_n", "DEFAULT_SIZE", "estimate_tets", "estimate", "estimate_part", "check_estimate", "second_order", "mesh_part", "mesh_inputs", "make_mesh", "prefetch"],
         "pool": ["WORKERS", "submit", "take", "cancel"],
-        "partmesh": ["Hole", "PartMesh", "fit_cylinder", "quality_summary", "save_npz", "load_npz", "TET10_EDGES", "TRI6_EDGES", "TET_FACES", "TET_FACE_OPPOSITE", "boundary_faces", "face_owners", "quadratic", "to_meshio", "write_mesh"],
+        "partmesh": ["Hole", "PartMesh", "fit_cylinder", "save_npz", "load_npz", "TET_FACE_OPPOSITE", "boundary_faces", "face_owners", "quadratic", "to_meshio", "write_mesh"],
     },
 )

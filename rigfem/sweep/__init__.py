@@ -8,8 +8,8 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "configs": ["SweepParams", "enumerate_configs"],
-        "bases": ["UnitBasis", "build_bases"],
-        "superpose": ["case_peak", "case_outcome"],
+        "bases": ["build_bases"],
+        "superpose": ["case_peak"],
         "run": ["evaluate", "run_chunk", "run_sweep", "SweepOptions"],
         "report": ["write_report"],
         "cost": ["JobCost", "check_cost", "sweep_cost", "synthesis_cost"],

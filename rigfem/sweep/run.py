@@ -131,7 +131,7 @@ def run_chunk(configs: list[dict], p: SweepParams, bases: dict[tuple, UnitBasis]
     for r in rows:
         bad = [k for k, v in r.items() if isinstance(v, float) and not np.isfinite(v)]
         if bad:
-            raise InputError(f"configuration {configs[0]}: non-finite {', '.join(bad)}")
+            raise ComputeError(f"configuration {configs[0]}: non-finite {', '.join(bad)}")
     return rows
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.fe.partcase import imbalance
 from rigfem.fe.stress import error_band_pct, patch, patch_error
 from rigfem.tensors import von_mises
@@ -37,7 +37,7 @@ def _columns(b: UnitBasis, u: UnitLoad, mass_ratio: float) -> list[tuple[int, fl
     e0, e1 = np.array([np.cos(ang[i0]), np.sin(ang[i0])]), np.array([np.cos(ang[i1]), np.sin(ang[i1])])
     w = np.linalg.solve(np.c_[e0, e1], [np.cos(a), np.sin(a)])
     if (w < -1e-12).any() or (diff[i0] + diff[i1]) > np.pi / 2 + 1e-9:
-        raise InputError(f"bearing direction on {u.group} is not between two basis directions")
+        raise ComputeError(f"bearing direction on {u.group} is not between two basis directions")
     return [(int(cols[i0]), float(w[0])), (int(cols[i1]), float(w[1]))]
 
 

@@ -8,7 +8,7 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "criterion": ["Verdict", "LIMIT_FACTOR", "IMBALANCE_TOL", "allowable_stress", "half_ultimate", "overall"],
+        "criterion": ["Verdict", "IMBALANCE_TOL", "half_ultimate", "overall"],
         "fatigue": ["Marin", "marin_endurance", "goodman"],
         "part": ["Outcome", "PartVerdict", "Verdicts", "Target", "judge"],
     },

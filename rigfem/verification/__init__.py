@@ -10,7 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "convergence": ["RATIO", "EXTEND", "AWAY_MM", "TARGETS", "StepSpec", "StudySpec", "richardson", "h_levels", "run_step", "scene_cases", "study", "analyse",
                         "to_json"],
-        "calculix": ["Comparison", "compare", "cross_check", "verify_job"],
+        "calculix": ["compare", "cross_check", "verify_job"],
         "closed_form": ["kt_plate_hole", "plate_hole_peak_mpa"],
         "le10": ["solve_le10"],
     },

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.tensors import von_mises
 from rigfem.io.calculix import CcxResult, export_model, run_ccx
 
@@ -45,7 +45,7 @@ def compare(solution: Any, result: CcxResult, coef: np.ndarray | None = None) ->
     n, k = len(x), solution.cases
     coef = np.eye(k) if coef is None else np.atleast_2d(np.asarray(coef, dtype=float))
     if result.displacement.shape[0] != len(coef):
-        raise InputError(f"ccx result has {result.displacement.shape[0]} load cases, expected {len(coef)}")
+        raise ComputeError(f"ccx result has {result.displacement.shape[0]} load cases, expected {len(coef)}")
     out = []
     for j, c in enumerate(coef):
         u_fe, u_cx = solution.displacement(c), result.displacement[j, :n]

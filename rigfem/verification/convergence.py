@@ -132,9 +132,9 @@ def richardson(h: Sequence[float], q: Sequence[float]) -> Extrapolation:
     """
     h, q = [float(v) for v in h], [float(v) for v in q]
     if len(h) != len(q) or len(q) < 3:
-        raise InputError(f"Richardson extrapolation needs at least 3 levels, got {len(q)}")
+        raise ComputeError(f"Richardson extrapolation needs at least 3 levels, got {len(q)}")
     if any(not math.isfinite(v) for v in h + q) or any(b >= a for a, b in zip(h, h[1:])) or h[-1] <= 0:
-        raise InputError("Richardson extrapolation needs finite values and mesh sizes > 0 decreasing "
+        raise ComputeError("Richardson extrapolation needs finite values and mesh sizes > 0 decreasing "
                          "coarse → fine")
     orders = [_order(h[i:i + 3], q[i:i + 3])[0] for i in range(len(q) - 2)]
     p, why = _order(h[-3:], q[-3:])
@@ -353,7 +353,7 @@ def study(cases_for: Callable[[int], list], settings, plan: StudySpec = StudySpe
         for spec in preset_steps():
             run(spec)
     if not [s for s in steps if s["kind"] == "h"]:
-        raise InputError(f"{name}: no h level could be solved ({'; '.join(refused)})")
+        raise ComputeError(f"{name}: no h level could be solved ({'; '.join(refused)})")
     return analyse(out)
 
 
