@@ -239,8 +239,8 @@ def conclusion_lines(r: dict) -> list[str]:
                 f"- reserve to the limit {c['reserve_pct']:.1f} % ({c['reserve_mpa']:.1f} MPa) at the band's top"]
     nc = r.get("not_checked") or {}
     if nc.get("parts") or nc.get("modes"):
-        out.append(f"- **not checked**: " + "; ".join(
-            t for t in (f"parts {', '.join(nc['parts'])}" if nc.get("parts") else "",
+        out.append("- **not checked**: " + "; ".join(
+            t for t in (f"parts {md_text(', '.join(nc['parts']))}" if nc.get("parts") else "",
                         f"{' and '.join(nc['modes'])} mode" if nc.get("modes") else "") if t)
                    + " (this check covers " + md_text(r["checked"]) + ")")
     return out

@@ -23,7 +23,6 @@ from rigfem.report.document import (
     configuration_lines,
     loads_lines,
     model_lines,
-    notes_lines,
     safety_factor,
     study_tables,
     title_block,
@@ -59,18 +58,19 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
     """The HTML page of a check report whose pictures and animation frames lie in ``folder``."""
     folder = Path(folder)
     r = report
-    files = list(r.get("files", [])) + list(r.get("field_files", []))
     names = list(dict.fromkeys(p["name"] for p in r["parts"]))
     pictures = {f: embedded_png(folder / f) for f in ["reactions.png", "peak_von_mises.png"]
                 + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor")]}
-    # link only files that are in the folder (a committed report may come without its VTU files)
-    present = [f for f in files if (folder / f).is_file() and f != "report.html"]
-    vtk = [f for f in present if f.endswith((".vtu", ".pvd")) and not f[:-4].rsplit("_", 1)[-1].isdigit()]
+    # links only to the files kept with the report; the field files (VTU/PVD/INP, not kept in the
+    # repository's result folders) are named, never linked
+    kept = [f for f in r.get("files", []) if (folder / f).is_file() and f != "report.html"]
+    fields = list(r.get("field_files", []))
+    present = [f for f in fields if (folder / f).is_file()]
     viewer = viewer_data(folder, present, r["limit_mpa"], cache)
     return render_page(
         "report.html.j2", r=r, cfg=r["configuration"], s=r["settings"], torque=r.get("torque_Nm"),
-        pictures=pictures, mode_text=MODE_TEXT, vtk=vtk, others=[f for f in present if f not in vtk
-                                                                and not f.endswith(".vtu")],
+        pictures=pictures, mode_text=MODE_TEXT, kept=kept,
+        fields=[f for f in fields if not f[:-4].rsplit("_", 1)[-1].isdigit()],
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
         viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
         allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
@@ -78,7 +78,7 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
         safety=lambda p: p.get("safety_factor", safety_factor(p.get("peak_mpa"), r["limit_mpa"])),
         md={k: markdown_html("\n".join(f(r))) for k, f in
             (("title", title_block), ("configuration", configuration_lines), ("assumptions", assumption_lines),
-             ("loads", loads_lines), ("notes", notes_lines), ("tables", study_tables), ("model", model_lines))})
+             ("loads", loads_lines), ("tables", study_tables), ("model", model_lines))})
 
 
 def write_html(report: dict, folder: str | Path, cache: Cache | None = None) -> Path:
