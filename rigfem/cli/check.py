@@ -70,7 +70,7 @@ def _overrides(a: argparse.Namespace) -> dict:
 def _summary(r: dict) -> str:
     """The terminal's summary: the governing part case first, then every part case by utilisation
     (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
-    from rigfem.report.document import allowable_label, by_utilisation, verdict_line
+    from rigfem.report.document import allowable_label, by_utilisation, sf_text, verdict_line
 
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
     lines = [f"{plain(r['scene'])}: {plain(r['description'])}"]
@@ -78,7 +78,7 @@ def _summary(r: dict) -> str:
     if c:
         lo, hi = c["utilisation_band_pct"]
         lines.append(f"governing: {c['name']} ({c['part']}), {c['mode']} mode: {c['utilisation_pct']:.1f} % of the "
-                     f"{allowable} (band {lo:.1f}-{hi:.1f} %), factor of safety {c['min_safety_factor']:.2f}, "
+                     f"{allowable} (band {lo:.1f}-{hi:.1f} %), factor of safety {sf_text(c['min_safety_factor'])}, "
                      f"reserve {c['reserve_pct']:.1f} %")
     lines.append(f"{'part':14s} {'mode':9s} {'peak σvm (MPa)':>14s} {'band (±%)':>9s} {'util. (%)':>9s} "
                  f"{'FoS (–)':>7s} {'crank (deg)':>11s}  verdict    where")
@@ -88,9 +88,8 @@ def _summary(r: dict) -> str:
                          f"{p['verdict'].upper():9s}  {p['notes'][0]}")
             continue
         why = f": {plain(p['reason'])}" if p.get("reason") else ""
-        sf = p.get("safety_factor")
         lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:14.1f} {p['error_pct']:9.1f} "
-                     f"{p['utilisation_pct']:9.1f} {'-' if sf is None else f'{sf:.2f}':>7s} {p['crank_deg']:11.1f}  "
+                     f"{p['utilisation_pct']:9.1f} {sf_text(p.get('safety_factor')):>7s} {p['crank_deg']:11.1f}  "
                      f"{p['verdict'].upper():9s}  {p['surface']}{why}")
     lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])

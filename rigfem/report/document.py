@@ -200,7 +200,8 @@ def verdict_line(r: dict) -> str:
     return r["verdict"].upper() + (f" ({checked})" if checked else "")
 
 
-def _sf(x) -> str:
+def sf_text(x) -> str:
+    """A factor of safety as printed: two decimals, ``–`` when there is none."""
     return "–" if x is None else f"{x:.2f}"
 
 
@@ -234,8 +235,8 @@ def conclusion_lines(r: dict) -> list[str]:
         out += ["", f"- governing: **{part_label(c['name'], c['part'])}, {c['mode']} mode** — "
                 f"{c['verdict'].upper()}, peak σvm {c['peak_mpa']:.1f} MPa at crank {_fmt(c['crank_deg'])}°",
                 f"- utilisation {c['utilisation_pct']:.1f} % (band {lo:.1f}–{hi:.1f} %)",
-                f"- minimum factor of safety {_sf(c['min_safety_factor'])} against the {allowable} "
-                f"({_sf(c['min_safety_factor_ultimate'])} against σu)",
+                f"- minimum factor of safety {sf_text(c['min_safety_factor'])} against the {allowable} "
+                f"({sf_text(c['min_safety_factor_ultimate'])} against σu)",
                 f"- reserve to the limit {c['reserve_pct']:.1f} % ({c['reserve_mpa']:.1f} MPa) at the band's top"]
     nc = r.get("not_checked") or {}
     if nc.get("parts") or nc.get("modes"):
@@ -264,14 +265,14 @@ def verdict_table(r: dict) -> list[str]:
         where = f"{p['surface']} ({', '.join(f'{x:.1f}' for x in p['location_mm'])})"
         sf = p.get("safety_factor", safety_factor(p["peak_mpa"], r["limit_mpa"]))
         out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | {p['peak_mpa']:.1f} | "
-                   f"{p['utilisation_pct']:.1f} | ±{p['error_pct']:.1f} | **{p['verdict'].upper()}** | {_sf(sf)} | "
-                   f"{_fmt(p.get('crank_deg'))} | {where} | {_sf(fat['safety_factor']) if fat else '–'} |")
+                   f"{p['utilisation_pct']:.1f} | ±{p['error_pct']:.1f} | **{p['verdict'].upper()}** | {sf_text(sf)} | "
+                   f"{_fmt(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} |")
     minima = r.get("part_minima")
     if minima:
         out += ["", "Minimum factor of safety per part (over the modes checked):", "",
                 "| part | against the allowable (–) | against σu (–) | in mode |", "|---|---|---|---|"]
-        out += [f"| {part_label(m['name'], m['part'])} | {_sf(m['min_safety_factor'])} | "
-                f"{_sf(m['min_safety_factor_ultimate'])} | {m['mode']} |" for m in minima]
+        out += [f"| {part_label(m['name'], m['part'])} | {sf_text(m['min_safety_factor'])} | "
+                f"{sf_text(m['min_safety_factor_ultimate'])} | {m['mode']} |" for m in minima]
     return out
 
 
