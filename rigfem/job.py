@@ -9,6 +9,8 @@ Everything after it trusts the Job.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -36,18 +38,20 @@ _DYNAMICS = {"samples": 360, "mass_model": "rigid-body", "frames": 12, "reaction
 @dataclasses.dataclass(frozen=True)
 class Request:
     """A check as asked: a scene (file or built-in name), ``[check]`` fields that override the
-    scene's (``{"fidelity": "draft", "parts": ["plate_A"]}``), and whether a configuration that
-    breaks a rig rule is checked anyway."""
+    scene's (``{"fidelity": "draft", "parts": ["plate_A"]}``), whether a configuration that
+    breaks a rig rule is checked anyway, and who signs the report."""
 
     scene: str | Path = REFERENCE_SCENE
     overrides: Mapping = dataclasses.field(default_factory=dict)
     allow_rule_violations: bool = False
+    author: str | None = None  #: the report's author (None: the scene's ``[report] author``)
 
 
 @dataclasses.dataclass(frozen=True)
 class Job:
     """A scene read for checking: its linkage with the forces it names, the check's settings, how
-    the reactions are got, the animation frames, the rig rules it breaks (allowed explicitly)."""
+    the reactions are got, the animation frames, the rig rules it breaks (allowed explicitly), the
+    hashes of its inputs and the report's author."""
 
     scene: Scene
     linkage: Linkage
@@ -56,6 +60,9 @@ class Job:
     frames: int  #: VTU frames of the cycle animation (0: none)
     rule_violations: tuple[str, ...] = ()
     description: str = ""
+    scene_sha256: str = ""  #: SHA-256 of the scene file's bytes
+    input_sha256: str = ""  #: SHA-256 of everything the result depends on (scene, [check] as run, reactions CSV)
+    author: str = ""
 
     @property
     def crank_deg(self):
@@ -71,6 +78,10 @@ class Checked:
     reactions: Reactions
     results: tuple[CaseResult, ...]
     verdicts: Verdicts
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
 
 
 def read_job(request: Request, cache: Cache) -> Job:
@@ -104,5 +115,11 @@ def read_job(request: Request, cache: Cache) -> Job:
                              f"next to the scene ({plain(str(csv_path), 120)})")
     options = DynamicsOptions(int(dyn["samples"]), dyn["mass_model"], sc.speed_hz, csv_path,
                               dyn["reactions_csv_missing"])
+    scene_sha = _sha256(path.read_bytes())
+    inputs = {"scene": scene_sha, "allow_rule_violations": bool(broken),  # the CSV by its content, not its path
+              "check": {**table, **dyn, "reactions_csv": _sha256(csv_path.read_bytes()) if csv_path else None}}
+    author = request.author if request.author is not None else sc.raw.get("report", {}).get("author", "")
     return Job(sc, lk, settings, options, int(dyn["frames"]), tuple(broken),
-               sc.raw.get("description", sc.raw["linkage"].get("title", "")))
+               sc.raw.get("description", sc.raw["linkage"].get("title", "")), scene_sha,
+               _sha256(json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str).encode()),
+               plain(author, 200))

@@ -19,6 +19,9 @@ class Observer:
     def step(self, done: int, total: int, what: str) -> None:
         """``done`` of ``total`` counted steps are finished, the last one ``what`` (a part case, a chunk)."""
 
+    def remaining(self, seconds: float | None) -> None:
+        """The running stage's estimated time left (None: no estimate)."""
+
     def partial(self, result: dict) -> None:
         """A long study's result so far (kept where the job may stop before the end)."""
 

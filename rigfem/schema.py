@@ -171,12 +171,19 @@ class CheckTable(_Table):
         return self
 
 
+class ReportTable(_Table):
+    """``[report]``: what the report says beside the results (``rigfem check --author`` overrides it)."""
+
+    author: Annotated[str, Field(max_length=200)] = ""
+
+
 class SceneFile(_Table):
     """A whole scene file."""
 
     description: Text = ""
     linkage: LinkageTable
     check: CheckTable = CheckTable()
+    report: ReportTable = ReportTable()
 
 
 # ----------------------------------------------------------------------------- errors
@@ -197,7 +204,7 @@ def _field(loc: tuple) -> str:
 
 
 _TAGS = {"four-bar", "slider-crank", "inverted-slider-crank", "quick-return"}
-_TABLE_NAMES = {"linkage", "check", "bodies", "gas", "fatigue", "coupler_point", "material"}
+_TABLE_NAMES = {"linkage", "check", "report", "bodies", "gas", "fatigue", "coupler_point", "material"}
 
 
 def _allowed(model: type[BaseModel] | None) -> list[str]:

@@ -3,6 +3,7 @@ or link, no raw markup in the visible text, a screenshot that is not blank; the 
 explorer respond.  A missing chromium fails these tests (CI installs it), it never skips them."""
 
 import io
+import re
 import shutil
 from pathlib import Path
 from urllib.parse import unquote, urlparse
@@ -77,3 +78,30 @@ def test_report_3d_view(browser, tmp_path):
     page.eval("document.getElementById('v-zin').click()")
     assert page.eval("document.getElementById('v-canvas').toDataURL()") != first
     assert page.errors() == []
+
+
+def test_fresh_report_first_screen_print_layout_and_pdf(browser, tmp_path):
+    """A fresh folder: the conclusion and the governing row on the first screen; in print (A4) no
+    table wider than the page, a page per part, the 3-D view left out; ``rigfem show --pdf`` renders."""
+    from rigfem.cli import main
+
+    out = tmp_path / "final-cm"
+    run_check(Request("final-cm", {"fidelity": "draft", "parts": ["plate_A", "post_B"], "frames": 2}), Output(out))
+    page = _check_page(browser, out / "report.html", tmp_path)
+    first = page.eval("[document.querySelector('.conclusion').getBoundingClientRect().bottom,"
+                      " document.querySelector('tr.governing').getBoundingClientRect().bottom]")
+    assert max(first) < 1000, first  # both on the first screen of a 1400 x 1000 window
+    assert "post_B" in page.eval("document.querySelector('tr.governing').innerText")
+    page.b.call("Emulation.setEmulatedMedia", page.s, media="print")
+    page.b.call("Emulation.setDeviceMetricsOverride", page.s, width=718, height=1000, deviceScaleFactor=1,
+                mobile=False)  # A4's printable width at 10 mm margins, CSS px
+    wide = page.eval("[...document.querySelectorAll('table')].map(t => t.getBoundingClientRect().right)"
+                     ".filter(r => r > document.body.getBoundingClientRect().right + 1).length")
+    assert wide == 0
+    breaks = page.eval("[...document.querySelectorAll('section.part')].map(s => getComputedStyle(s).breakBefore)")
+    assert breaks == ["auto", "page"] and page.eval("getComputedStyle(document.querySelector('h2.parts')).breakBefore") == "page"
+    assert page.eval("getComputedStyle(document.querySelector('.interactive')).display") == "none"
+    assert main(["show", str(out), "--pdf"]) == 0
+    pdf = (out / "report.pdf").read_bytes()
+    pages = len(re.findall(rb"/Type\s*/Page\b", pdf))
+    assert pdf.startswith(b"%PDF-") and pdf.rstrip().endswith(b"%%EOF") and 4 <= pages <= 20, pages

@@ -357,7 +357,7 @@ def test_pipe_to_head_ends_quietly():
 
 
 @pytest.mark.parametrize("cmd", ["check", "reactions", "kinematics", "convergence", "verify", "mesh", "sweep",
-                                 "synthesize function", "synthesize motion", "parts", "show"])
+                                 "synthesize function", "synthesize motion", "parts", "show", "compare"])
 def test_help_reads_as_text_with_every_default(capsys, cmd):
     with pytest.raises(SystemExit):
         main([*cmd.split(), "--help"])

@@ -34,7 +34,7 @@ def _report():
             "rules": [{"name": "grashof", "value": 1.0, "limit": 0.0, "ok": True}],
             "peaks": {"A": {"force_N": 430.2, "crank_deg": 16.6}},
             "torque_Nm": {"peak": 150.0, "crank_deg": 20.0},
-            "settings": {"modes": ["original"], "limit_factor": 0.5, "material": "rig_steel",
+            "settings": {"modes": ["original"], "limit_factor": 0.5, "material": "rig_steel", "sigma_u_mpa": 750.0,
                          "fidelity": "standard", "order": 2, "size_mm": 6.0, "local_size_mm": 1.2},
             "parts": [part]}
 
@@ -42,7 +42,8 @@ def _report():
 def test_markdown_and_json(tmp_path):
     r = _report()
     md = render_markdown(r)
-    assert "| crank_rail (rail_size25) | 123.4 | 16.6 | hole_02 (80.0, 3.5, 12.0) | ±2.0 % | 32.9 % | **pass** | – |" in md
+    assert ("| crank_rail (rail_size25) | original | 123.4 | 32.9 | ±2.0 | **PASS** | 3.04 | 16.6 | "
+            "hole_02 (80.0, 3.5, 12.0) | – |") in md
     assert "Overall verdict: PASS" in md
     write_json(r, tmp_path / "r.json")
     assert json.loads((tmp_path / "r.json").read_text())["parts"][0]["peak_mpa"] == 123.4
@@ -61,7 +62,7 @@ def two_plates(tmp_path_factory):
 
 def test_report_json_has_material_mesh_and_balance_tables(two_plates):
     report, out = two_plates
-    assert report["schema"] == 3 and report["configuration"]["branch"] == "open"
+    assert report["schema"] == 4 and report["configuration"]["branch"] == "open"
     mat = {m["property"]: m for m in report["material"]}
     assert set(mat) == {"E", "nu", "sigma_u", "sigma_y", "density"}
     assert mat["E"]["value"] == 210000.0 and mat["density"]["value"] == pytest.approx(7850.0)

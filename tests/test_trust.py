@@ -129,7 +129,7 @@ def test_unloaded_part_among_loaded_ones_is_not_a_pass(tmp_path, monkeypatch, ca
     assert verdicts == {"plate_A": "pass", "plate_B": "not loaded"} and r["verdict"] == "undecided"
     assert "NOT LOADED" in capsys.readouterr().out
     assert 'class="badge not-loaded"' in (tmp_path / "o" / "report.html").read_text()
-    assert "**not loaded**" in (tmp_path / "o" / "report.md").read_text()
+    assert "**NOT LOADED**" in (tmp_path / "o" / "report.md").read_text()
 
 
 def test_criterion_never_passes_unloaded_or_unbalanced():

@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "verify": "verify",
     "sweep": "sweep",
     "show": "show",
+    "compare": "compare",
     "synthesize": "synthesize",
     "cache": "cache",
 }

@@ -14,7 +14,7 @@ from pathlib import Path
 from rigfem.cli.exitcodes import EXIT
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import check_place, wrote
-from rigfem.cli.progress import OBSERVER
+from rigfem.cli.progress import OBSERVER, above
 from rigfem.errors import plain
 from rigfem.settings import REFERENCE_SCENE
 
@@ -46,6 +46,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--solver", default="auto", help="auto | pardiso | superlu | amg")
     p.add_argument("--export-inp", action="store_true",
                    help="also write each part case at its critical crank angle as a CalculiX deck (.inp)")
+    p.add_argument("--author", help="the report's author, in its title block (default: the scene's [report] author)")
     p.add_argument("--json", action="store_true", help="print the report JSON instead of the summary")
     p.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     p.add_argument("--no-pictures", action="store_true",
@@ -67,45 +68,66 @@ def _overrides(a: argparse.Namespace) -> dict:
 
 
 def _summary(r: dict) -> str:
-    lines = [f"{plain(r['scene'])}: {plain(r['description'])}",
-             f"{'part':14s} {'mode':9s} {'peak σvm':>9s} {'crank°':>7s} {'error':>7s} {'util.':>7s}  verdict  where"]
-    for p in r["parts"]:
+    """The terminal's summary: the governing part case first, then every part case by utilisation
+    (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
+    from rigfem.report.document import allowable_label, by_utilisation, sf_text, verdict_line
+
+    allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
+    lines = [f"{plain(r['scene'])}: {plain(r['description'])}"]
+    c = r.get("conclusion")
+    if c:
+        lo, hi = c["utilisation_band_pct"]
+        lines.append(f"governing: {c['name']} ({c['part']}), {c['mode']} mode: {c['utilisation_pct']:.1f} % of the "
+                     f"{allowable} (band {lo:.1f}-{hi:.1f} %), factor of safety {sf_text(c['min_safety_factor'])}, "
+                     f"reserve {c['reserve_pct']:.1f} %")
+    lines.append(f"{'part':14s} {'mode':9s} {'peak σvm (MPa)':>14s} {'band (±%)':>9s} {'util. (%)':>9s} "
+                 f"{'FoS (–)':>7s} {'crank (deg)':>11s}  verdict    where")
+    for p in by_utilisation(r["parts"]):
         if p.get("peak_mpa") is None:
-            lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>9s} {'-':>7s} {'-':>7s} {'-':>7s}  "
-                         f"{p['verdict'].upper():7s}  {p['notes'][0]}")
+            lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>14s} {'-':>9s} {'-':>9s} {'-':>7s} {'-':>11s}  "
+                         f"{p['verdict'].upper():9s}  {p['notes'][0]}")
             continue
         why = f": {plain(p['reason'])}" if p.get("reason") else ""
-        lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:9.1f} {p['crank_deg']:7.1f} "
-                     f"{p['error_pct']:6.1f}% {p['utilisation_pct']:6.1f}%  {p['verdict'].upper():7s}  "
-                     f"{p['surface']}{why}")
+        lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:14.1f} {p['error_pct']:9.1f} "
+                     f"{p['utilisation_pct']:9.1f} {sf_text(p.get('safety_factor')):>7s} {p['crank_deg']:11.1f}  "
+                     f"{p['verdict'].upper():9s}  {p['surface']}{why}")
     lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
-    scope = f"; checked {r['left_out']}" if r.get("left_out") else ""
-    lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa{scope})")
+    if r.get("not_checked", {}).get("parts"):
+        lines.append(f"not checked: {', '.join(r['not_checked']['parts'])}")
+    lines.append(f"overall: {verdict_line(r)}; {allowable}")
     return "\n".join(lines)
+
+
+def _list_scenes() -> None:
+    """The built-in scenes and their descriptions, read as text (nothing of the FE is imported)."""
+    from importlib import resources
+
+    root = resources.files("rigfem") / "scenes"
+    for f in sorted((p for p in root.iterdir() if p.name.endswith(".toml")), key=lambda p: p.name):
+        data = tomllib.loads(f.read_text())
+        print(f"{f.name[:-5]:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
 
 
 class _Verdict(OBSERVER.__class__):
     """The command line's progress, and the summary printed as soon as the verdicts are known."""
 
     def decided(self, report: dict) -> None:  # before the pictures and files are written
-        print(_summary(report), flush=True)
+        with above():
+            print(_summary(report), flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.list:  # a listing is instant: before any of the check's imports
+        _list_scenes()
+        return 0
     from rigfem.cache import from_environment
     from rigfem.context import Context
     from rigfem.pipeline import Output, Request, run_check
-    from rigfem.scene import builtin_scenes
 
-    if args.list:
-        for name, path in sorted(builtin_scenes().items()):
-            data = tomllib.loads(path.read_text())
-            print(f"{name:32s} {plain(data.get('description', data['linkage'].get('title', '')))}")
-        return 0
     if args.out is not None:
         check_place("--out", args.out, folder=True)
-    request = Request(args.scene, _overrides(args), args.allow_rule_violations)
+    request = Request(args.scene, _overrides(args), args.allow_rule_violations, args.author)
     output = Output(Path(args.out) if args.out is not None else None, args.force, not args.no_pictures,
                     args.export_inp)
     ctx = Context(from_environment(), OBSERVER if args.json else _Verdict(), args.solver)
@@ -113,5 +135,6 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
     out = Path(args.out) if args.out is not None else Path("results") / report["scene"]
-    wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")
+    with above():  # on a line of its own, not after the progress line
+        wrote(f"{out}{os.sep} (report.md, report.html; rigfem show {out})")
     return EXIT[report["verdict"]]

@@ -1,7 +1,8 @@
 """Progress of a long command, by stage: after :data:`AFTER_S` seconds a line on stderr naming
 the command, its stage and the elapsed time — redrawn in place on a terminal; plain log lines
 otherwise (CI logs, files): one when each stage begins and one every :data:`EVERY_S` seconds,
-``rigfem <command>: <stage> · <done>/<total> <unit> … <elapsed> s``.  Library code never prints: it
+``rigfem <command>: <stage> · <done>/<total> <unit> … <elapsed> s``, with the time left where the
+stage has an estimate (counting down on a terminal).  Library code never prints: it
 reports to the :class:`rigfem.observer.Observer` of its context, and the CLI's is :data:`OBSERVER`,
 which shows the same on a terminal as in a log."""
 
@@ -15,7 +16,7 @@ from collections.abc import Iterator
 
 from rigfem.observer import Observer
 
-__all__ = ["AFTER_S", "EVERY_S", "heartbeat", "stage", "OBSERVER"]
+__all__ = ["AFTER_S", "EVERY_S", "heartbeat", "stage", "above", "OBSERVER"]
 
 AFTER_S, EVERY_S = 2.0, 10.0
 _SPIN = "|/-\\"
@@ -28,11 +29,20 @@ class _Beat:
     def __init__(self, what: str, stream, tty: bool) -> None:
         self.what, self.stream, self.tty = what, stream, tty
         self.stage, self.t0, self.lines, self.count = "running", time.monotonic(), 0, ""
+        self.deadline: float | None = None  #: when the stage's estimate says it ends (monotonic s)
         self.lock = threading.Lock()
+
+    def left(self) -> str:
+        """`` · about N s left`` of the stage's estimate, or that it runs past it."""
+        if self.deadline is None:
+            return ""
+        s = self.deadline - time.monotonic()
+        return (" · past the estimate" if s <= 0 else f" · about {s:.0f} s left" if s < 90
+                else f" · about {s / 60:.0f} min left")
 
     def line(self) -> None:
         """Write the current line (the caller decides when)."""
-        text = f"rigfem {self.what}: {self.stage}{self.count} … {time.monotonic() - self.t0:.0f} s"
+        text = f"rigfem {self.what}: {self.stage}{self.count}{self.left()} … {time.monotonic() - self.t0:.0f} s"
         with self.lock, contextlib.suppress(OSError, ValueError):
             self.stream.write(f"\r\x1b[K{text} {_SPIN[self.lines % 4]}" if self.tty else text + "\n")
             self.stream.flush()
@@ -45,9 +55,30 @@ def stage(name: str) -> None:
     if not _LIVE:
         return
     beat = _LIVE[-1]
-    beat.stage, beat.count = name, ""
+    beat.stage, beat.count, beat.deadline = name, "", None
     if not beat.tty and beat.lines:
         beat.line()
+
+
+def remaining(seconds: float | None) -> None:
+    """The running stage is estimated to end in ``seconds`` (None: no estimate)."""
+    if _LIVE:
+        _LIVE[-1].deadline = None if seconds is None else time.monotonic() + seconds
+
+
+@contextlib.contextmanager
+def above() -> Iterator[None]:
+    """Print on stdout inside this block: a terminal's progress line is erased first and redrawn
+    below what was printed, never mixed into it."""
+    if not _LIVE or not _LIVE[-1].tty:
+        yield
+        return
+    beat = _LIVE[-1]
+    with beat.lock:
+        with contextlib.suppress(OSError, ValueError):
+            beat.stream.write("\r\x1b[K")
+            beat.stream.flush()
+        yield
 
 
 def step(done: int, total: int, what: str) -> None:
@@ -64,6 +95,9 @@ class _Progress(Observer):
 
     def step(self, done: int, total: int, what: str) -> None:
         step(done, total, what)
+
+    def remaining(self, seconds: float | None) -> None:
+        remaining(seconds)
 
 
 #: the observer every command hands its library calls

@@ -75,10 +75,14 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, plan: Plan = Plan()
     def job(g: tuple) -> tuple:  # the part and mesh settings of g's current level
         return group_job(geo[g], levels[level[g]][1])
 
-    order = sorted(geo, key=lambda g: getattr(estimate_part(*job(g)), "tets", math.inf))
+    def tets(g: tuple) -> float:  # the estimated mesh of g's current level
+        return getattr(estimate_part(*job(g)), "tets", math.inf)
+
+    order = sorted(geo, key=tets)
     prefetch([job(g) for g in order], cache)
     start_compiling(cache)  # a first run after an install: numba compiles while the meshes are made
     queue, sink, done = collections.deque(order), Sink(), 0
+    eta = _Remaining()
     while queue:
         try:
             g = next_ready(queue, lambda g: mesh_state(*job(g), cache))
@@ -91,7 +95,10 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, plan: Plan = Plan()
         t0 = time.perf_counter()
         observer.stage(f"solving part {geo[g][0][1].name}" + (f" ({name})" if name else "")
                        + (f" · {done} of {len(cases)} cases done" if done else ""))
+        observer.remaining(eta.seconds([tets(q) for q in [g, *queue]]))
+        work = tets(g)
         out = plan.solve(geo[g], s, ctx.solver, cache)
+        eta.solved(work)
         ladder.tried(g, name, s, out, time.perf_counter() - t0)
         step = next_step(out, k, levels, plan.judge)
         if not step.final:
@@ -113,6 +120,25 @@ def solve_cases(cases: list[tuple[str, PartCase]], settings, plan: Plan = Plan()
         trim_heap()  # what the part's solve and the reduction freed goes back to the system
         done += len(geo[g])
     return [sink.results[id(case)] for _, case in cases]
+
+
+class _Remaining:
+    """The FE stage's time left, estimated: the seconds spent so far per estimated tetrahedron
+    solved (:func:`rigfem.mesh.mesher.estimate_part`), times the tetrahedra of the parts still to
+    solve at their current level (a part that climbs adds its next level on the way)."""
+
+    def __init__(self) -> None:
+        self.t0, self.work = time.perf_counter(), 0.0
+
+    def solved(self, tets: float) -> None:
+        self.work += tets
+
+    def seconds(self, todo: list[float]) -> float | None:
+        """Seconds left to solve parts of ``todo`` estimated tetrahedra (None until a part is solved,
+        or with a part of unknown size)."""
+        if not (0 < self.work < math.inf) or not all(t < math.inf for t in todo):
+            return None
+        return (time.perf_counter() - self.t0) / self.work * sum(todo)
 
 
 class _Ladders:

@@ -11,16 +11,22 @@ from __future__ import annotations
 from pathlib import Path
 
 from rigfem import __version__
+from rigfem.report.provenance import provenance
 from rigfem.context import Context
 from rigfem.fe.partcase import CaseResult, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.job import Checked
 from rigfem.report.document import (
+    ASSUMPTIONS,
     REPORT_SCHEMA,
+    UNITS,
     allowable_label,
+    conclusion,
     material_table,
     part_label,
+    part_minima,
     render_markdown,
+    safety_factor,
     write_json,
 )
 from rigfem.report.entries import part_entry
@@ -84,11 +90,17 @@ def document(checked: Checked) -> dict:
     job, sm, v = checked.job, checked.reactions.summary, checked.verdicts
     s, h = job.settings, checked.reactions.history
     parts = _parts(checked)
+    for p in parts:
+        p["safety_factor"] = safety_factor(p.get("peak_mpa"), v.limit_mpa)
+        p["safety_factor_ultimate"] = safety_factor(p.get("peak_mpa"), s.material.sigma_u)
     return {
         "schema": REPORT_SCHEMA, "scene": job.scene.name, "description": job.description,
-        "rigfem_version": __version__,
+        "rigfem_version": __version__, "provenance": provenance(job.scene_sha256, job.input_sha256, job.author),
         "rule_violations": list(job.rule_violations), "assumed": h.meta.get("assumed", []),
-        "verdict": v.overall, "left_out": v.left_out, "limit_mpa": v.limit_mpa,
+        "verdict": v.overall, "left_out": v.left_out, "checked": v.checked,
+        "not_checked": {"parts": list(v.not_checked[0]), "modes": list(v.not_checked[1])}, "limit_mpa": v.limit_mpa,
+        "conclusion": conclusion(parts, v.limit_mpa, s.material.sigma_u), "part_minima": part_minima(parts),
+        "units": [{"quantity": q, "unit": u} for q, u in UNITS], "assumptions": list(ASSUMPTIONS),
         "configuration": {"type": h.meta["type"], "lengths_mm": h.meta["lengths_mm"],
                           "speed_hz": job.scene.speed_hz, "model": h.meta["model"],
                           "samples": int(h.crank_deg.size), "branch": job.linkage.meta.get("branch", "open")},

@@ -13,8 +13,31 @@ from pathlib import Path
 
 from rigfem.errors import plain
 
-#: version of report.json's layout (README: report.json); raised when a field changes meaning or goes
-REPORT_SCHEMA = 3
+#: version of report.json's layout (docs/report.md: the fields); raised when a field changes meaning or goes
+REPORT_SCHEMA = 4
+
+#: the units of every number in a report
+UNITS = [("length, position, displacement", "mm"), ("stress, strength, modulus", "MPa"), ("force", "N"),
+         ("moment (part frame)", "N·mm"), ("driver torque", "N·m"), ("crank angle, transmission angle", "deg"),
+         ("crank speed", "Hz"), ("mass", "kg"), ("density", "kg/m³"),
+         ("utilisation (peak / allowable), error band, reserve", "%"), ("factor of safety", "–")]
+
+#: what the model assumes and leaves out, whatever the scene
+ASSUMPTIONS = [
+    "Linear elasticity, small strain and small displacement: stress is proportional to load, so every part is "
+    "solved once per unit load and the crank cycle is a superposition of those solutions.",
+    "Quasi-static loads: the rigid-body dynamics of the linkage give the joint forces, the driver torque and each "
+    "body's acceleration at every crank angle; the parts are loaded by them without vibration (no natural "
+    "frequency, no impact, no play in the joints).",
+    "No contact: a pin or screw pushes on the half of its hole it bears on, with a cosine pressure, and never "
+    "pulls; parts do not touch each other.",
+    "Screws and pins: a screw that holds a part is its hole wall on springs to a fixed rigid shaft; a pin or screw "
+    "that loads a part is a bearing load on its hole; no preload, no thread, no friction.",
+    "The material is homogeneous, isotropic and linear up to the criterion; no plasticity, residual stress or "
+    "weld is modelled.",
+    "The stress is the recovered nodal von Mises stress of the mesh (an estimate with a calibrated error band, "
+    "not a bound); a sharp re-entrant corner's peak depends on the mesh.",
+]
 
 
 def finite(obj, where: str = "report"):
@@ -49,7 +72,8 @@ def md_text(text: object) -> str:
 
 
 #: what each of a part's pictures shows (rigfem.report.pictures.part_pictures)
-_PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displacement", "safety_factor": "factor of safety"}
+_PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displacement",
+            "safety_factor": "factor of safety against the allowable"}
 
 
 def part_label(name: str, part: str) -> str:
@@ -73,6 +97,47 @@ def material_table(m) -> list[dict]:
             {"property": "sigma_u", "value": m.sigma_u, "unit": "MPa", "source": src["sigma_u"]},
             {"property": "sigma_y", "value": None, "unit": "MPa", "source": src["sigma_y"]},
             {"property": "density", "value": m.density * 1e12, "unit": "kg/m³", "source": src["density"]}]
+
+
+def safety_factor(peak_mpa: float | None, against_mpa: float) -> float | None:
+    """``against / peak`` (–), None when there is no stress to divide by."""
+    return None if not peak_mpa else against_mpa / peak_mpa
+
+
+def conclusion(parts: list[dict], limit_mpa: float, sigma_u_mpa: float) -> dict | None:
+    """The governing part case (highest utilisation), its utilisation with the band, the minimum
+    factor of safety (against the allowable and against σu) and the reserve to the limit at the
+    band's top; None when no stress was computed."""
+    solved = [p for p in parts if p.get("peak_mpa") is not None]
+    if not solved:
+        return None
+    g = max(solved, key=lambda p: p["utilisation_pct"])
+    band = g["utilisation_pct"] * g["error_pct"] / 100
+    return {"name": g["name"], "part": g["part"], "mode": g["mode"], "verdict": g["verdict"],
+            "peak_mpa": g["peak_mpa"], "crank_deg": g.get("crank_deg"), "utilisation_pct": g["utilisation_pct"],
+            "utilisation_band_pct": [g["utilisation_pct"] - band, g["utilisation_pct"] + band],
+            "min_safety_factor": safety_factor(g["peak_mpa"], limit_mpa),
+            "min_safety_factor_ultimate": safety_factor(g["peak_mpa"], sigma_u_mpa),
+            "reserve_pct": 100.0 - (g["utilisation_pct"] + band),
+            "reserve_mpa": limit_mpa - g["peak_mpa"] * (1 + g["error_pct"] / 100)}
+
+
+def by_utilisation(parts: list[dict]) -> list[dict]:
+    """The part cases, highest utilisation first (unsolved ones, which fail, at the top)."""
+    return sorted(parts, key=lambda p: -math.inf if p.get("peak_mpa") is None else -p["utilisation_pct"])
+
+
+def part_minima(parts: list[dict]) -> list[dict]:
+    """Per part, its minimum factor of safety over the modes checked and the mode that gives it."""
+    out: dict[str, dict] = {}
+    for p in parts:
+        sf = p.get("safety_factor")
+        if sf is None:
+            continue
+        if p["name"] not in out or sf < out[p["name"]]["min_safety_factor"]:
+            out[p["name"]] = {"name": p["name"], "part": p["part"], "mode": p["mode"], "min_safety_factor": sf,
+                              "min_safety_factor_ultimate": p["safety_factor_ultimate"]}
+    return sorted(out.values(), key=lambda m: m["min_safety_factor"])
 
 
 def _vec(v, nd: int = 1) -> str:
@@ -104,8 +169,9 @@ def study_tables(r: dict) -> list[str]:
     for p in parts:
         b = p.get("balance")
         if b:
+            free = " (free body: no support)" if any(k.startswith("FreeBody") for k in b.get("supports", {})) else ""
             lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {_vec(b['applied_N'])} | "
-                         f"{_vec(b['applied_Nmm'], 0)} | {_vec(b['supports_N'])} | {_vec(b['supports_Nmm'], 0)} | "
+                         f"{_vec(b['applied_Nmm'], 0)} | {_vec(b['supports_N'])}{free} | {_vec(b['supports_Nmm'], 0)} | "
                          f"{b['residual_N']:.2g} |")
     return lines
 
@@ -128,29 +194,97 @@ def _tolerance(r: dict) -> str:
     return ", ".join(f"{t:g} %" for t in sorted(tol)) or "–"
 
 
-def render_markdown(r: dict) -> str:
-    """Human-readable report: configuration, rules, reactions, one table per mode."""
+def verdict_line(r: dict) -> str:
+    """The verdict as the summary and the report print it: ``PASS (1 of 6 parts, original mode only)``."""
+    checked = r.get("checked")
+    return r["verdict"].upper() + (f" ({checked})" if checked else "")
+
+
+def sf_text(x) -> str:
+    """A factor of safety as printed: two decimals, ``–`` when there is none."""
+    return "–" if x is None else f"{x:.2f}"
+
+
+def title_block(r: dict) -> list[str]:
+    """Markdown of the title block: what was checked, when, by whom, with what (schema 4 reports)."""
+    pv = r.get("provenance")
+    if not pv:
+        return ["", f"rigfem {md_text(r.get('rigfem_version', ''))} (report schema {r.get('schema', '–')}: "
+                    f"no provenance recorded)"]
+    commit = pv["commit"] + ("" if pv["dirty"] is None else " (dirty: uncommitted changes)" if pv["dirty"]
+                             else " (clean)")
+    libs = ", ".join(f"{k} {v}" for k, v in pv["libraries"].items())
+    m = pv["machine"]
+    rows = [("scene", r["scene"]), ("date (UTC)", pv["date_utc"]), ("author", pv["author"] or "–"),
+            ("rigfem", f"{pv['rigfem_version']}, commit {commit}"), ("Python", pv["python"]), ("libraries", libs),
+            ("machine", f"{m['host']}: {m['system']}, {m['cpu']}, {m['cores']} cores"),
+            ("scene SHA-256", pv["scene_sha256"]), ("input SHA-256 (scene, [check] as run, reactions CSV)",
+                                                     pv["input_sha256"])]
+    return ["", "| title block | |", "|---|---|"] + [f"| {k} | {md_text(v)} |" for k, v in rows]
+
+
+def conclusion_lines(r: dict) -> list[str]:
+    """Markdown of the conclusion: the verdict, the governing part case, its utilisation with the
+    band, the minimum factor of safety, the reserve, and what a check of a subset left out."""
+    allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
+    out = ["", "## Conclusion", "", f"**Overall verdict: {verdict_line(r)}** — criterion: peak von Mises < the "
+           f"{allowable} ({md_text(r['settings']['material'])}, σu = {r['settings']['sigma_u_mpa']:g} MPa)."]
+    c = r.get("conclusion")
+    if c:
+        lo, hi = c["utilisation_band_pct"]
+        out += ["", f"- governing: **{part_label(c['name'], c['part'])}, {c['mode']} mode** — "
+                f"{c['verdict'].upper()}, peak σvm {c['peak_mpa']:.1f} MPa at crank {_fmt(c['crank_deg'])}°",
+                f"- utilisation {c['utilisation_pct']:.1f} % (band {lo:.1f}–{hi:.1f} %)",
+                f"- minimum factor of safety {sf_text(c['min_safety_factor'])} against the {allowable} "
+                f"({sf_text(c['min_safety_factor_ultimate'])} against σu)",
+                f"- reserve to the limit {c['reserve_pct']:.1f} % ({c['reserve_mpa']:.1f} MPa) at the band's top"]
+    nc = r.get("not_checked") or {}
+    if nc.get("parts") or nc.get("modes"):
+        out.append("- **not checked**: " + "; ".join(
+            t for t in (f"parts {md_text(', '.join(nc['parts']))}" if nc.get("parts") else "",
+                        f"{' and '.join(nc['modes'])} mode" if nc.get("modes") else "") if t)
+                   + " (this check covers " + md_text(r["checked"]) + ")")
+    return out
+
+
+def verdict_table(r: dict) -> list[str]:
+    """Markdown of every part case, highest utilisation first, the governing one marked."""
+    c = r.get("conclusion") or {}
+    out = ["", "## Verdict per part case (highest utilisation first)", "",
+           f"Factor of safety = {allowable_label(r['settings']['limit_factor'], r['limit_mpa']).split(' =')[0]} "
+           f"/ peak von Mises (against the allowable; against σu it is twice that when the allowable is σu/2).", "",
+           "| | part | mode | peak σvm (MPa) | utilisation (%) | band (± % of peak) | verdict | factor of safety (–) | "
+           "at crank (deg) | where (mm) | Goodman n (–) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for p in by_utilisation(r["parts"]):
+        mark = "**▶ governing**" if (p["name"], p["mode"]) == (c.get("name"), c.get("mode")) else ""
+        if p.get("peak_mpa") is None:
+            out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | – | – | – | "
+                       f"**{p['verdict'].upper()}** | – | – | – | – |")
+            continue
+        fat = p.get("fatigue")
+        where = f"{p['surface']} ({', '.join(f'{x:.1f}' for x in p['location_mm'])})"
+        sf = p.get("safety_factor", safety_factor(p["peak_mpa"], r["limit_mpa"]))
+        out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | {p['peak_mpa']:.1f} | "
+                   f"{p['utilisation_pct']:.1f} | ±{p['error_pct']:.1f} | **{p['verdict'].upper()}** | {sf_text(sf)} | "
+                   f"{_fmt(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} |")
+    minima = r.get("part_minima")
+    if minima:
+        out += ["", "Minimum factor of safety per part (over the modes checked):", "",
+                "| part | against the allowable (–) | against σu (–) | in mode |", "|---|---|---|---|"]
+        out += [f"| {part_label(m['name'], m['part'])} | {sf_text(m['min_safety_factor'])} | "
+                f"{sf_text(m['min_safety_factor_ultimate'])} | {m['mode']} |" for m in minima]
+    return out
+
+
+def configuration_lines(r: dict) -> list[str]:
+    """Markdown of the configuration, its rig rules and the peak reactions."""
     cfg = r["configuration"]
-    lines = [f"# rigfem check: {md_text(r['scene'])}", ""]
-    if r.get("rule_violations"):
-        lines += ["**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
-                  "checked only because --allow-rule-violations was passed, and its overall verdict is FAIL "
-                  "whatever its stresses:**", ""]
-        lines += [f"- {md_text(v)}" for v in r["rule_violations"]] + [""]
-    if r.get("assumed"):
-        lines += ["**ASSUMED: the input lacked data the model needs; the scene stated its value:**", ""]
-        lines += [f"- {md_text(v)}" for v in r["assumed"]] + [""]
-    lines += [
-             md_text(r.get("description", "")).strip(), "",
-             f"**Overall verdict: {r['verdict'].upper()}** — criterion: peak von Mises < the "
-             f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])} "
-             f"({md_text(r['settings']['material'])}).", ""]
-    lines += ["## Configuration", "",
-              f"- linkage: {cfg['type']}, lengths (mm): "
-              + ", ".join(f"{k} = {v:g}" for k, v in cfg["lengths_mm"].items())
-              + (f", branch {cfg['branch']}" if cfg.get("branch") else ""),
-              f"- crank speed {cfg['speed_hz']:g} Hz, mass model `{cfg['model']}`, "
-              f"{cfg['samples']} samples per turn (peaks refined)"]
+    lines = ["", "## Configuration", "",
+             f"- linkage: {cfg['type']}, lengths (mm): "
+             + ", ".join(f"{k} = {v:g}" for k, v in cfg["lengths_mm"].items())
+             + (f", branch {cfg['branch']}" if cfg.get("branch") else ""),
+             f"- crank speed {cfg['speed_hz']:g} Hz, mass model `{cfg['model']}`, "
+             f"{cfg['samples']} samples per turn (peaks refined)"]
     if r.get("transmission_angle_deg"):
         mu = r["transmission_angle_deg"]
         lines.append(f"- transmission angle μ: {mu['min']:.2f}° … {mu['max']:.2f}°")
@@ -160,34 +294,107 @@ def render_markdown(r: dict) -> str:
     lines += ["", "| rule | value | limit | unit | ok |", "|---|---|---|---|---|"]
     for rule in r.get("rules", []):
         lines.append(f"| {rule['name']} | {rule['value']:.6g} | {rule.get('relation', '')} {rule['limit']:.6g} | "
-                     f"{rule.get('unit', '')} | {'yes' if rule['ok'] else '**no**'} |")
-    lines += ["", "## Peak reactions", "", "| joint | peak (N) | crank angle (°) |", "|---|---|---|"]
+                     f"{rule.get('unit', '') or '–'} | {'yes' if rule['ok'] else '**no**'} |")
+    lines += ["", "## Peak reactions", "", "| joint | peak (N) | crank angle (deg) |", "|---|---|---|"]
     for name, p in r["peaks"].items():
         lines.append(f"| {name} | {_fmt(p['force_N'])} | {_fmt(p['crank_deg'], 2)} |")
     t = r["torque_Nm"]
     lines.append(f"| driver torque (N·m) | {_fmt(t['peak'])} | {_fmt(t['crank_deg'], 2)} |")
-    for mode in r["settings"]["modes"]:
-        rows = [p for p in r["parts"] if p["mode"] == mode]
-        lines += ["", f"## Parts, {mode} mode", "", MODE_TEXT[mode], "",
-                  "| part | peak σvm (MPa) | at crank (°) | where (mm) | error est. | utilisation | "
-                  "verdict | Goodman n (–) |", "|---|---|---|---|---|---|---|---|"]
-        for p in rows:
-            fat = p.get("fatigue")
-            if p.get("peak_mpa") is None:
-                lines.append(f"| {part_label(p['name'], p['part'])} | – | – | – | – | – | **{p['verdict']}** | – |")
-                continue
-            lines.append(
-                f"| {part_label(p['name'], p['part'])} | {p['peak_mpa']:.1f} | {_fmt(p.get('crank_deg'), 1)} | "
-                f"{p['surface']} ({', '.join(f'{c:.1f}' for c in p['location_mm'])}) | "
-                f"±{p['error_pct']:.1f} % | {p['utilisation_pct']:.1f} % | **{p['verdict']}** | "
-                f"{_fmt(fat['safety_factor'], 2) if fat else '–'} |")
-        for p in rows:
-            for note in p.get("notes", []):
-                lines.append(f"- {p['name']}: {note}")
+    return lines
+
+
+def assumption_lines(r: dict) -> list[str]:
+    """Markdown of the units table, the assumptions and limitations, and what each mode models."""
+    out = ["", "## Units", "", "| quantity | unit |", "|---|---|"]
+    out += [f"| {u['quantity']} | {u['unit']} |" for u in r.get("units") or [{"quantity": q, "unit": u}
+                                                                          for q, u in UNITS]]
+    out += ["", "## Assumptions and limitations", ""]
+    out += [f"- {a}" for a in r.get("assumptions") or ASSUMPTIONS]
+    out += [f"- {mode} mode: {MODE_TEXT[mode]}" for mode in r["settings"]["modes"]]
+    return out
+
+
+def _xyz(v) -> str:
+    return " | ".join(f"{x + 0.0:.1f}" for x in v)
+
+
+def loads_lines(r: dict) -> list[str]:
+    """Markdown of each part case's loads (every pin and screw force, the body force) and fixtures
+    (every support's reaction) at its critical crank angle, in the part's frame."""
+    cases = [p for p in r["parts"] if p.get("loads")]
+    if not cases:
+        return []
+    out = ["", "## Loads and fixtures per part case (critical crank angle, part frame)", "",
+           "Connector forces: each pin or screw that loads the part (a bearing load on the half of its hole it "
+           "pushes) and each support's reaction. A free body (cycle-mode rail) has no support: its loads balance "
+           "its own inertia, so its reactions are ≈ 0 by construction, not a missing load."]
+    for p in cases:
+        lf = p["loads"]
+        out += ["", f"### {md_text(part_label(p['name'], p['part']))}, {p['mode']} mode, crank "
+                    f"{lf['crank_deg']:.1f}°", "",
+                "| entity | kind | Fx (N) | Fy (N) | Fz (N) | magnitude (N) |", "|---|---|---|---|---|---|"]
+        out += [f"| {md_text(x['entity'])} | {x['kind']} | {_xyz(x['force_N'])} | {x['magnitude_N']:.1f} |"
+                for x in lf["loads"]]
+        out += [f"| {md_text(x['entity'])} | fixture: {x['kind']} | {_xyz(x['reaction_N'])} | "
+                f"{x['magnitude_N']:.1f} |" for x in lf["fixtures"]]
+        if lf.get("free_body"):
+            out.append("")
+            out.append("Free body: no support reactions (the 3-2-1 point supports only remove rigid motion).")
+    return out
+
+
+def notes_lines(r: dict) -> list[str]:
+    """Markdown of every part case's notes."""
+    rows = [(p, n) for p in r["parts"] for n in p.get("notes", [])]
+    if not rows:
+        return []
+    return ["", "## Notes per part case", ""] + [f"- {p['name']} ({p['mode']}): {md_text(n)}" for p, n in rows]
+
+
+def model_lines(r: dict) -> list[str]:
+    """Markdown of the Model section: the mesh, what the band means and its calibration, the files."""
+    lines = ["", "## Model", "",
+             f"- fidelity `{r['settings']['fidelity']}`: P{r['settings']['order']} tetrahedra, "
+             + _mesh_sizes(r['settings']),
+             "- error estimate (an estimate, not a bound): recovery-based (difference between the raw and the "
+             "recovered stress at the peak) times a per-order factor calibrated so the band covers the converged "
+             "peak (results/convergence/band_coverage.md); a peak whose band contains the limit is *undecided*",
+             "- free-body imbalance (force, moment; relative to the applied load, tolerance "
+             f"{_tolerance(r)}): " + "; ".join(f"{p['name']} {p['mode']} {p['solve']['imbalance']['force_pct']:.2f} %, "
+                                               f"{p['solve']['imbalance']['moment_pct']:.2f} %"
+                                               for p in r["parts"] if p.get("solve")),
+             f"- files: {', '.join(r.get('files', []))}"]
+    if r.get("field_files"):
+        lines.append(f"- written by the run for ParaView/CalculiX, not kept in the repository's result folders "
+                     f"(`rigfem check --force` writes them again): {', '.join(r['field_files'])}")
+    return lines
+
+
+def warning_lines(r: dict) -> list[str]:
+    """Markdown of the rule violations and assumed inputs, shown before anything else."""
+    lines = []
+    if r.get("rule_violations"):
+        lines += ["", "**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
+                  "checked only because --allow-rule-violations was passed, and its overall verdict is FAIL "
+                  "whatever its stresses:**", ""]
+        lines += [f"- {md_text(v)}" for v in r["rule_violations"]]
+    if r.get("assumed"):
+        lines += ["", "**ASSUMED: the input lacked data the model needs; the scene stated its value:**", ""]
+        lines += [f"- {md_text(v)}" for v in r["assumed"]]
+    return lines
+
+
+def render_markdown(r: dict) -> str:
+    """The report as Markdown: title block, conclusion, verdicts by utilisation, configuration,
+    assumptions, loads and fixtures, pictures, study tables, model."""
+    lines = [f"# rigfem check: {md_text(r['scene'])}", "", md_text(r.get("description", "")).strip()]
+    lines += title_block(r) + warning_lines(r) + conclusion_lines(r) + verdict_table(r)
+    lines += configuration_lines(r) + assumption_lines(r) + loads_lines(r) + notes_lines(r)
     pics = [p for p in r["parts"] if p.get("pictures")]
     if pics:
         lines += ["", "## Pictures", "", "Stress pictures share one colour scale: utilisation 0–100 % of the "
-                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it.", ""]
+                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it; the factor "
+                  f"of safety pictures divide the same allowable by the von Mises stress.", ""]
         for p in pics:
             label = part_label(p["name"], p["part"])
             lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]
@@ -196,21 +403,7 @@ def render_markdown(r: dict) -> str:
     lines += study_tables(r)
     if r.get("differences"):
         lines += ["", "## Original vs cycle mode", ""] + [f"- {d}" for d in r["differences"]]
-    lines += ["", "## Model", "",
-              f"- fidelity `{r['settings']['fidelity']}`: P{r['settings']['order']} tetrahedra, "
-              + _mesh_sizes(r['settings']),
-              "- error estimate (an estimate, not a bound): recovery-based (difference between the raw and the "
-              "recovered stress at the peak) times a per-order factor calibrated so the band covers the converged "
-              "peak (results/convergence/band_coverage.md); a peak whose band contains the limit is *undecided*",
-              "- free-body imbalance (force, moment; relative to the applied load, tolerance "
-              f"{_tolerance(r)}): " + "; ".join(f"{p['name']} {p['mode']} {p['solve']['imbalance']['force_pct']:.2f} %, "
-                                                f"{p['solve']['imbalance']['moment_pct']:.2f} %"
-                                                for p in r["parts"] if p.get("solve")),
-              f"- files: {', '.join(r.get('files', []))}"]
-    if r.get("field_files"):
-        lines.append(f"- written by the run for ParaView/CalculiX, not kept in the repository's result folders "
-                     f"(`rigfem check --force` writes them again): {', '.join(r['field_files'])}")
-    lines.append("")
+    lines += model_lines(r) + [""]
     return "\n".join(lines)
 
 

@@ -13,7 +13,7 @@ from rigfem.rig.parts import load_part
 from rigfem.verdict.criterion import IMBALANCE_TOL
 from rigfem.verdict.part import PartVerdict
 
-__all__ = ["P1_NOTE", "ELEMENT", "balance", "part_entry"]
+__all__ = ["P1_NOTE", "ELEMENT", "balance", "loads_and_fixtures", "part_entry"]
 
 #: what a P1 (linear tetrahedron) report says: a known under-predictor of bending stress
 P1_NOTE = ("linear tetrahedra (order 1) under-predict bending stress: on the standard mesh they read the reference "
@@ -62,6 +62,39 @@ def balance(sol, c: np.ndarray) -> dict:
             "residual_Nmm": float(np.linalg.norm(app[3:] + tot_s[3:]))}
 
 
+def _connector(hole: str) -> str:
+    """What pushes on a loaded hole: the pin on a plate's bearing seat, a coupling screw otherwise."""
+    return "pin on the bearing seat" if hole == "bore" else f"screw in {hole}"
+
+
+#: what each support of rigfem.fe.supports stands for, by the prefix of its name
+_FIXTURE = {"ShaftInHole": "screw: the hole wall on springs (radial stiffness E/r) to a fixed rigid shaft, no preload",
+            "Symmetry": "face sliding on its support (zero normal displacement, no friction)",
+            "Fixed": "face fixed (all displacements zero)",
+            "FreeBody": "free body: inertia relief balances the loads; 3-2-1 point supports carry ≈ 0"}
+
+
+def loads_and_fixtures(res: CaseResult, bal: dict) -> dict:
+    """A part case's loads and fixtures at its critical crank angle (part frame, N): each pin or
+    screw force on a hole (cosine bearing pressure on the half it pushes), the body force of the
+    part's own inertia (with the inertia relief of a free body), each support's reaction."""
+    case, row = res.case, res.row
+    holes: dict[str, np.ndarray] = {}
+    for u, c in zip(case.loads, case.coef[row]):
+        if u.kind == "bearing":
+            holes[u.group] = holes.get(u.group, np.zeros(3)) + c * np.asarray(u.direction, float)
+    loads = [{"entity": _connector(g), "kind": "bearing load", "force_N": [float(t) for t in f],
+              "magnitude_N": float(np.linalg.norm(f))} for g, f in holes.items()]
+    body = np.asarray(bal["applied_N"]) - sum(holes.values(), np.zeros(3))
+    if any(u.kind == "inertia" for u in case.loads) or res.solution.free_body:
+        loads.append({"entity": "the part's own inertia", "kind": "body force (−ρ·a, with inertia relief)",
+                      "force_N": [float(t) for t in body], "magnitude_N": float(np.linalg.norm(body))})
+    fixtures = [{"entity": name.split("(", 1)[1].rstrip(")") if "(" in name else name,
+                 "kind": _FIXTURE.get(name.split("(", 1)[0], name), "reaction_N": v["force_N"],
+                 "magnitude_N": float(np.linalg.norm(v["force_N"]))} for name, v in bal["supports"].items()]
+    return {"crank_deg": res.crank_deg, "loads": loads, "fixtures": fixtures, "free_body": bool(res.solution.free_body)}
+
+
 def _fatigue(res: CaseResult, pv: PartVerdict) -> dict | None:
     """The Goodman check, its critical point named by node and place."""
     if pv.fatigue is None:
@@ -104,6 +137,7 @@ def part_entry(res: CaseResult, pv: PartVerdict, settings) -> dict:
         "balance": balance(sol, c),
         "notes": list(res.case.notes),
     }
+    out["loads"] = loads_and_fixtures(res, out["balance"])
     if v.reason:
         out["notes"].insert(0, v.reason)
     out["notes"] += _profile_caveat(res)

@@ -1,45 +1,84 @@
 """``report.html``: the check report as one self-contained page (pictures embedded, 3-D view inline).
 
 Built from the report dict and the files of the result folder only (template
-``rigfem/templates/report.html.j2``), so the page carries exactly the numbers of ``report.json``.
-The template autoescapes: every text that can come from a user's file (scene description, names,
-notes) shows as text.  Opens in any browser without a server, offline.
+``rigfem/templates/report.html.j2``), so the page carries exactly the numbers of ``report.json``
+and every section of ``report.md`` (the same Markdown sections, rendered).  The template
+autoescapes: every text that can come from a user's file (scene description, names, notes)
+shows as text.  Opens in any browser without a server, offline; it is the one file to hand in,
+and prints (a print stylesheet: A4, a page per part) to the PDF of ``rigfem show --pdf``.
 """
 
 from __future__ import annotations
 
+import base64
+import io
 from pathlib import Path
 
 from rigfem.cache import Cache
-from rigfem.report.document import MODE_TEXT, allowable_label, study_tables
+from rigfem.report.document import (
+    MODE_TEXT,
+    allowable_label,
+    assumption_lines,
+    by_utilisation,
+    configuration_lines,
+    loads_lines,
+    model_lines,
+    safety_factor,
+    study_tables,
+    title_block,
+)
 from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
 
-__all__ = ["render_html", "write_html"]
+__all__ = ["EMBED_HALVED_PX", "embedded_png", "render_html", "write_html"]
+
+#: a picture at least this wide is embedded at half its size (a part's 1600 px field picture: the
+#: page's width; the full-size file stays in the folder)
+EMBED_HALVED_PX = 1600
+
+
+def embedded_png(path: Path) -> str | None:
+    """A PNG of the folder as a data URI (halved when it is :data:`EMBED_HALVED_PX` wide or wider),
+    or None when it is absent: the page carries its pictures."""
+    if not path.is_file():
+        return None
+    from PIL import Image
+
+    with Image.open(path) as im:
+        if im.width < EMBED_HALVED_PX:
+            data = path.read_bytes()
+        else:
+            buf = io.BytesIO()
+            im.reduce(2).save(buf, "PNG")
+            data = buf.getvalue()
+    return "data:image/png;base64," + base64.b64encode(data).decode("ascii")
 
 
 def render_html(report: dict, folder: str | Path, cache: Cache | None = None) -> str:
     """The HTML page of a check report whose pictures and animation frames lie in ``folder``."""
     folder = Path(folder)
     r = report
-    files = list(r.get("files", [])) + list(r.get("field_files", []))
     names = list(dict.fromkeys(p["name"] for p in r["parts"]))
-    # pictures by relative name: they sit beside the page (embedding two dozen 1600 x 1000 PNGs made a
-    # 12 MB page); the 3-D view's data stays embedded, so the folder works offline as it is
-    pictures = {f: f if (folder / f).is_file() else None for f in ["reactions.png", "peak_von_mises.png"]
+    pictures = {f: embedded_png(folder / f) for f in ["reactions.png", "peak_von_mises.png"]
                 + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor")]}
-    # link only files that are in the folder (a committed report may come without its VTU files)
-    present = [f for f in files if (folder / f).is_file() and f != "report.html"]
-    vtk = [f for f in present if f.endswith((".vtu", ".pvd")) and not f[:-4].rsplit("_", 1)[-1].isdigit()]
+    # links only to the files kept with the report; the field files (VTU/PVD/INP, not kept in the
+    # repository's result folders) are named, never linked
+    kept = [f for f in r.get("files", []) if (folder / f).is_file() and f != "report.html"]
+    fields = list(r.get("field_files", []))
+    present = [f for f in fields if (folder / f).is_file()]
     viewer = viewer_data(folder, present, r["limit_mpa"], cache)
     return render_page(
         "report.html.j2", r=r, cfg=r["configuration"], s=r["settings"], torque=r.get("torque_Nm"),
-        pictures=pictures, mode_text=MODE_TEXT, vtk=vtk, others=[f for f in present if f not in vtk
-                                                                and not f.endswith(".vtu")],
+        pictures=pictures, mode_text=MODE_TEXT, kept=kept,
+        fields=[f for f in fields if not f[:-4].rsplit("_", 1)[-1].isdigit()],
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
         viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
         allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
-        tables=markdown_html("\n".join(study_tables(r))))
+        rows=by_utilisation(r["parts"]),
+        safety=lambda p: p.get("safety_factor", safety_factor(p.get("peak_mpa"), r["limit_mpa"])),
+        md={k: markdown_html("\n".join(f(r))) for k, f in
+            (("title", title_block), ("configuration", configuration_lines), ("assumptions", assumption_lines),
+             ("loads", loads_lines), ("tables", study_tables), ("model", model_lines))})
 
 
 def write_html(report: dict, folder: str | Path, cache: Cache | None = None) -> Path:

@@ -65,6 +65,9 @@ class Verdicts:
     limit_mpa: float  #: the allowable stress the peaks were judged against
     rule_violations: tuple[str, ...] = ()
     left_out: str = ""
+    #: what a check of a subset checked, short ("1 of 6 parts, original mode only"; "" when everything)
+    checked: str = ""
+    not_checked: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())  #: (parts, modes) not checked
 
     @property
     def governing(self) -> PartVerdict | None:
@@ -91,16 +94,21 @@ class Target:
         return v.verdict != "undecided" and outcome.peak_mpa * err <= s.target_pct * v.limit_mpa
 
 
-def _left_out(settings) -> str:
-    """What a check of a subset did not check: '' when every part and mode was checked."""
+def _scope(settings) -> dict:
+    """What a check of a subset left out (the long text, the short one, the parts and modes not
+    checked); empty texts when every part and mode was checked."""
     every = PARTS.get(settings.linkage_type, {})
-    out = []
-    if len(settings.parts) < len(every):
-        missing = [p for p in every if p not in settings.parts]
-        out.append(f"{len(settings.parts)} of {len(every)} parts (not {', '.join(missing)})")
-    if len(settings.modes) < len(MODES):
-        out.append(f"{' and '.join(settings.modes)} mode only")
-    return ", ".join(out)
+    parts = tuple(p for p in every if p not in settings.parts)
+    modes = tuple(m for m in MODES if m not in settings.modes)
+    long, short = [], []
+    if parts:
+        count = f"{len(every) - len(parts)} of {len(every)} parts"
+        long.append(f"{count} (not {', '.join(parts)})")
+        short.append(count)
+    if modes:
+        long.append(f"{' and '.join(settings.modes)} mode only")
+        short.append(long[-1])
+    return {"left_out": ", ".join(long), "checked": ", ".join(short), "not_checked": (parts, modes)}
 
 
 def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] = (),
@@ -123,4 +131,4 @@ def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] 
               else "undecided")
     return Verdicts(tuple(parts), stress, "fail" if rule_violations else stress,
                     allowable_stress(settings.material.sigma_u, settings.limit_factor), tuple(rule_violations),
-                    _left_out(settings))
+                    **_scope(settings))
