@@ -13,7 +13,7 @@ from pathlib import Path
 
 from rigfem.errors import plain
 
-#: version of report.json's layout (docs/report.md: the fields); raised when a field changes meaning or goes
+#: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning or goes
 REPORT_SCHEMA = 4
 
 #: the units of every number in a report
