@@ -110,6 +110,8 @@ SCENE_NOTES: dict[str, str] = {
     "description": "free text shown at the top of every report",
     "linkage": "the linkage: its `type` picks which keys it takes (below)",
     "check": "what a check does; a missing key takes the default of the preset or `rigfem.settings`",
+    "report": "what the report says beside the results",
+    "report.author": "the author named in the report's title block (`rigfem check --author` overrides it)",
     "linkage.type": "the kind of linkage",
     "linkage.title": "a title for the linkage (reports)",
     "linkage.notes": "free text kept with the linkage",
@@ -293,9 +295,11 @@ def scene_reference(notes: dict[str, str] | None = None) -> tuple[str, list[str]
         lines += [f'### type = "{d["properties"]["type"]["const"]}"', "", _rst(d.get("description", "")), "",
                   *_table("linkage", d, defs, own, notes, missing), ""]
         queue += [(f"linkage.{k}{suf}", sub) for k in d["properties"] for suf, sub in _subtables(d["properties"][k], defs)]
-    check = _resolve(schema["properties"]["check"], defs)
-    queue.insert(0, ("check", check))
-    queue += [(f"check.{k}{suf}", sub) for k in check["properties"] for suf, sub in _subtables(check["properties"][k], defs)]
+    for top in (k for k in schema["properties"] if k != "linkage"):  # [check], [report], …: each a table of its own
+        for suf, table in _subtables(schema["properties"][top], defs):
+            queue.append((top + suf, table))
+            queue += [(f"{top}{suf}.{k}{s2}", sub) for k in table["properties"]
+                      for s2, sub in _subtables(table["properties"][k], defs)]
     seen = set()
     for path, d in queue:
         if path in seen:

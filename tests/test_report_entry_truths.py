@@ -33,7 +33,8 @@ def result(sol, imbalance=(0.0, 0.0), coef=((1.0,),)):
     """A part case of the cantilever, as the check hands it to the verdict (its documented fields)."""
     m = sol.model.mesh
     return SimpleNamespace(
-        case=SimpleNamespace(name="beam", part="PF_4b_006", params={}, rows=np.array([30.0]), notes=["tip load"]),
+        case=SimpleNamespace(name="beam", part="PF_4b_006", params={}, rows=np.array([30.0]), notes=["tip load"],
+                           loads=[], coef=np.array(coef)),
         mode="original", solution=sol, coef=np.array(coef), row=0, peak=sol.peak(np.array(coef[0])),
         cycle_nodes=None, cycle_stress=None, imbalance=imbalance, seconds={"solve": 1.0}, level="coarse",
         stopped="decided", ladder=[{"level": "coarse"}],
