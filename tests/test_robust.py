@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from rigfem.errors import InputError
+from said import one_line
 
 RIGFEM = [sys.executable, "-m", "rigfem"]
 
@@ -104,7 +105,7 @@ def test_100_m_rail_cli_exit_2_in_seconds(tmp_path):
     took = time.perf_counter() - t0
     print(f"100 m rail refused in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == 2 and took < 15.0
-    assert len(r.stderr.strip().splitlines()) == 1 and "GiB" in r.stderr and "--allow-large" in r.stderr
+    assert "GiB" in one_line(r.stderr) and "--allow-large" in r.stderr
 
 
 def test_allow_large_lifts_the_limit(tmp_path, monkeypatch):
@@ -161,7 +162,7 @@ def test_sweep_cli_scheduler_exit_codes(tmp_path, address, code, words):
     took = time.perf_counter() - t0
     print(f"sweep --scheduler {address}: exit {r.returncode} in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == code and took < 30.0
-    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert words in one_line(r.stderr)
 
 
 # ----------------------------------------------------------------------------- §6 the cache environment
@@ -182,8 +183,8 @@ def test_unusable_cache_folder_runs_without_a_cache_and_says_so_once(tmp_path, w
     r = subprocess.run([*RIGFEM, "mesh", "PF_4b_006", "--size", "12", "--out", str(tmp_path / "p.vtu")],
                        capture_output=True, text=True, env=_env(tmp_path, RIGFEM_CACHE=str(cache)), timeout=300)
     assert r.returncode == 0, r.stderr
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "running without a cache" in lines[0] and str(cache) in lines[0]
+    line = one_line(r.stderr)
+    assert "running without a cache" in line and str(cache) in line
     assert (tmp_path / "p.vtu").stat().st_size > 0
     if where == "file":
         assert cache.read_text() == "a user's file\n"
@@ -228,7 +229,7 @@ def test_bad_cache_limit_is_one_line(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "-1")
     assert main(["cache"]) == 2
     err = capsys.readouterr().err
-    assert "RIGFEM_CACHE_MAX_GB" in err and "-1" in err and len(err.strip().splitlines()) == 1
+    assert "RIGFEM_CACHE_MAX_GB" in one_line(err) and "-1" in err
 
 
 def test_cache_command_shows_and_clears_only_rigfems_entries(tmp_path, monkeypatch, capsys, fresh_usable):
