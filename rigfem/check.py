@@ -398,7 +398,7 @@ def _report(cs: CheckScene, out: Path, force: bool, h: ReactionHistory, results:
         report["files"] = ["report.json", "report.md", *pics, "report.html"]
         report["field_files"] = fields
         write_json(report, d / "report.json")
-        (d / "report.md").write_text(render_markdown(report))
+        (d / "report.md").write_text(render_markdown(report), encoding="utf-8")
         write_html(report, d)
     return report
 
