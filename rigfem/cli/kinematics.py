@@ -187,8 +187,14 @@ def format_table(res: dict, max_rows: int = 24) -> str:
                 out.append(f"{lim['kind']}: crank {lim['crank_deg']:.4f} deg, slider at {lim['slider_mm']:.4f} mm")
             if t["stroke_mm"] is not None:
                 out.append(f"slider stroke {t['stroke_mm']:.4f} mm")
-        if t["dead_points_deg"]:
-            out.append("dead points (the crank cannot drive past): " + ", ".join(f"{a:.4f}" for a in t["dead_points_deg"])
+        change = t.get("change_points_deg") or []
+        dead = [a for a in t["dead_points_deg"] if not any(abs((a - c + 180) % 360 - 180) < 1e-6 for c in change)]
+        if change:
+            out.append("change points (every link in line; the crank passes, the linkage may leave on either branch, "
+                       "this follows the smooth one): " + ", ".join(f"{a:.4f}" for a in change) + " deg"
+                       + ("; it comes back to its start after two turns" if t.get("turns_to_repeat") == 2 else ""))
+        if dead:
+            out.append("dead points (the crank cannot drive past): " + ", ".join(f"{a:.4f}" for a in dead)
                        + " deg" + (f"; crank range {t['crank_range_deg'][0]:.4f} to {t['crank_range_deg'][1]:.4f} deg"
                                    if t.get("crank_range_deg") else ""))
         if t["time_ratio"] is not None:
