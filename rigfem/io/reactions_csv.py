@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
-from rigfem.errors import InputError, decode_text
+from rigfem.errors import InputError, decode_text, plain, read_at_most
 from rigfem.files import whole_file
 from rigfem.linkage.loops import is_full_turn
 
@@ -47,6 +47,11 @@ def write_csv(h: ReactionHistory, path: str | Path) -> None:
             row.append("" if mask[i] else f"{h.torque_Nm[i]:.10g}")
             row.append("1" if mask[i] else "0")
             w.writerow(row)
+
+
+#: largest reaction CSV read (bytes): rigfem's own CSV of 100 000 crank angles (the most a check
+#: samples) is about 25 MB
+MAX_BYTES = 64 * 2**20
 
 
 #: largest crank-angle step (deg) an imported history may have: 36 samples per turn, the least
@@ -132,17 +137,17 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     ``meta["assumed"]`` then says so.  Lines starting with ``#`` are comments.  Refused
     (InputError naming the problem): angles that do not cover one full turn in steps of at most
     :data:`MAX_STEP_DEG`, angles or forces that do not fit their declared unit (radians in a
-    degree column, kN), and sampling too coarse to bracket the peaks (see :func:`_check_forces`).
+    degree column, kN), sampling too coarse to bracket the peaks (see :func:`_check_forces`; rows
+    marked singular are left out of that test, not the test itself), more than
+    :data:`MAX_SINGULAR_SHARE` of the rows marked singular, and a column (or a joint's pair, the
+    driver, the crank angle) given twice.
     """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"reaction CSV {str(p)!r} does not exist")
     pairs: dict[str, tuple[str, str]] = {}
     lines = []
-    try:
-        blob = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"reaction CSV {str(p)!r} cannot be read: {exc.strerror or exc}") from None
+    blob = read_at_most(p, MAX_BYTES, f"reaction CSV {str(p)!r}", "a reaction CSV")
     for line in decode_text(blob, f"reaction CSV {str(p)!r}").splitlines():
         s = line.strip()
         if s.startswith("#"):
