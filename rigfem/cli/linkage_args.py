@@ -9,13 +9,10 @@ from rigfem.cli.exitcodes import RULES_REFUSED
 from rigfem.errors import check_range
 from rigfem.settings import REFERENCE_SCENE
 
-#: allowed bar length (mm), the linkage builders' range: checked where the option is read
-LENGTH_MM = (10.0, 10_000.0)
-
-
 def lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
-    """--four-bar / --slider-crank lengths as floats, each in :data:`LENGTH_MM` (InputError naming it)."""
-    return [check_range(n, v, *LENGTH_MM, "mm") for n, v in zip(names, values)]
+    """--four-bar / --slider-crank lengths as positive floats (InputError naming the one that is
+    not); the builders then hold them to 10-10000 mm, saying when a length looks like metres."""
+    return [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(names, values)]
 
 
 def add_linkage_arguments(p: argparse.ArgumentParser) -> None:
