@@ -19,7 +19,7 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
-from rigfem.studies.band_coverage import markdown, run
+from rigfem.verification.band_coverage import markdown, run
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "results" / "convergence"

@@ -30,7 +30,9 @@ from pathlib import Path
 import numpy as np
 from record import OUT, summarise, write_record
 
-from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve, von_mises
+from rigfem.cache import NO_CACHE
+from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve
+from rigfem.tensors import von_mises
 from rigfem.io import export_model, run_ccx
 from rigfem.material import get_material
 from rigfem.mesh import MeshSettings, mesh_part
@@ -61,7 +63,7 @@ def rigfem_once(settings: MeshSettings):
     """One full rigfem run; returns (model, solution, timings in s)."""
     part = load_part("rail_size25", {"length": 700})
     t0, c0 = time.perf_counter(), time.process_time()
-    pm = mesh_part(part, settings, use_cache=False)
+    pm = mesh_part(part, settings, cache=NO_CACHE)
     t1, c1 = time.perf_counter(), time.process_time()
     model = build_model(pm, get_material("rig_steel"), order=2)
     model.K  # noqa: B018 - the stiffness is assembled on first use: time it here, with the P2 mesh

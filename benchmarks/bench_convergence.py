@@ -48,7 +48,7 @@ def cycle_stress(part: str) -> list[dict]:
 def directions(part: str) -> list[dict]:
     """Cycle-mode peak vs bearing directions on the draft mesh (mesh held fixed)."""
     from rigfem.settings import FIDELITY
-    from rigfem.studies import StepSpec, run_step, scene_cases
+    from rigfem.verification import StepSpec, run_step, scene_cases
 
     settings, by = scene_cases(SCENE, [part], {"modes": ["cycle"]})
     rows = []

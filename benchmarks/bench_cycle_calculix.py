@@ -45,7 +45,8 @@ def _run(a: argparse.Namespace) -> int:
         os.environ.setdefault(var, "1")
     from rigfem.check import load_check_scene
     from rigfem.dynamics import peaks, simulate
-    from rigfem.fe import mesh_case, solve_cases, supports_of, von_mises
+    from rigfem.fe import mesh_case, solve_cases, supports_of
+from rigfem.tensors import von_mises
     from rigfem.io import export_model, run_ccx
     from rigfem.loads import part_cases
 

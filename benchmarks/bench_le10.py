@@ -11,7 +11,7 @@ Only the small levels (what the committed results were made with, if the table s
 
     python benchmarks/bench_le10.py --sizes 400 283 200 141
 
-Each level is meshed once here (gmsh, OpenCASCADE, curved P2 tets: rigfem.studies.le10), then
+Each level is meshed once here (gmsh, OpenCASCADE, curved P2 tets: rigfem.verification.le10), then
 solved in a fresh subprocess so its peak RSS is its own: rigfem (model, assembly, factorisation,
 solve, stress recovery) ``--repeats`` times, then CalculiX 2.20 on the deck rigfem exports for
 the identical model (same nodes, C3D10 elements, supports, consistent nodal loads), as many
@@ -85,7 +85,7 @@ def solve_level(mesh_npz: str, repeats: int, single_above: int, threads: int) ->
     import rigfem.fe.solver  # noqa: F401
     from rigfem.io import export_model, run_ccx
     from rigfem.mesh.partmesh import load_npz
-    from rigfem.studies.le10 import load, solve_le10, supports
+    from rigfem.verification.le10 import load, solve_le10, supports
 
     pm = load_npz(Path(mesh_npz))
     rss0 = _hwm_mib()
@@ -124,7 +124,7 @@ def solve_level(mesh_npz: str, repeats: int, single_above: int, threads: int) ->
 def run(sizes, repeats: int, single_above: int, threads: int) -> list[dict]:
     """Mesh every level here, solve each in its own subprocess (:func:`solve_level`)."""
     from rigfem.mesh.partmesh import save_npz
-    from rigfem.studies.le10 import TARGET_SYY, le10_mesh
+    from rigfem.verification.le10 import TARGET_SYY, le10_mesh
 
     rows = []
     with tempfile.TemporaryDirectory(prefix="le10-") as tmp:
@@ -154,7 +154,7 @@ def plot(rows: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
 
-    from rigfem.studies.le10 import TARGET_SYY
+    from rigfem.verification.le10 import TARGET_SYY
 
     dof = [r["dof"] for r in rows]
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))

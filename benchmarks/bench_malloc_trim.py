@@ -7,7 +7,7 @@ glibc's adaptive mmap threshold, so every large temporary is mapped and unmapped
 times one sweep chunk (every ``--every``-th configuration whose crank turns, draft, unit
 solutions from the disk cache) in fresh single-threaded processes with and without the
 variable: wall, user and system time and minor page faults of the chunk alone (median of
-``--repeats`` processes each).  ``rigfem.studies.sweep`` starts its local workers without it.
+``--repeats`` processes each).  ``rigfem.sweep.run`` starts its local workers without it.
 Writes results/benchmarks/malloc_trim.json (``python benchmarks/publish.py`` writes the .md).
 """
 
@@ -25,7 +25,7 @@ CHILD = """
 import json, resource, sys, time
 import numpy as np
 from rigfem.linkage import fourbar_closes
-from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_chunk
+from rigfem.sweep import SweepParams, build_bases, enumerate_configs, run_chunk
 p = SweepParams()
 grid = np.linspace(0.0, 360.0, 3601)
 cfgs = [c for c in enumerate_configs(p) if fourbar_closes(c["b2"], c["b3"], c["b4"], c["d"], grid).all()]

@@ -42,7 +42,7 @@ def table_leaves(path: str):
     """(lengths.column, number) for every finite number of the computed rows of a sweep table."""
     import pandas as pd
 
-    from rigfem.studies.sweep_configs import LENGTHS
+    from rigfem.sweep.configs import LENGTHS
 
     t = pd.read_csv(path, keep_default_na=False, na_values=[""])
     t = t[t["status"] == "ok"]

@@ -39,7 +39,7 @@ STAGES = {
                  ("report/pictures.py", "reactions_plot"), ("report/pictures.py", "_plot_peaks")],
     "HTML report": [("report/html.py", "write_html")],
     "VTU/PVD writing": [("report/vtu.py", "write_vtu")],
-    "sweep: unit-field peaks": [("studies/sweep_bases.py", "case_peak")],
+    "sweep: unit-field peaks": [("sweep/bases.py", "case_peak")],
     "sweep: load cases": [("loads/cases.py", "part_cases")],
 }
 
@@ -64,7 +64,7 @@ def _profile(argv: list[str], env: dict, prof: str) -> None:
 
 SWEEP_CHUNK = """
 import sys
-from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_chunk
+from rigfem.sweep import SweepParams, build_bases, enumerate_configs, run_chunk
 p = SweepParams(fidelity=sys.argv[1])
 bases = build_bases(p)
 import cProfile

@@ -1,11 +1,15 @@
-"""Regenerate every results/benchmarks/*.md table and README's figures from the benchmark records.
+"""Regenerate every results/benchmarks/*.md table and the figures of README and the docs from the records.
 
-    python benchmarks/publish.py           # write the tables and README's generated blocks
-    python benchmarks/publish.py --check   # exit 1 when a table, README or a record disagrees
+    python benchmarks/publish.py           # write the tables and the pages' generated blocks
+    python benchmarks/publish.py --check   # exit 1 when a table, a page or a record disagrees
 
-README's figures live between ``<!-- NAME:begin -->`` and ``<!-- NAME:end -->`` markers (blocks
-of lines) or inside ``<!-- fig:KEY -->…<!-- /fig -->`` spans (one figure in a sentence); both are
-rewritten from results/benchmarks/*.json (benchmarks/record.py), never typed by hand.
+A page's figures (README.md and every docs/**/*.md) live between ``<!-- NAME:begin -->`` and
+``<!-- NAME:end -->`` markers (blocks of lines) or inside ``<!-- fig:KEY -->…<!-- /fig -->`` spans
+(one figure in a sentence); both are rewritten from results/benchmarks/*.json (benchmarks/record.py)
+and results/convergence/*.json, never typed by hand.  Each block and each span appears on exactly one
+page (one figure per quantity; another page links to it); ``--check`` fails on a figure that differs
+from its record, a block or span on no page or on two, and a result file a figure names that does not
+exist.
 """
 
 from __future__ import annotations
@@ -20,6 +24,10 @@ from record import OUT, REQUIRED, ROOT, summarise
 from tables import LE10_TARGET, RENDER, grid_note, grid_rows, hms, le10_outliers, med, perf_note, perf_rows
 
 README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+#: the reference parts of the convergence study, in the presets table's column order
+CONVERGENCE_PARTS = {"crank_rail": "crank rail", "coupler_rail": "coupler rail", "rocker_rail": "rocker rail",
+                     "plate_A": "plate", "post_B": "I-profile post"}
 VERIFY = "calculix_verify_final-cm"  #: written by `rigfem verify --against calculix`, not a benchmark
 COVERAGE = ROOT / "results" / "convergence" / "band_coverage.json"  #: written by benchmarks/band_coverage.py
 BLOCK = re.compile(r"(<!-- (?P<name>[\w-]+):begin -->\n)(?P<body>.*?)(<!-- (?P=name):end -->)", re.S)
@@ -32,6 +40,9 @@ def load(out: Path = OUT) -> dict[str, dict]:
             if p.stem in RENDER or p.stem == VERIFY}
     if COVERAGE.is_file():  # the error band's coverage study keeps its own record (every raw case, date, commit)
         recs["band_coverage"] = json.loads(COVERAGE.read_text())
+    conv = {n: ROOT / "results" / "convergence" / f"{n}.json" for n in CONVERGENCE_PARTS}
+    if all(p.is_file() for p in conv.values()):  # written by `rigfem convergence PART`
+        recs["convergence"] = {n: json.loads(p.read_text()) for n, p in conv.items()}
     return recs
 
 
@@ -61,7 +72,7 @@ def problems(recs: dict[str, dict]) -> list[str]:
     """Records lacking a required key or raw samples, or whose summaries differ from their samples."""
     out = []
     for n, r in recs.items():
-        if n in (VERIFY, "band_coverage"):
+        if n in (VERIFY, "band_coverage", "convergence"):
             continue
         out += [f"results/benchmarks/{n}.json: no {k!r}" for k in REQUIRED if k not in r]
         smp = r.get("samples")
@@ -78,20 +89,22 @@ def _missing(name: str) -> str:
     return f"not measured yet in the dated record format: run `{COMMANDS[name]}`"
 
 
+#: where another record measures the same quantity, the figure is the performance table's (issue 26's record,
+#: re-measured as a whole): a row of another record names the table instead of quoting its own older figure
+PERF_PAGE = "[the performance table](#goals)"
+
+
 def _check(c: dict) -> str:
-    rss = [c["summary"][s]["peak_tree_rss_mib"] for s in c["summary"]]
-    walls = "; ".join(f"{s} **{med(c, s):.1f} s**" for s in c["summary"])
-    load = [x["load_before"][0] for runs in c["samples"].values() for x in runs]
-    return (f"{walls} (cold: empty rigfem and numba caches; warm: both filled); peak RSS of the check's process tree "
-            f"{min(s['min'] for s in rss):.0f}–{max(s['max'] for s in rss):.0f} MiB; median of "
-            f"{c['params']['repeats']} separate process(es), load average {min(load):.1f}–{max(load):.1f} at their "
-            f"starts on {c['machine']['cores']} shared cores, {c['date'][:10]} — results/benchmarks/check.md")
+    """The check record's row: its cold and warm draft times are the performance table's rows (re-measured
+    there), so the row points to them and keeps what only it holds (the whole scene's outputs)."""
+    return (f"draft cold and warm: see {PERF_PAGE} (`rigfem check final-cm --force --fidelity draft`, the same "
+            f"work, re-measured); this record ({c['date'][:10]}) keeps the runs' samples — results/benchmarks/check.md")
 
 
 def _calculix(x: dict) -> str:
     d = x["derived"]
-    return (f"{x['params']['mesh']['dof']:,} DOF: FE wall time ratio rigfem/ccx "
-            f"**{d['FE wall ratio rigfem / ccx']:.2f}**; {x['params']['unit cases']} load cases "
+    return (f"{x['params']['mesh']['dof']:,} DOF: FE wall time ratio rigfem/ccx of one solve: see {PERF_PAGE}; "
+            f"{x['params']['unit cases']} load cases "
             f"**{d['unit cases wall ratio rigfem / ccx']:.2f}** (one "
             f"factorisation); peak σvm agrees to {d['peak von Mises rel diff']:.0e}; median of "
             f"{x['params']['repeats']}, {x['date'][:10]} — results/benchmarks/calculix_vs_rigfem.md")
@@ -137,14 +150,13 @@ def _pardiso(p: dict) -> str:
 
 def _sweep(sw: dict) -> str:
     one = next(iter(sw["samples"].values()))[0]
-    eff = "".join(f"; efficiency 1 → 2 workers, {k.split()[0]}: {100 * v:.0f} %" for k, v in sw["derived"].items()
-                  if "efficiency" in k)
-    return (f"{one['configurations']:,} configurations, {one['computed']:,} computed: "
-            + "; ".join(f"{k} **{hms(med(sw, k))}**" for k in sw["summary"]) + eff
+    own = [k for k in sw["summary"] if "2 workers" not in k]  # 2 workers: the performance table's row
+    return (f"{one['configurations']:,} configurations, {one['computed']:,} computed: 2 workers, cold and warm: see "
+            f"{PERF_PAGE}; " + "; ".join(f"{k} **{hms(med(sw, k))}**" for k in own)
             + f" (the runs measured, {sw['date'][:10]}) — results/benchmarks/sweep.md, results/sweep/")
 
 
-#: README's Figures table: (record, figure, result from the record)
+#: the figures tables (performance and verification pages): (record, figure, result from the record)
 ROWS = [
     ("check", "`rigfem check final-cm --force`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
      "HTML)", _check),
@@ -184,7 +196,7 @@ ROWS = [
      "results/rail_profile/study.md"),
     ("le10", "NAFEMS LE10, rigfem vs CalculiX on the same P2 meshes: σyy(D), time and peak RSS vs DOF", _le10),
     ("sweep_grid_cost", "cost of a 30 mm rig grid on N workers",
-     lambda g: "see [Running the sweep on a cluster](#running-the-sweep-on-a-cluster) — "
+     lambda g: "see [Running the sweep on a cluster](guide/sweep.md#running-the-sweep-on-a-cluster) — "
                "results/benchmarks/sweep_grid_cost.md"),
     ("sweep", "the whole four-bar sweep, `rigfem sweep --four-bar`, end to end (start-up included)", _sweep),
     ("pardiso", "MKL PARDISO's defaults, and rigfem's settings without the variable blocks, against rigfem's "
@@ -200,10 +212,17 @@ ROWS = [
 ]
 
 
-def figure_rows(recs: dict[str, dict]) -> list[str]:
-    """README's Figures table: figure, the command that measured it, the result from its record."""
+#: records whose rows are on the verification page (docs/verification.md); every other row is a performance figure
+VERIFICATION_ROWS = {VERIFY, "band_coverage", "le10", "speed/accuracy of the fidelity presets", "rail profile sensitivity"}
+
+
+def figure_rows(recs: dict[str, dict], page: str = "performance") -> list[str]:
+    """A figures table (``page``: performance or verification): figure, the command that measured it, the
+    result from its record."""
     out = ["| figure | command | result |", "|---|---|---|"]
     for name, figure, *how in ROWS:
+        if ((name or figure) in VERIFICATION_ROWS) != (page == "verification"):
+            continue
         if name is None:
             out.append(f"| {figure} | {how[0]} | {how[1]} |")
         elif name in recs:
@@ -213,48 +232,147 @@ def figure_rows(recs: dict[str, dict]) -> list[str]:
     return out
 
 
+def _pct(x: float) -> str:
+    """A signed percentage as the presets table writes it (a true minus sign)."""
+    return (f"{100 * x:+.2f}" if abs(x) < 1e-3 else f"{100 * x:+.1f}").replace("-", "−")
+
+
+def _preset_cell(res: dict, preset: str) -> str:
+    """One part's cell of a preset's row: error original / cycle mode (%), CPU time of the step."""
+    errs, sec = [], None
+    for mode in ("original", "cycle"):
+        a = res["modes"][mode]["peak_mpa"]
+        ex, v = a.get("extrapolation"), a["presets"][preset]
+        sec = v.get("cpu_seconds") or v["seconds"]
+        if not ex or not ex["converging"]:
+            errs.append("n.c.")
+        elif v["error"] is None:
+            errs.append(f"±{100 * v['error_bound']:.2g}")
+        else:
+            errs.append(_pct(v["error"]))
+    return f"{errs[0]} / {errs[1]} %, {sec:.0f} s"
+
+
+def _p1_cell(res: dict) -> str:
+    out = []
+    for mode in ("original", "cycle"):
+        a = res["modes"][mode]["peak_mpa"]
+        e = a["errors"].get("P1@standard")
+        out.append("—" if e is None or not (a.get("extrapolation") or {}).get("converging") else f"{100 * e:+.0f}"
+                   .replace("-", "−"))
+    return " / ".join(out) + ("" if out[1] == "—" else " %")
+
+
+def preset_rows(conv: dict[str, dict]) -> list[str]:
+    """The presets' errors against the converged peaks, per reference part (results/convergence/*.json)."""
+    from rigfem.settings import FIDELITY
+    from rigfem.verification.convergence import TARGETS
+
+    out = ["| preset | mesh | " + " | ".join(CONVERGENCE_PARTS.values()) + " | target |",
+           "|---|---|" + "---|" * len(CONVERGENCE_PARTS) + "---|"]
+    for name, f in FIDELITY.items():
+        mesh = f"P{f.order}, {f.size_mm:g} mm, {f.near_mm:g} mm at loaded interfaces, {f.bearing_directions} directions"
+        out.append(f"| `{name}` | {mesh} | " + " | ".join(_preset_cell(conv[n], name) for n in CONVERGENCE_PARTS)
+                   + f" | {100 * TARGETS[name]:g} % |")
+    out.append("| P1 | on the standard mesh | " + " | ".join(_p1_cell(conv[n]) for n in CONVERGENCE_PARTS) + " | — |")
+    return out
+
+
+def _p1_low(conv: dict[str, dict]) -> str:
+    errs = [-100 * r["modes"][m]["peak_mpa"]["errors"]["P1@standard"] for r in conv.values() for m in r["modes"]
+            if (r["modes"][m]["peak_mpa"].get("extrapolation") or {}).get("converging")
+            and r["modes"][m]["peak_mpa"]["errors"].get("P1@standard") is not None]
+    return f"{min(errs):.0f}–{max(errs):.0f} %"
+
+
 def spans(recs: dict[str, dict]) -> dict[str, str]:
-    """The single figures quoted in README's prose (a missing record says how to make it)."""
-    sw, mt, k = recs.get("sweep", {}), recs.get("malloc_trim"), recs.get("kinematics")
-    out = {"sweep-2": _missing("sweep"), "malloc-trim": _missing("malloc_trim"),
-           "kinematics-ms": f"({_missing('kinematics')})"}
-    if {"cold, 2 workers", "warm, 2 workers"} <= set(sw.get("summary", {})):
-        out["sweep-2"] = (f"{hms(med(sw, 'warm, 2 workers'))} with warm caches, {hms(med(sw, 'cold, 2 workers'))} "
-                          f"cold (results/benchmarks/sweep.md)")
+    """The single figures quoted in the pages' prose (a missing record says how to make it)."""
+    p, mt, k, conv = recs.get("perf", {}), recs.get("malloc_trim"), recs.get("kinematics"), recs.get("convergence")
+    out = {"sweep-2": _missing("perf"), "malloc-trim": _missing("malloc_trim"),
+           "kinematics-ms": f"({_missing('kinematics')})",
+           "p1-low": "(not measured yet: run `rigfem convergence PART` for each reference part)",
+           "coupler-cycle": "(not measured yet: run `rigfem convergence coupler_rail`)",
+           "coupler-levels": "(not measured yet: run `rigfem convergence coupler_rail`)"}
+    if {"sweep cold", "sweep warm"} <= set(p.get("summary", {})):  # the performance table's figure, quoted
+        out["sweep-2"] = (f"{hms(med(p, 'sweep cold'))} cold, {med(p, 'sweep warm'):.1f} s with warm caches "
+                          f"([performance](../performance.md#goals))")
     if mt:
         faults = med(mt, "MALLOC_TRIM_THRESHOLD_=65536", "minor_faults")
         out["malloc-trim"] = (f"{100 * mt['derived']['wall with / without - 1']:+.0f} %, {faults / 1e6:.1f} million "
                               f"minor faults per chunk: `{mt['command']}`, results/benchmarks/malloc_trim.md")
     if k:
         out["kinematics-ms"] = f"{k['derived']['total ms']:.1f} ms"
+    if conv:
+        out["p1-low"] = _p1_low(conv)
+        out |= _not_converging(conv)
+    b = recs.get("band_coverage")
+    out["band-draft-factor"] = (f"{b['coverage']['draft']['largest_required_factor']:.2f}" if b else
+                                f"(not measured yet: run `{COMMANDS['band_coverage']}`)")
     return out
 
 
+def _not_converging(conv: dict[str, dict]) -> dict[str, str]:
+    """The coupler rail's cycle-mode peak, which does not converge: its finest value against the limit, and
+    the sequence over the h levels (results/convergence/coupler_rail.json)."""
+    from rigfem.material import get_material  # the limit: σu/2 of the rig steel
+
+    hs = [st["modes"]["cycle"]["peak_mpa"] for st in conv["coupler_rail"]["steps"] if st["kind"] == "h"]
+    limit = get_material("rig_steel").sigma_u / 2
+    return {"coupler-cycle": f"{hs[-1]:.1f} MPa, {100 * hs[-1] / limit:.0f} % of the limit",
+            "coupler-levels": " → ".join(f"{v:.2f}" for v in hs) + " MPa"}
+
+
 def blocks(recs: dict[str, dict]) -> dict[str, str]:
-    """README's generated blocks of lines."""
+    """The pages' generated blocks of lines."""
     g = recs.get("sweep_grid_cost")
     grid = (f"Command: `{g['command']}` (results/benchmarks/sweep_grid_cost.md, {g['date'][:10]}):\n\n"
             + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
     p = recs.get("perf")
     perf = (f"Command: `{COMMANDS['perf']}` (this record: `{p['command']}`):\n\n" + "\n".join(perf_rows(p)) + "\n\n"
             + perf_note(p) + "\n") if p else _missing("perf") + ".\n"
-    return {"figures": "\n".join(figure_rows(recs)) + "\n", "grid-cost": grid, "performance": perf}
+    conv = recs.get("convergence")
+    presets = ("Commands: `rigfem convergence PART` for each part (results/convergence/PART.json):\n\n"
+               + "\n".join(preset_rows(conv)) + "\n") if conv else "not measured yet: run `rigfem convergence PART`.\n"
+    return {"perf-figures": "\n".join(figure_rows(recs, "performance")) + "\n",
+            "verification-figures": "\n".join(figure_rows(recs, "verification")) + "\n",
+            "grid-cost": grid, "performance": perf, "preset-errors": presets}
 
 
-def render_readme(text: str, recs: dict[str, dict]) -> str:
-    """README with every generated block and span rewritten from the records."""
+def pages() -> list[Path]:
+    """README and every page of the docs: the files whose figures this script writes."""
+    return [README, *sorted(DOCS.rglob("*.md"))]
+
+
+def markers(text: str) -> list[str]:
+    """The blocks and spans a page holds, by name (``block:NAME``, ``fig:KEY``)."""
+    return [f"block:{m['name']}" for m in BLOCK.finditer(text)] + [f"fig:{m['key']}" for m in SPAN.finditer(text)]
+
+
+def placement(texts: dict[Path, str], recs: dict[str, dict]) -> list[str]:
+    """Each generated block and span on exactly one page: one figure per quantity, and none forgotten."""
+    where: dict[str, list[str]] = {}
+    for path, text in texts.items():
+        for k in markers(text):
+            where.setdefault(k, []).append(str(path.relative_to(ROOT)))
+    known = {f"block:{n}" for n in blocks(recs)} | {f"fig:{k}" for k in spans(recs)}
+    bad = [f"{k} is on no page (README.md, docs/)" for k in sorted(known - set(where))]
+    bad += [f"{k} is on {len(v)} pages ({', '.join(v)}): one figure per quantity, link to the one page"
+            for k, v in sorted(where.items()) if len(v) > 1]
+    bad += [f"{k} on {', '.join(v)} has no renderer in benchmarks/publish.py" for k, v in sorted(where.items())
+            if k not in known]
+    return bad
+
+
+def render_page(text: str, recs: dict[str, dict]) -> str:
+    """A page with every generated block and span it holds rewritten from the records."""
     b, s = blocks(recs), spans(recs)
-    missing = [n for n in b if f"<!-- {n}:begin -->" not in text]
-    if missing:
-        raise SystemExit(f"README.md: no <!-- {missing[0]}:begin --> block")
     text = BLOCK.sub(lambda m: m[1] + b[m["name"]] + m[4] if m["name"] in b else m[0], text)
     return SPAN.sub(lambda m: m[1] + s[m["key"]] + m[4] if m["key"] in s else m[0], text)
 
 
-def readme_paths(text: str) -> list[str]:
-    """Result files named by README's Figures block that do not exist."""
-    m = next((m for m in BLOCK.finditer(text) if m["name"] == "figures"), None)
-    body = m["body"] if m else ""
+def named_paths(text: str) -> list[str]:
+    """Result files named by a page's figures tables that do not exist."""
+    body = "".join(m["body"] for m in BLOCK.finditer(text) if m["name"].endswith("figures"))
     named = set(re.findall(r"results/[\w./-]+\w", body))
     named |= {"results/benchmarks/" + f for f in re.findall(r", (le10\.png)", body)}
     return sorted(p for p in named if not (ROOT / p).exists())
@@ -263,7 +381,10 @@ def readme_paths(text: str) -> list[str]:
 def outputs(recs: dict[str, dict]) -> dict[Path, str]:
     """Every file this script writes, with its text."""
     out = {OUT / f"{n}.md": render(recs[n]) for n, render in RENDER.items() if n in recs}
-    out[README] = render_readme(README.read_text(), recs)
+    for page in pages():
+        text = page.read_text()
+        if markers(text):
+            out[page] = render_page(text, recs)
     return out
 
 
@@ -278,7 +399,9 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     files = outputs(recs)
     stale = [p for p, t in files.items() if not p.is_file() or p.read_text() != t]
-    bad = [f"README.md names {p}, which does not exist" for p in readme_paths(files[README])]
+    bad = placement({p: t for p, t in files.items() if p.suffix == ".md" and OUT not in p.parents}, recs)
+    bad += [f"{p.relative_to(ROOT)} names {q}, which does not exist" for p, t in files.items()
+            if OUT not in p.parents for q in named_paths(t)]
     if a.check:
         bad += [f"{p.relative_to(ROOT)} differs from its records: run python benchmarks/publish.py" for p in stale]
     else:

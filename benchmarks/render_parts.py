@@ -18,6 +18,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+from rigfem.cache import NO_CACHE
 from rigfem.mesh import DEFAULT_SIZE, MeshSettings, PartMesh, boundary_faces, mesh_part
 from rigfem.rig import load_part, rail_hole_groups, rail_hole_x
 
@@ -104,7 +105,7 @@ def main() -> None:
         n = len(rail_hole_x(part))
         loaded = ("hole_00", "hole_02", f"hole_{n - 3:02d}", f"hole_{n - 1:02d}")
         t = time.perf_counter()
-        pm = mesh_part(part, MeshSettings(DEFAULT_SIZE["rail"], loaded), use_cache=False)
+        pm = mesh_part(part, MeshSettings(DEFAULT_SIZE["rail"], loaded), cache=NO_CACHE)
         print(f"rail {L} mm: size {DEFAULT_SIZE['rail']} mm, refined {loaded}: {len(pm.points)} nodes, "
               f"{len(pm.tets)} tets, minSICN min {pm.quality['min']:.3f}, {time.perf_counter() - t:.2f} s")
     part = load_part("rail_size25", {"length": 700})

@@ -3,7 +3,7 @@ and the wall time of their sweep projected on N Dask workers from a short measur
 
     python benchmarks/sweep_grid_cost.py [--every 40] [--workers 1 2 16 64]
 
-Counting uses the rules of ``rigfem.studies.enumerate_configs`` with the rail's pitch overridden
+Counting uses the rules of ``rigfem.sweep.enumerate_configs`` with the rail's pitch overridden
 (each length a whole number of pitches from one pitch up, its coupling's two screws on the
 rail's holes, the ground from 660 mm on the 2500 mm ground rail); the 60 mm count is checked
 against ``enumerate_configs`` itself.  The configurations that get an FE check are those whose
@@ -35,7 +35,7 @@ from rigfem.rig import MIN_GROUND_MM
 from rigfem.rig.layout import RailLayout
 from rigfem.rig.parts import load_part, rail_hole_x
 from rigfem.settings import PLATE, RAIL
-from rigfem.studies import SweepParams, build_bases, enumerate_configs, run_sweep
+from rigfem.sweep import SweepParams, build_bases, enumerate_configs, run_sweep
 
 
 def grid_lengths(rail_mm: float, pitch: float) -> list[float]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-#: the reference stress of NAFEMS LE10 at point D, MPa (rigfem.studies.le10.TARGET_SYY; not imported:
+#: the reference stress of NAFEMS LE10 at point D, MPa (rigfem.verification.le10.TARGET_SYY; not imported:
 #: rendering must not load the FE stack); tests/test_figures.py checks the two agree
 LE10_TARGET = -5.38
 
@@ -175,7 +175,7 @@ def le10(rec: dict) -> str:
     lines = head(rec, "NAFEMS LE10, thick plate under pressure: rigfem vs CalculiX")
     lines += [f"σyy at D (2000, 0, 300) mm, target {LE10_TARGET} MPa (NAFEMS TNSB Rev. 3, 1990).  Quarter plate, "
               "curved P2 tetrahedra (C3D10 in ccx) on the identical mesh, supports and nodal loads "
-              f"(`rigfem.studies.le10`); {rec['params']['threads']} thread per code.  Every mesh this command ran "
+              f"(`rigfem.verification.le10`); {rec['params']['threads']} thread per code.  Every mesh this command ran "
               "is listed.", "",
               "| h (mm) | layers | tets | DOF | rigfem σyy(D) (MPa) | error | ccx σyy(D) (MPa) | error | "
               "rigfem time (s) | ccx time (s) | time ratio rigfem/ccx | runs | rigfem peak RSS (MiB) | "
@@ -284,7 +284,7 @@ def malloc_trim(rec: dict) -> str:
         lines.append(f"| {k} | {med(rec, k):.1f} | {med(rec, k, 'user_s'):.1f} | {med(rec, k, 'sys_s'):.1f} | "
                      f"{med(rec, k, 'minor_faults'):,.0f} |")
     lines += ["", f"With the variable the chunk takes {100 * rec['derived']['wall with / without - 1']:+.0f} % wall "
-              "time; local sweep workers are started without it (`rigfem.studies.sweep`)."]
+              "time; local sweep workers are started without it (`rigfem.sweep.run`)."]
     return "\n".join(lines) + "\n"
 
 

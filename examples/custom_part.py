@@ -8,6 +8,13 @@ The mesh uses the ``standard`` preset of a rig check (6 mm, 1.2 mm at the hole).
 Mises stress, with its error estimate, is compared with Peterson's Kt closed form.
 
 Run: python examples/custom_part.py
+
+Prints (tests/test_examples.py compares; ``...`` stands for what differs from run to run)::
+
+    949 nodes (preset standard: 6 mm, 1.2 mm at the hole)
+    peak von Mises 157.3 MPa ± 2.3 % (error estimate) on 'hole'
+    Peterson Kt closed form 157.4 MPa: FE -0.11 %, within the error estimate
+    41.9 % of σu/2 = 375 MPa: pass
 """
 
 from pathlib import Path
@@ -17,7 +24,7 @@ from rigfem.material import get_material
 from rigfem.mesh import mesh_part
 from rigfem.rig import load_part
 from rigfem.settings import preset
-from rigfem.studies.closed_form import plate_hole_peak_mpa
+from rigfem.verification.closed_form import plate_hole_peak_mpa
 from rigfem.verdict import half_ultimate
 
 SIGMA_MPA, WIDTH_MM, HOLE_MM = 50.0, 100.0, 20.0  # as in plate_with_hole.geo

@@ -5,6 +5,11 @@ elastic shaft-in-hole support, no false singularity), pushes the bearing seat wi
 cosine bearing pressure, and prints the peak von Mises stress against the allowable.
 
 Run: python examples/solve_part.py
+
+Prints (tests/test_examples.py compares; ``...`` stands for what differs from run to run)::
+
+    4862 nodes; peak von Mises 31.6 MPa ± 7.2 % (error estimate) on 'screw_2' at [57.0, -0.0, 10.0] mm
+    8.4 % of σu/2 = 375 MPa: pass
 """
 
 from rigfem.fe import BearingLoad, ShaftInHole, build_model, solve

@@ -5,6 +5,11 @@ with the general planar solver, and prints the transmission-angle range and the 
 the coupler curve.
 
 Run: python examples/textbook_kinematics.py
+
+Prints (tests/test_examples.py compares; ``...`` stands for what differs from run to run)::
+
+    mech2-fourbar-coupler-point: transmission angle 12.2..96.1 deg over one turn
+    coupler curve spans 166.6 x 115.0 mm
 """
 
 import numpy as np

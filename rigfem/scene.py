@@ -2,8 +2,8 @@
 
 The whole file is checked against :mod:`rigfem.schema` first (unknown tables and keys,
 types, ranges).  Content that passed the same schema before is not checked again: a verified
-cache entry (:mod:`rigfem.mesh.cache`) keyed by the file's SHA-256, the schema's code and
-pydantic's version records the pass, so reading a known scene loads no pydantic (issue 26:
+cache entry (:mod:`rigfem.cache`) keyed by the file's SHA-256 and pydantic's version (and, as
+every entry, by the package's code) records the pass, so reading a known scene loads no pydantic (issue 26:
 ``rigfem kinematics SCENE`` is a light command).  The ``[linkage]`` table becomes a
 :class:`Scene`: the linkage's type and builder arguments, its speed and what it names
 (masses, a gas force).  Nothing is computed here: :func:`rigfem.linkage.mechanisms.build`
@@ -39,14 +39,12 @@ from importlib.metadata import version
 from pathlib import Path
 
 from rigfem.errors import InputError, decode_text, plain, read_at_most
-from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
+from rigfem.cache import Cache, resolve as resolve_cache
 
 #: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
 MAX_DEPTH = 8
 #: largest scene file read (bytes)
 MAX_BYTES = 1_000_000
-#: the code a scene's validity depends on (rigfem.schema and the vocabularies it names)
-_SCHEMA_CODE = ("schema.py", "material.py", "settings.py")
 
 _SPEED_KEYS = ("speed_hz", "rpm", "omega_rad_s")
 
@@ -150,24 +148,24 @@ def read_toml(path: Path) -> tuple[dict, str]:
     return data, hashlib.sha256(blob).hexdigest()
 
 
-def _validate(data: dict, digest: str, name: str) -> None:
+def _validate(data: dict, digest: str, name: str, cache: Cache) -> None:
     """Check a scene's raw TOML (``digest``: SHA-256 of its bytes) against :mod:`rigfem.schema`,
-    unless this content passed the same schema (code and pydantic version) before."""
-    inputs = {"scene": digest, "code": code_hash(*_SCHEMA_CODE), "pydantic": version("pydantic")}
-    folder = cache_dir() / "scenes" / entry_key(inputs)
-    if read_entry(folder, inputs) is not None:
+    unless this content passed the same schema (package and pydantic version) before."""
+    inputs = {"scene": digest, "pydantic": version("pydantic")}
+    if cache.get("scenes", inputs, lambda entry: True):
         return
     from rigfem.schema import validate_scene  # pydantic: loaded for content not validated before
 
     validate_scene(data, name)
-    write_entry(folder, inputs, lambda d: None)  # only valid content is recorded
+    cache.put("scenes", inputs, lambda tmp: None)  # only valid content is recorded
 
 
-def load_scene(path_or_name: str | Path) -> Scene:
-    """Read a scene file (or built-in scene name) as plain, validated data."""
+def load_scene(path_or_name: str | Path, cache: Cache | None = None) -> Scene:
+    """Read a scene file (or built-in scene name) as plain, validated data (``cache``: where a
+    validation is remembered; None: the environment's, :func:`rigfem.cache.resolve`)."""
     p = resolve(path_or_name)
     data, digest = read_toml(p)
-    _validate(data, digest, p.name)
+    _validate(data, digest, p.name, resolve_cache(cache))
     t = data["linkage"]
     return Scene(p.stem, t["type"], linkage_params(t), _speed(t), t, float(t.get("alpha_rad_s2", 0.0)),
                  t.get("instant_deg"), bool(t.get("textbook", False)), data,

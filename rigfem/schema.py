@@ -130,7 +130,7 @@ class Fatigue(_Table):
 
     surface: Literal[tuple(SURFACE)] = "machined"  # type: ignore[valid-type]
     reliability: Literal[tuple(RELIABILITY)] = 0.9  # type: ignore[valid-type]
-    size_mm: Annotated[float, Field(ge=1.0, le=500.0)] = 19.0
+    size_mm: Annotated[float, Field(ge=2.79, le=254.0)] = 19.0  # Shigley's size factor's range
 
 
 class CsvMissing(_Table):

@@ -31,7 +31,7 @@ import os
 from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING
 
-from rigfem.errors import InputError
+from rigfem.errors import InputError, check_range
 from rigfem.material import Material, get_material, table_material
 
 if TYPE_CHECKING:  # rig.layout loads numpy: imported where a scene is resolved, so the CLI starts light
@@ -69,6 +69,14 @@ class MeshSettings:
     refine_dist_mm: float | None = None  #: distance over which the size grows back (default 2*size_mm)
     min_quality: float = 0.1  #: smallest acceptable gmsh minSICN of a tetrahedron
     concentrate: tuple[str, ...] = ()  #: refined groups that raise stress (fillets): half the local size
+
+    def __post_init__(self) -> None:
+        """The invariants every mesher relies on: sizes finite and > 0 (at most 10 m), a quality in [0, 1]."""
+        for name, v in (("size_mm", self.size_mm), ("local_size_mm", self.local_size_mm),
+                        ("refine_dist_mm", self.refine_dist_mm)):
+            if v is not None:
+                check_range(name, v, 0.0, 1e4, "mm", lo_open=True)
+        check_range("min_quality", self.min_quality, 0.0, 1.0)
 
     @property
     def near_mm(self) -> float:

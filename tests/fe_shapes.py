@@ -1,6 +1,6 @@
-"""Test PartMesh builders: their one home is :mod:`rigfem.studies.shapes` (the band-coverage study meshes them too)."""
+"""Test PartMesh builders: their one home is :mod:`rigfem.verification.shapes` (the band-coverage study meshes them too)."""
 
-from rigfem.studies.shapes import (  # noqa: F401
+from rigfem.verification.shapes import (  # noqa: F401
     FACES,
     bar_with_holes,
     box,

@@ -5,19 +5,19 @@ import json
 
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.cli import main
 from rigfem.settings import FIDELITY, LADDER, PRESET_ERROR_PCT
 
 FINAL_CM = '[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\nmasses = "rig"\n'
 PLATE = {"parts": ["plate_A"], "modes": ["original"], "samples": 72, "frames": 0}
+PLATE_DRAFT = dict(PLATE, fidelity="draft")
 
 
 @pytest.fixture(scope="module")
 def far(tmp_path_factory):
     """The plate at the standard preset: at about 2 % of the allowable, decided on the coarse level."""
-    return run_check("final-cm", out=tmp_path_factory.mktemp("a") / "o", quiet=True,
-                     overrides=dict(PLATE, fidelity="standard"))
+    return run_check(Request("final-cm", dict(PLATE, fidelity="standard")), Output(tmp_path_factory.mktemp("a") / "o"))
 
 
 def test_far_below_the_limit_stops_at_the_coarse_level(far):
@@ -32,8 +32,7 @@ def test_far_below_the_limit_stops_at_the_coarse_level(far):
 
 
 def test_forced_size_meshes_exactly_that(far, tmp_path):
-    r = run_check("final-cm", out=tmp_path / "o", quiet=True,
-                  overrides=dict(PLATE, size_mm=8.0, local_size_mm=1.7))
+    r = run_check(Request("final-cm", dict(PLATE, size_mm=8.0, local_size_mm=1.7)), Output(tmp_path / "o"))
     (p,) = r["parts"]
     m = p["mesh"]
     assert r["settings"]["adaptive"] is False
@@ -69,7 +68,7 @@ def test_warm_check_starts_where_the_ladder_stopped(tmp_path, monkeypatch, caplo
     ladder outcome), reports the same ladder and peak; a damaged record is discarded and climbed again."""
     import logging
 
-    import rigfem.fe.partcase as partcase
+    from stages import recording, solved as solve
 
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     base = tmp_path / "base.toml"
@@ -80,29 +79,27 @@ def test_warm_check_starts_where_the_ladder_stopped(tmp_path, monkeypatch, caplo
     low = json.loads((tmp_path / "b" / "report.json").read_text())["parts"][0]
     scene = tmp_path / "edge.toml"  # the limit on the coarse peak: the plate climbs to draft
     scene.write_text(FINAL_CM + f"[check]\nlimit_factor = {low['peak_mpa'] / (2 * low['limit_mpa'])!r}\n")
-    solved = []
-    real = partcase._solve_group
-    monkeypatch.setattr(partcase, "_solve_group", lambda g, s, *a: solved.append(a[-1]) or real(g, s, *a))
+    solved, name = [], {p.size_mm: n for n, p in LADDER.items()}
 
-    def check(out: str) -> dict:
+    def check():  # the check's stages with a part solver that records each level it solves
         solved.clear()
-        main(["check", str(scene), "--out", str(tmp_path / out), *args])
-        return json.loads((tmp_path / out / "report.json").read_text())["parts"][0]
+        (r,) = solve(str(scene), PLATE_DRAFT, solve=recording(solved))[2]
+        solved[:] = [name[s] for s in solved]
+        return r
 
-    first = check("o1")
+    first = check()
     assert solved == ["coarse", "draft"]
-    second = check("o2")
+    second = check()
     assert solved == ["draft"]  # the coarse level it discarded is not loaded again
-    assert second["mesh"]["ladder"][0] == first["mesh"]["ladder"][0]
-    assert [s["level"] for s in second["mesh"]["ladder"]] == ["coarse", "draft"]
-    assert (second["peak_mpa"], second["verdict"], second["mesh"]["dofs"]) == \
-        (first["peak_mpa"], first["verdict"], first["mesh"]["dofs"])
-    (rec,) = (tmp_path / "cache" / "ladders").rglob("ladder.json")
+    assert second.ladder[0] == first.ladder[0]
+    assert [s["level"] for s in second.ladder] == ["coarse", "draft"]
+    assert (second.peak.value, second.solution.model.mesh.ndof) == (first.peak.value, first.solution.model.mesh.ndof)
+    (rec,) = (tmp_path / "cache").rglob("ladders/*/ladder.json")
     rec.write_text(rec.read_text().replace('"draft"', '"coarse"'))  # damaged
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
-        third = check("o3")
+        third = check()
     assert solved == ["coarse", "draft"] and "discarded" in caplog.text
-    assert third["peak_mpa"] == first["peak_mpa"]
+    assert third.peak.value == first.peak.value
 
 
 def test_no_adaptive_flag_and_bad_value(tmp_path, capsys):
@@ -118,7 +115,7 @@ def test_no_adaptive_flag_and_bad_value(tmp_path, capsys):
 
 
 def test_best_shrink_is_the_element_orders_rate():
-    from rigfem.fe.partcase import best_shrink
+    from rigfem.fe.ladder import best_shrink
 
     coarse, draft, standard = (LADDER[n] for n in ("coarse", "draft", "standard"))
     assert best_shrink(coarse, standard, 2) == pytest.approx(min(6 / 12, 1.2 / 2.4) ** 2)
@@ -130,7 +127,7 @@ def test_best_shrink_is_the_element_orders_rate():
 def test_a_level_that_cannot_settle_is_skipped(tmp_path, monkeypatch):
     """The limit on the coarse peak at the standard preset: even the best rate (h²) leaves the
     draft band straddling it, so the plate goes coarse → standard; a warm check solves standard only."""
-    import rigfem.fe.partcase as partcase
+    from stages import recording, solved as solve
 
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     args = ["--parts", "plate_A", "--modes", "original", "--fidelity", "standard", "--samples", "72",
@@ -142,57 +139,53 @@ def test_a_level_that_cannot_settle_is_skipped(tmp_path, monkeypatch):
     assert low["mesh"]["level"] == "coarse"
     scene = tmp_path / "edge.toml"
     scene.write_text(FINAL_CM + f"[check]\nlimit_factor = {low['peak_mpa'] / (2 * low['limit_mpa'])!r}\n")
-    solved = []
-    real = partcase._solve_group
-    monkeypatch.setattr(partcase, "_solve_group", lambda g, s, *a: solved.append(a[-1]) or real(g, s, *a))
+    solved, name = [], {p.size_mm: n for n, p in LADDER.items()}
+    (r,) = solve(str(scene), dict(PLATE, fidelity="standard"), solve=recording(solved))[2]
+    assert [name[s] for s in solved] == ["coarse", "standard"]
+    assert [s["level"] for s in r.ladder] == ["coarse", "standard"] and r.ladder[0]["skipped"] == ["draft"]
     main(["check", str(scene), "--out", str(tmp_path / "o"), *args])
-    m = json.loads((tmp_path / "o" / "report.json").read_text())["parts"][0]["mesh"]
-    assert solved == ["coarse", "standard"]
-    assert [s["level"] for s in m["ladder"]] == ["coarse", "standard"] and m["ladder"][0]["skipped"] == ["draft"]
     assert "coarse" in (tmp_path / "o" / "report.md").read_text() and "draft skipped" in \
         (tmp_path / "o" / "report.md").read_text()
     solved.clear()
-    main(["check", str(scene), "--out", str(tmp_path / "o2"), *args])
-    assert solved == ["standard"]
+    solve(str(scene), dict(PLATE, fidelity="standard"), solve=recording(solved))
+    assert [name[s] for s in solved] == ["standard"]
 
 
-def test_the_part_whose_mesh_is_made_first_is_solved_first(monkeypatch):
+def test_the_part_whose_mesh_is_made_first_is_solved_first():
     """The queue's estimates only guess which mesh comes first: the first part whose mesh is ready
     is taken, waiting while meshes are being made; with none being made, the queue's head."""
     from collections import deque
 
-    from rigfem.fe import partcase
+    from rigfem.fe.executor import next_ready
 
     seen = []
     timeline = {"a": ["making", "making", "making"], "b": ["making", "making", "ready"], "c": ["none"] * 3}
 
-    def state(name, _settings):
+    def state(name):
         seen.append(name)
-        calls = seen.count(name) - 1
-        return timeline[name][min(calls, 2)]
+        return timeline[name][min(seen.count(name) - 1, 2)]
 
-    monkeypatch.setattr(partcase, "mesh_state", state)
-    monkeypatch.setattr(partcase, "POLL_S", 0.0)
-    assert partcase._next_ready(deque("abc"), lambda g: (g, None)) == "b"  # after two rounds of waiting
+    assert next_ready(deque("abc"), state, 0.0) == "b"  # after two rounds of waiting
     assert seen.count("b") == 3
     timeline.update(a=["none"] * 3, b=["none"] * 3)
-    assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "c"  # none being made: the head
+    assert next_ready(deque("cab"), state, 0.0) == "c"  # none being made: the head
     timeline.update(a=["ready"] * 3)
-    assert partcase._next_ready(deque("cab"), lambda g: (g, None)) == "a"
+    assert next_ready(deque("cab"), state, 0.0) == "a"
 
 
 def test_an_interruption_while_waiting_for_a_mesh_cancels_the_meshers(monkeypatch):
-    from collections import deque
-
-    from rigfem.fe import partcase
+    """Ctrl-C while the FE waits for a mesh: the mesher processes are cancelled."""
+    from rigfem.fe import executor
+    from rigfem.mesh import pool
+    from stages import solved as solve
 
     cancelled = []
 
-    def state(name, _settings):
+    def interrupted(*a):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(partcase, "mesh_state", state)
-    monkeypatch.setattr(partcase.pool, "cancel", lambda: cancelled.append(True) or [])
+    monkeypatch.setattr(executor, "mesh_state", interrupted)  # the mesher's answer, where the executor asks
+    monkeypatch.setattr(pool, "cancel", lambda *a, **k: cancelled.append(not (a or k)) or [])  # True: every job
     with pytest.raises(KeyboardInterrupt):
-        partcase._next_ready(deque("ab"), lambda g: (g, None))
-    assert cancelled == [True]
+        solve("final-cm", PLATE_DRAFT)
+    assert cancelled[-1] is True

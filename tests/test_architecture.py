@@ -18,23 +18,29 @@ import rigfem
 PKG = pathlib.Path(rigfem.__file__).parent
 #: lowest first; every rigfem module belongs to exactly one layer
 LAYERS = [
-    ("rigfem.errors", "rigfem.files", "rigfem.memory", "rigfem.material", "rigfem.geometry"),  # geometry: part files (data)
+    ("rigfem.errors", "rigfem.files", "rigfem.memory", "rigfem.material", "rigfem.geometry",
+     "rigfem.observer", "rigfem.tensors"),  # geometry: part files (data)
+    ("rigfem.cache",),
+    ("rigfem.context",),
     ("rigfem.rig",),
     ("rigfem.settings",),
+    ("rigfem.schema", "rigfem.scene"),
     ("rigfem.linkage",),
     ("rigfem.dynamics",),
     ("rigfem.loads",),
+    ("rigfem.verdict",),
     ("rigfem.mesh",),
     ("rigfem.fe",),
-    ("rigfem.verdict",),
-    ("rigfem.report",),
     ("rigfem.io",),
-    ("rigfem.schema", "rigfem.scene"),
-    ("rigfem.check",),
-    ("rigfem.studies",),
-    ("rigfem.cli", "rigfem.__main__"),
+    ("rigfem.job",),
+    ("rigfem.report",),
+    ("rigfem.pipeline",),
+    ("rigfem.check",),  # the deprecated alias of rigfem.pipeline's run_check
+    ("rigfem.verification", "rigfem.sweep"),
+    ("rigfem.design",),
+    ("rigfem.cli", "rigfem.__main__", "rigfem.studies"),  # studies: the deprecated aliases of the three above
 ]
-SUBPACKAGES = ("rig", "linkage", "dynamics", "loads", "mesh", "fe", "verdict", "report", "io", "studies")
+SUBPACKAGES = ("rig", "linkage", "dynamics", "loads", "mesh", "fe", "verdict", "report", "io", "sweep", "verification", "design")
 
 
 def _modules() -> dict[str, pathlib.Path]:
@@ -155,7 +161,7 @@ _HEAVY = ("rigfem.dynamics", "rigfem.fe", "rigfem.mesh", "skfem", "gmsh")
 #: nothing of the verdict, FE or mesh code (only the verified cache, rigfem.mesh.cache, that
 #: records a scene's content as validated)
 _SCENE_HEAVY = ("rigfem.dynamics", "rigfem.mesh", "rigfem.fe", "rigfem.verdict", "skfem", "gmsh")
-_CACHE_ONLY = ["rigfem.mesh", "rigfem.mesh.cache"]
+_CACHE_ONLY: list[str] = []  # the cache (rigfem.cache) is below them all
 
 
 def _loaded_after(code: str, heavy: tuple[str, ...] = _HEAVY) -> list[str]:
@@ -219,3 +225,17 @@ with contextlib.redirect_stdout(io.StringIO()):
 def test_the_import_probe_can_fail():
     """The probe sees a dynamics import when there is one."""
     assert "rigfem.dynamics.solver" in _loaded_after("import rigfem.dynamics.solver")
+
+
+def test_studies_aliases_warn_and_resolve():
+    """Scripts written against rigfem.studies (before 0.2) still run, with a DeprecationWarning."""
+    code = ("import warnings; warnings.simplefilter('error', DeprecationWarning)\n"
+            "import rigfem.sweep\n"
+            "try:\n    from rigfem.studies import SweepParams\nexcept DeprecationWarning as w: print(w)\n"
+            "warnings.simplefilter('ignore')\n"
+            "from rigfem.studies import SweepParams as A\nfrom rigfem.studies.closed_form import kt_plate_hole\n"
+            "import rigfem.studies.sweep as s\n"
+            "assert A is rigfem.sweep.SweepParams and s is __import__('rigfem.sweep.run').sweep.run\n"
+            "print(kt_plate_hole(0.2) > 2)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "rigfem.studies.SweepParams moved to rigfem.sweep.configs.SweepParams" in out and out.endswith("True\n")

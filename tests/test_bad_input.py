@@ -318,7 +318,7 @@ _keys = st.sampled_from(["b2", "b3", "b4", "d", "type", "order", "modes", "parts
 @given(table=st.sampled_from(["linkage", "check"]), key=_keys, value=_values)
 def test_any_scene_parses_or_is_input_error(tmp_path, table, key, value):
     """A scene with one field replaced by anything: a valid linkage and settings, or InputError."""
-    from rigfem.check import load_check_scene
+    from stages import job_of
 
     d = copy.deepcopy(BASE)
     if value is None:
@@ -328,7 +328,7 @@ def test_any_scene_parses_or_is_input_error(tmp_path, table, key, value):
     scene = tmp_path / "p.toml"
     scene.write_text(dump(d))
     try:
-        cs = load_check_scene(scene, allow_rule_violations=True)
+        cs = job_of(scene, allow=True)
     except InputError as exc:
         assert "\n" not in str(exc)
         return

@@ -10,7 +10,7 @@ from fe_shapes import box, quarter_ring
 
 from rigfem.fe import BAND_FACTOR, FixedComponents, Gravity, Pressure, Symmetry, build_model, solve
 from rigfem.material import get_material
-from rigfem.studies.band_coverage import (
+from rigfem.verification.band_coverage import (
     PRESETS,
     calibrate,
     closed_form_case,
@@ -80,11 +80,11 @@ def test_committed_record_sets_the_factors_and_every_preset_covers_95_percent():
 
 
 def test_p1_reports_say_linear_tetrahedra_under_predict_bending(tmp_path):
-    from rigfem.check import run_check
+    from rigfem.pipeline import Output, Request, run_check
 
     fast = {"parts": ["plate_A"], "modes": ["original"], "fidelity": "draft", "samples": 36, "frames": 0}
-    r1 = run_check("final-cm", out=tmp_path / "p1", overrides={**fast, "order": 1}, quiet=True)
-    r2 = run_check("final-cm", out=tmp_path / "p2", overrides=fast, quiet=True)
+    r1 = run_check(Request("final-cm", {**fast, "order": 1}), Output(tmp_path / "p1"))
+    r2 = run_check(Request("final-cm", fast), Output(tmp_path / "p2"))
     assert all(any("under-predict bending" in n for n in p["notes"]) for p in r1["parts"])
     assert not any("under-predict bending" in n for p in r2["parts"] for n in p["notes"])
     assert "under-predict bending" in (tmp_path / "p1" / "report.md").read_text()

@@ -11,7 +11,7 @@ import matplotlib.image as mpimg
 import pytest
 
 from browser import Browser
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.report.html import write_html
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,7 +67,7 @@ def test_committed_reports(browser, tmp_path):
 
 def test_report_3d_view(browser, tmp_path):
     out = tmp_path / "final-cm"
-    run_check("final-cm", out=out, quiet=True, overrides={"fidelity": "draft", "parts": ["plate_A"], "frames": 3})
+    run_check(Request("final-cm", {"fidelity": "draft", "parts": ["plate_A"], "frames": 3}), Output(out))
     page = _check_page(browser, out / "report.html", tmp_path)
     first = page.eval("document.getElementById('v-canvas').toDataURL()")
     assert page.eval("document.getElementById('v-angle').textContent").startswith("0.0°")

@@ -18,8 +18,9 @@ from skfem import (
 )
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
+from rigfem.cache import NO_CACHE
 from rigfem.errors import InputError
-from rigfem.fe import von_mises
+from rigfem.tensors import von_mises
 from rigfem.io import CalculixError, read_frd, run_ccx, write_inp
 
 E, NU = 210_000.0, 0.3  # MPa
@@ -238,7 +239,7 @@ def test_rail_rigfem_vs_calculix(tmp_path):
 
     holes = ("hole_00", "hole_01", "hole_10", "hole_11")
     pm = mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(size_mm=16.0, refine=holes, local_size_mm=5.0),
-                   use_cache=False)
+                   cache=NO_CACHE)
     model = build_model(pm, get_material("rig_steel"), order=2)
     # pins in the pivot holes; on hole_00 only the side the pin bears on (springs on half the wall)
     supports = [ShaftInHole("hole_00", direction=(-1.0, 0.0, 0.0)), ShaftInHole("hole_01")]
@@ -267,7 +268,7 @@ def test_cross_check_free_body(tmp_path):
 
     from rigfem.fe import FreeBody, SurfaceForce, build_model
     from rigfem.material import get_material
-    from rigfem.studies import cross_check
+    from rigfem.verification import cross_check
 
     model = build_model(box(60.0, 10.0, 8.0, 12, 2, 2), get_material("rig_steel"), order=2)
     cases = [[SurfaceForce("xmin", (-500.0, 0.0, 0.0)), SurfaceForce("xmax", (500.0, 0.0, 0.0))],
@@ -292,10 +293,10 @@ def test_cross_check_free_body(tmp_path):
 def test_reference_scene_against_calculix():
     """Every part case of `rigfem verify --against calculix final-cm` (draft): README claims all 12
     within 0.0012 % (results/benchmarks/calculix_verify_final-cm.md); peak 0.002 %, displacement 0.001 %."""
-    from rigfem.check import load_check_scene
-    from rigfem.studies import verify_scene
+    from rigfem.verification import verify_job
+    from stages import job_of
 
-    rows = verify_scene(load_check_scene("final-cm", {"fidelity": "draft", "frames": 0}))
+    rows = verify_job(job_of("final-cm", {"fidelity": "draft", "frames": 0}))
     assert len(rows) == 12
     for r in rows:
         assert abs(r["peak_rel_diff"]) < 2e-5 and r["displacement_rel_diff"] < 1e-5, r

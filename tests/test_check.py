@@ -6,7 +6,7 @@ import meshio
 import numpy as np
 import pytest
 
-from rigfem.check import read_report, run_check
+from rigfem.pipeline import Output, Request, read_report, run_check
 from rigfem.cli import main
 from rigfem.errors import InputError
 from said import one_line
@@ -17,7 +17,7 @@ FAST = {"parts": ["plate_A"], "fidelity": "draft", "samples": 72, "frames": 3}
 @pytest.fixture(scope="module")
 def plate_report(tmp_path_factory):
     out = tmp_path_factory.mktemp("check") / "final-cm"
-    return out, run_check("final-cm", out=out, overrides=FAST, quiet=True)
+    return out, run_check(Request("final-cm", FAST), Output(out))
 
 
 def test_report_and_files(plate_report):
@@ -48,7 +48,7 @@ def test_existing_folder_is_not_overwritten(plate_report, capsys):
     out, _ = plate_report
     before = (out / "report.json").read_text()
     with pytest.raises(InputError, match="--force"):
-        run_check("final-cm", out=out, overrides=FAST, quiet=True)
+        run_check(Request("final-cm", FAST), Output(out))
     assert main(["check", "--out", str(out), "--parts", "plate_A"]) == 2
     assert "already exists; pass --force" in capsys.readouterr().err
     assert (out / "report.json").read_text() == before
@@ -68,8 +68,7 @@ def test_failing_part_exits_1(tmp_path, capsys):
 def test_toggle_configuration_is_never_given_a_number(tmp_path):
     scene = tmp_path / "toggle.toml"  # d + b2 = 1199 ≈ b3 + b4: μ reaches 175°
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 300.0\nb3 = 600.0\nb4 = 600.0\nd = 899.0\n')
-    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True,
-                  allow_rule_violations=True)  # it breaks the crank-turns and hole-grid rules
+    r = run_check(Request(scene, {"parts": ["plate_A"]}, True), Output(tmp_path / "o"))  # it breaks the crank-turns and hole-grid rules
     assert r["verdict"] == "fail" and r["singular"]
     assert all(p["peak_mpa"] is None and "toggle" in p["notes"][0] for p in r["parts"])
     assert "toggle" in (tmp_path / "o" / "report.md").read_text()
@@ -91,22 +90,20 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, args, message):
 
 def test_imported_csv_reproduces_the_dynamics(tmp_path):
     """A reaction CSV exported by rigfem and imported back gives the same verdict numbers."""
-    from rigfem.check import load_check_scene
     from rigfem.dynamics import simulate
     from rigfem.io import write_csv
+    from stages import job_of
 
-    cs = load_check_scene("final-cm")
-    write_csv(simulate(cs.linkage, samples=360), tmp_path / "ext.csv")
+    write_csv(simulate(job_of("final-cm").linkage, samples=360), tmp_path / "ext.csv")
     opts = {"parts": ["plate_A"], "fidelity": "draft", "frames": 0}
-    ref = run_check("final-cm", out=tmp_path / "ref", overrides=opts, quiet=True)
-    imp = run_check("final-cm", out=tmp_path / "imp", quiet=True,
-                    overrides={**opts, "reactions_csv": str(tmp_path / "ext.csv")})
+    ref = run_check(Request("final-cm", opts), Output(tmp_path / "ref"))
+    imp = run_check(Request("final-cm", {**opts, "reactions_csv": str(tmp_path / "ext.csv")}), Output(tmp_path / "imp"))
     assert imp["configuration"]["model"] == "imported from ext.csv"
     for a, b in zip(ref["parts"], imp["parts"]):
         assert b["peak_mpa"] == pytest.approx(a["peak_mpa"], rel=1e-4)
         assert b["crank_deg"] == pytest.approx(a["crank_deg"], abs=0.01)
     with pytest.raises(InputError, match="reactions_csv = 'nope.csv': no such file"):
-        run_check("final-cm", out=tmp_path / "x", overrides={**opts, "reactions_csv": "nope.csv"})
+        run_check(Request("final-cm", {**opts, "reactions_csv": "nope.csv"}), Output(tmp_path / "x"))
 
 
 def _numbers(entry, prefix=""):
@@ -123,12 +120,10 @@ def test_a_final_part_holds_only_its_critical_combination():
     """Once a part is final, a check keeps of its solution only what the report still reads (the
     critical row's combination; the animation frames are written as it becomes final), not every
     unit solution; the verdict entries are those of the whole solution."""
-    from rigfem.check import load_check_scene, solve_scene
-    from rigfem.verdict.part import verdict_of
+    from stages import entries, solved
 
-    cs = load_check_scene("final-cm", FAST)
-    _, small, _ = solve_scene(cs)
-    _, every, _ = solve_scene(cs, on_final=lambda r: None)
+    job, _, small = solved("final-cm", FAST)
+    _, _, every = solved("final-cm", FAST, whole=True)
     for r, ref in zip(small, every):
         shared = [o for o in small if o.solution is r.solution]  # the modes that share supports
         assert r.solution.U.shape[1] == len({tuple(o.coef[o.row]) for o in shared}) < r.solution.cases
@@ -138,7 +133,7 @@ def test_a_final_part_holds_only_its_critical_combination():
         for i in dropped[:1]:
             with pytest.raises(ValueError, match="kept"):
                 r.solution.stress(r.coef[i])
-        a, b = _numbers(verdict_of(r, cs.settings)), _numbers(verdict_of(ref, cs.settings))
+        (a,), (b,) = (_numbers(e) for e in entries(job, [r])), (_numbers(e) for e in entries(job, [ref]))
         assert a.keys() == b.keys()
         for k in a:
             assert a[k] == pytest.approx(b[k], rel=1e-10, abs=1e-9) if isinstance(a[k], float) else a[k] == b[k], k

@@ -47,7 +47,8 @@ def test_a_skip_fails_under_ci(inner, monkeypatch):
 
 def test_ci_runs_the_readme_test_command_then_the_heavy_tests():
     readme = (ROOT / "README.md").read_text()
-    setup = readme[readme.index("## Set-up on a fresh machine"):readme.index("## The data path")]
+    start = readme.index("## Set-up on a fresh machine")
+    setup = readme[start:readme.index("\n## ", start)]
     commands = re.findall(r"^    (\S.*)$", setup, re.M)
     assert len(commands) == 2 and "rigfem check" in commands[0]
     test_command = commands[1]

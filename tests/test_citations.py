@@ -3,7 +3,10 @@
 A citation is ``NAME.md §N`` (or ``§N-M``), or a Markdown path: ``dir/name.md``, or a bare
 ``NAME.md`` whose name starts with a capital (a document such as the README; lower-case bare
 names are files a command writes, e.g. ``report.md``, and so is a ``results/`` path named in code).  A cited path is resolved from the
-repository's top and from the citing file's folder.
+repository's top and from the citing file's folder; a link of the docs (and of the two scripts that write
+their pages, docs/gen.py and benchmarks/publish.py) may also name a page docs/gen.py generates when the site
+is built, resolved from docs/ and its folders (``mkdocs build --strict`` in tests/test_docs.py checks every
+such link and anchor on the built site).
 """
 
 import pathlib
@@ -28,6 +31,31 @@ def _sections(doc: pathlib.Path) -> set[int]:
     return {int(m) for m in re.findall(r"^#+\s*(\d+)[.)\s]", doc.read_text(), re.M)}
 
 
+DOCS = ROOT / "docs"
+_GENERATED: set[pathlib.Path] = set()
+
+
+def _generated() -> set[pathlib.Path]:
+    """The pages docs/gen.py generates at build time, as paths under docs/."""
+    if not _GENERATED:
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location("docs_gen", DOCS / "gen.py")
+        gen = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(gen)
+        _GENERATED.update((DOCS / uri).resolve() for uri in gen.pages())
+    return _GENERATED
+
+
+def _docs_page(path: pathlib.Path, ref: str) -> pathlib.Path | None:
+    """A page (on disk or generated) a docs link names (from the page's folder, or for the page-writing scripts from docs/)."""
+    if DOCS not in path.parents and path not in (DOCS / "gen.py", ROOT / "benchmarks" / "publish.py"):
+        return None
+    bases = [path.parent] if DOCS in path.parents and path.suffix == ".md" else [DOCS, *(d for d in DOCS.iterdir()
+                                                                                         if d.is_dir())]
+    return next((p for b in bases if (p := (b / ref).resolve()).is_file() or p in _generated()), None)
+
+
 def citations(path: pathlib.Path) -> list[tuple[str, pathlib.Path | None, list[int]]]:
     """(as written, the file it resolves to or None, the § numbers cited) of one file's citations."""
     out = []
@@ -37,7 +65,7 @@ def citations(path: pathlib.Path) -> list[tuple[str, pathlib.Path | None, list[i
             continue  # a file a command writes (report.md), not a document
         if path.suffix == ".py" and ref.startswith("results/"):
             continue  # code naming the result file it writes, not a document it cites
-        doc = next((p for p in (ROOT / ref, path.parent / ref) if p.is_file()), None)
+        doc = next((p for p in (ROOT / ref, path.parent / ref) if p.is_file()), None) or _docs_page(path, ref)
         secs = list(range(int(a), int(b or a) + 1)) if a else []
         out.append((m.group(0), doc, secs))
     return out
@@ -51,7 +79,7 @@ def test_every_cited_document_and_section_exists():
         for text, doc, secs in citations(f):
             if doc is None:
                 bad.append(f"{f.relative_to(ROOT)}: {text!r} cites a file the repository lacks")
-            elif missing := [s for s in secs if s not in _sections(doc)]:
+            elif secs and (missing := [s for s in secs if s not in _sections(doc)]):
                 bad.append(f"{f.relative_to(ROOT)}: {text!r}: no section {missing} in {doc.relative_to(ROOT)}")
     assert not bad, "\n".join(bad)
 

@@ -47,8 +47,8 @@ def test_verify_without_ccx_names_the_package(capsys, tmp_path, monkeypatch):
 @pytest.mark.tool("ccx")
 def test_export_inp_is_the_same_model(tmp_path):
     """The deck written by ``rigfem check --export-inp`` reproduces rigfem's peak in ccx."""
-    from rigfem.check import read_report
-    from rigfem.fe import von_mises
+    from rigfem.pipeline import read_report
+    from rigfem.tensors import von_mises
     from rigfem.io import run_ccx
 
     out = tmp_path / "o"

@@ -9,8 +9,11 @@ import pytest
 
 from rigfem.cli import main
 from rigfem.errors import InputError
-from rigfem.studies import (
+from rigfem.cache import from_environment
+from rigfem.job import Request
+from rigfem.verification.convergence import (
     StepSpec,
+    StudySpec,
     analyse,
     away_from_singular_edges,
     fine_step,
@@ -74,8 +77,8 @@ def test_real_coarse_h_sequence_on_the_plate_converges():
     """The plate's peak (screw-hole rim, original mode) on three coarse sqrt(2) levels ending at
     8/1.2 mm: it must converge to the reference of the full study (9.23 MPa at 4/0.6 mm, 297k
     DOF, results/convergence/plate_A.md) within the study's stated uncertainty."""
-    settings, by = scene_cases("final-cm", ["plate_A"], {"modes": ["original"]})
-    res = study(by["plate_A"], settings, levels=3, isolate=False, presets=False, finest=(8.0, 1.2))
+    job, by = scene_cases(Request("final-cm", {"parts": ["plate_A"], "modes": ["original"]}), from_environment())
+    res = study(by["plate_A"], job.settings, StudySpec(levels=3, isolate=False, presets=False, finest=(8.0, 1.2)))
     steps = res["steps"]
     assert [s["label"] for s in steps] == ["h0", "h1", "h2"]
     assert steps[0]["dofs"] < steps[1]["dofs"] < steps[2]["dofs"]
@@ -91,7 +94,8 @@ def test_real_coarse_h_sequence_on_the_plate_converges():
 @pytest.mark.heavy  # a spawned process importing the FE stack: ~8 s alone, ~45 s on the busy machine
 def test_isolated_step_measures_time_memory_and_a_finite_peak():
     """One coarse plate step in a spawned process: its own peak RSS above the post-import RSS."""
-    settings, by = scene_cases("final-cm", ["plate_A"], {"modes": ["cycle"]})
+    job, by = scene_cases(Request("final-cm", {"parts": ["plate_A"], "modes": ["cycle"]}), from_environment())
+    settings = job.settings
     spec = StepSpec("coarse", "h", 2, 30.0, 6.0, 8)
     r = run_step(by["plate_A"](8), settings, spec)
     assert r["peak_rss_mib"] > r["base_rss_mib"] > 0 and r["seconds"] > 0 and r["dofs"] > 1000
@@ -115,7 +119,7 @@ def test_cli_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path):
 
 
 def _synthetic_study(peaks: dict[str, list[float]]) -> dict:
-    """A study dict as rigfem.studies.convergence writes it, from given h-sequence peaks per mode."""
+    """A study dict as rigfem.verification.convergence writes it, from given h-sequence peaks per mode."""
     sizes = [(11.3, 1.7), (8.0, 1.2), (5.66, 0.85), (4.0, 0.6)]
     steps = [{"label": f"h{k}", "kind": "h", "order": 2, "size_mm": g, "local_size_mm": loc,
               "bearing_directions": 24, "dofs": 10000 * 3 ** k, "tets": 1000 * 3 ** k, "seconds": 2.0 ** k,
@@ -178,7 +182,7 @@ def test_fine_preset_error_is_measured_against_an_extended_sequence():
 
 def test_levels_beyond_the_finest_continue_the_ratio():
     """The levels a non-converging study may add are the sequence continued past ``finest``."""
-    from rigfem.studies import h_levels
+    from rigfem.verification import h_levels
 
     base = h_levels(4, 2 ** 0.5, (4.0, 0.6))
     more = h_levels(4, 2 ** 0.5, (4.0, 0.6), beyond=1)

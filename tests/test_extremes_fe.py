@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from fe_shapes import box
 
+from rigfem.cache import NO_CACHE
 from rigfem.errors import InputError
 from rigfem.fe import Fixed, SolverError, SurfaceForce, Symmetry, build_model, solve
 from rigfem.material import Material, get_material, material_from_dict
@@ -99,13 +100,13 @@ def test_memory_guard_names_the_parameter_and_acts_before_meshing(monkeypatch):
     monkeypatch.setattr(gmsh.model.mesh, "generate", no_meshing)
     part = load_part("rail_size25", {"length": 700})
     with pytest.raises(InputError) as e:
-        mesh_part(part, MeshSettings(0.2), use_cache=False)
+        mesh_part(part, MeshSettings(0.2), cache=NO_CACHE)
     msg = str(e.value)
     assert msg.startswith("size_mm = 0.2 mm") and "\n" not in msg
     assert "GiB" in msg and "increase size_mm (--size)" in msg
     # the guard compares with the machine size it is given: a 4 mm rail on a 1e-4 GiB machine
     with pytest.raises(InputError, match=r"more than the machine's 0.0001 GiB"):
-        mesh_part(part, MeshSettings(4.0), use_cache=False, machine_gib=1e-4)
+        mesh_part(part, MeshSettings(4.0), cache=NO_CACHE, machine_gib=1e-4)
 
 
 # ----------------------------------------------------------------------------- aspect ratio 100
@@ -185,7 +186,7 @@ def test_check_at_100_hz_scales_the_plate_peak_by_1e4_and_stays_finite(tmp_path)
     report JSON written for the failing case holds no NaN or infinity."""
     import json
 
-    from rigfem.check import run_check
+    from rigfem.pipeline import Output, Request, run_check
 
     # one mesh for both (no ladder): the failing 100 Hz case would otherwise climb to a finer level
     fast = {"parts": ["plate_A"], "fidelity": "draft", "samples": 72, "frames": 0, "modes": ["original"],
@@ -195,7 +196,7 @@ def test_check_at_100_hz_scales_the_plate_peak_by_1e4_and_stays_finite(tmp_path)
         scene = tmp_path / f"hz{hz:g}.toml"
         scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 840.0\nb4 = 780.0\nd = 1020.0\n'
                          f"speed_hz = {hz}\n")
-        out[hz] = run_check(scene, out=tmp_path / f"o{hz:g}", overrides=fast, quiet=True)
+        out[hz] = run_check(Request(scene, fast), Output(tmp_path / f"o{hz:g}"))
         finite(json.loads((tmp_path / f"o{hz:g}" / "report.json").read_text()))
     lo, hi = (out[h]["parts"][0] for h in (1.0, 100.0))
     assert hi["peak_mpa"] / lo["peak_mpa"] == pytest.approx(1e4, rel=1e-8)
@@ -209,5 +210,5 @@ def test_rail_meshed_far_too_coarse_is_a_clear_error():
     from rigfem.rig import load_part
 
     with pytest.raises(InputError, match=r"^part rail_size25: mesh quality .* change size_mm = 200 mm") as e:
-        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(200.0), use_cache=False)
+        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(200.0), cache=NO_CACHE)
     assert "\n" not in str(e.value)

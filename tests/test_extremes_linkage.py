@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.cli import main
 from rigfem.dynamics import peaks, simulate
 from rigfem.linkage import MU_TOGGLE_DEG, ClosureError, four_bar, slider_crank
@@ -95,8 +95,7 @@ def test_mu_to_zero_through_check(tmp_path):
     """tests/test_check.py covers mu -> 180 deg; this is the mu -> 0 side."""
     scene = tmp_path / "toggle0.toml"
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 100.0\nb3 = 840.0\nb4 = 780.0\nd = 175.0\n')
-    r = run_check(scene, out=tmp_path / "o", overrides={"parts": ["plate_A"]}, quiet=True,
-                  allow_rule_violations=True)  # it breaks the ground-clearance and hole-grid rules
+    r = run_check(Request(scene, {"parts": ["plate_A"]}, True), Output(tmp_path / "o"))  # it breaks the ground-clearance and hole-grid rules
     assert r["verdict"] == "fail" and r["singular"][0][0] == 0.0
     assert r["parts"] and all(p["peak_mpa"] is None and "toggle" in p["notes"][0] for p in r["parts"])
     rep = json.loads((tmp_path / "o" / "report.json").read_text())

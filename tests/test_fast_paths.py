@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from rigfem.check import run_check
+from rigfem.cache import from_environment
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.cli import main
 from rigfem.fe import BearingLoad, Gravity, Inertia, build_model, load_matrix, load_vector
 from rigfem.fe.solver import LinearSolver
@@ -83,10 +84,10 @@ def test_prefetched_mesh_is_made_once_and_taken(tmp_path, monkeypatch):
 
     monkeypatch.setattr(mesher, "make_mesh", counting)
     jobs = [(load_part(PLATE), MeshSettings(14.0)), (load_part(RAIL, {"length": 200}), MeshSettings(14.0))]
-    assert mesher.prefetch(jobs) == 2
+    assert mesher.prefetch(jobs, from_environment()) == 2
     pms = [mesh_part(p, s) for p, s in jobs]
     assert sorted(made) == sorted([PLATE, RAIL]) and [pm.name for pm in pms] == [PLATE, RAIL]
-    assert mesher.prefetch(jobs) == 0  # both now in the cache
+    assert mesher.prefetch(jobs, from_environment()) == 0  # both now in the cache
     again = mesh_part(*jobs[0])
     assert again.meta["cache"] == "hit" and np.array_equal(again.points, pms[0].points)
 
@@ -94,24 +95,24 @@ def test_prefetched_mesh_is_made_once_and_taken(tmp_path, monkeypatch):
 def test_cancelled_prefetch_ends_its_mesher(tmp_path, monkeypatch):
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     job = (load_part(RAIL, {"length": 200}), MeshSettings(9.0))
-    assert mesher.prefetch([job]) == 1
+    assert mesher.prefetch([job], from_environment()) == 1
     key = mesh_inputs(*job)[0]
     fut = pool._jobs[key][0]
     pool.cancel()
     with pytest.raises(BaseException):
         fut.result(timeout=30)
-    assert not list((tmp_path / "cache").glob("meshes/*"))
+    assert not list((tmp_path / "cache").glob("rigfem-entries/meshes/*"))
 
 
 FAST = ["--parts", "plate_A", "--fidelity", "draft", "--samples", "72", "--frames", "0", "--quiet"]
 
 
 def test_no_pictures_and_verdict_printed_first(tmp_path, capsys, monkeypatch):
-    import rigfem.check as check
+    import rigfem.report.check as report
 
     seen = []
-    real = check.reactions_plot
-    monkeypatch.setattr(check, "reactions_plot", lambda *a: (seen.append(capsys.readouterr().out), real(*a)))
+    real = report.reactions_plot
+    monkeypatch.setattr(report, "reactions_plot", lambda *a: (seen.append(capsys.readouterr().out), real(*a)))
     assert main(["check", "--out", str(tmp_path / "pics"), *FAST]) == 0
     assert "overall: PASS" in seen[0]  # the verdict was printed before the first picture
     assert main(["check", "--out", str(tmp_path / "none"), "--no-pictures", *FAST]) == 0
@@ -125,9 +126,8 @@ def test_no_pictures_and_verdict_printed_first(tmp_path, capsys, monkeypatch):
 
 
 def test_run_check_without_pictures(tmp_path):
-    r = run_check("final-cm", out=tmp_path / "o", overrides={"parts": ["plate_A"], "fidelity": "draft",
-                                                             "samples": 36, "frames": 0, "modes": ["original"]},
-                  quiet=True, pictures=False)
+    r = run_check(Request("final-cm", {"parts": ["plate_A"], "fidelity": "draft",
+                                                             "samples": 36, "frames": 0, "modes": ["original"]}), Output(tmp_path / "o", pictures=False))
     assert r["verdict"] == "pass" and not list((tmp_path / "o").glob("*.png"))
 
 

@@ -146,7 +146,9 @@ def test_once_the_kernels_are_loaded_no_compile_child_is_started(tmp_path, monke
     assembly._kernels()
     started = []
     monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "empty"))
-    assembly.start_compiling()
-    assembly.compiled()
+    from rigfem.cache import Cache
+
+    empty = Cache(tmp_path / "empty", 10**9)
+    assembly.start_compiling(empty)
+    assembly.compiled(empty)
     assert started == []

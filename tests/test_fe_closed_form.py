@@ -16,7 +16,7 @@ from rigfem.fe import (
     volume,
 )
 from rigfem.material import get_material
-from rigfem.studies.closed_form import kt_plate_hole
+from rigfem.verification.closed_form import kt_plate_hole
 
 SYM = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
 

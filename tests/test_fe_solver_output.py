@@ -88,7 +88,7 @@ def test_shaft_support_peak_converges_fixed_hole_does_not():
 
 def test_vtu_roundtrip(cantilever, tmp_path):
     sol = solve(cantilever, [Fixed("xmin")], [SurfaceForce("xmax", (0, 0, -100))])
-    m = meshio.read(write_vtu(tmp_path / "c.vtu", sol))
+    m = meshio.read(write_vtu(tmp_path / "c.vtu", sol, None, 375.0))
     assert m.cells[0].type == "tetra10" and len(m.points) == len(cantilever.mesh.nodes)
     assert m.point_data["stress"].shape == (len(m.points), 6)
     for k in ("displacement", "stress", "von_mises", "safety_factor"):
@@ -183,13 +183,13 @@ def test_solution_cache_reproduces_the_solve_exactly(tmp_path, monkeypatch):
     # another load, material or mesh is another entry
     other = cached_solve(build_model(pm, get_material("abs"), 2), sup, [Pressure("xmax", -10.0)])
     assert "cache" not in other.times
-    assert len(list((tmp_path / "solutions").iterdir())) == 2
+    assert len(list((tmp_path / "rigfem-entries" / "solutions").iterdir())) == 2
 
 
 def test_peak_von_mises_is_exact():
     """The bounded search returns the brute-force maximum and its node, whatever the chunking:
     a field with one sharp peak, rows that cancel it, rows of zeros."""
-    from rigfem.fe import peak_von_mises, von_mises
+    from rigfem.tensors import peak_von_mises, von_mises
 
     rng = np.random.default_rng(1)
     S = rng.normal(size=(5, 3000, 6))
@@ -264,28 +264,3 @@ def test_the_heap_is_trimmed_on_linux():
     trim_heap()
 
 
-def test_a_solution_batch_is_stored_when_its_writer_runs_and_shares_one_factorisation(tmp_path, monkeypatch):
-    """cached_solve hands a new entry's write to ``store`` (the unit bases write one batch in a
-    thread while the next is solved): nothing is stored until it runs; batches of one model and
-    supports share the factorisation kept in ``factorised``."""
-    from fe_shapes import plate_with_hole
-
-    from rigfem.fe import Pressure, Symmetry, build_model, cached_solve
-    from rigfem.fe.cache import load_solution, solution_inputs
-    from rigfem.material import get_material
-
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
-    pm = plate_with_hole(60.0, 40.0, 2.0, 5.0, size=8.0, h_hole=3.0)
-    pm.meta["hash"] = "test-mesh-batches"
-    model = build_model(pm, get_material("rig_steel"), 2)
-    sup = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]
-    writes, factorised = [], {}
-    a = cached_solve(model, sup, [Pressure("xmax", -10.0)], factorised=factorised, store=writes.append)
-    b = cached_solve(model, sup, [Pressure("xmax", -20.0)], factorised=factorised, store=writes.append)
-    assert len(writes) == 2 and len(factorised) == 1  # two entries to write, one factorisation
-    assert np.allclose(b.U, 2 * a.U, rtol=1e-9, atol=0)
-    inputs = solution_inputs(model, sup, [Pressure("xmax", -10.0)], "auto", 1e-10)
-    assert load_solution(model, inputs) is None  # not stored until its write runs
-    writes[0]()
-    stored = load_solution(model, inputs)
-    assert stored is not None and np.array_equal(stored.U, a.U)

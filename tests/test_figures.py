@@ -1,4 +1,4 @@
-"""README's figures and the results/benchmarks tables agree with the dated benchmark records."""
+"""The figures of README and the docs, and the results/benchmarks tables, agree with the dated records."""
 
 from __future__ import annotations
 
@@ -51,25 +51,43 @@ def test_a_summary_edited_by_hand_is_refused(recs):
     assert any("no raw samples" in p for p in publish.problems(bad))
 
 
-def test_a_readme_figure_that_differs_from_its_record_is_caught(recs):
-    text = (ROOT / "README.md").read_text()
-    assert publish.render_readme(text, recs) == text
+PERF_PAGE = ROOT / "docs" / "performance.md"  #: the page that holds the figures tables
+
+
+def test_a_figure_that_differs_from_its_record_is_caught(recs):
+    text = PERF_PAGE.read_text()
+    assert publish.render_page(text, recs) == text
     moved = copy.deepcopy(recs)
     for s in moved["kinematics"]["samples"].values():
         for x in s:
             x["ms"] *= 2.0
     moved["kinematics"]["summary"] = record.summarise(moved["kinematics"]["samples"])
     moved["kinematics"]["derived"]["total ms"] *= 2.0
-    assert publish.render_readme(text, moved) != text
+    assert publish.render_page(text, moved) != text
     typed = text.replace(f"**{recs['kinematics']['derived']['total ms']:.1f} ms**", "**99.0 ms**", 1)
-    assert typed != text and publish.render_readme(typed, recs) == text
+    assert typed != text and publish.render_page(typed, recs) == text
 
 
 def test_a_figure_row_naming_a_missing_result_file_is_caught():
-    text = (ROOT / "README.md").read_text()
-    assert publish.readme_paths(text) == []
-    bad = text.replace("<!-- figures:end -->", "| x | y | results/benchmarks/nowhere.md |\n<!-- figures:end -->")
-    assert publish.readme_paths(bad) == ["results/benchmarks/nowhere.md"]
+    text = PERF_PAGE.read_text()
+    assert publish.named_paths(text) == []
+    bad = text.replace("<!-- perf-figures:end -->", "| x | y | results/benchmarks/nowhere.md |\n<!-- perf-figures:end -->")
+    assert publish.named_paths(bad) == ["results/benchmarks/nowhere.md"]
+
+
+def test_one_figure_per_quantity(recs):
+    """A block or span on two pages, or on none, is refused; where two records measure the same work the
+    performance table's figure is the one shown (the sweep's older 2-worker times are not quoted)."""
+    texts = {p: p.read_text() for p in publish.pages()}
+    assert publish.placement(texts, recs) == []
+    sweep = PERF_PAGE.parent / "guide" / "sweep.md"
+    twice = {**texts, ROOT / "README.md": texts[ROOT / "README.md"] + "\n<!-- fig:sweep-2 -->x<!-- /fig -->\n"}
+    assert any("fig:sweep-2 is on 2 pages" in p for p in publish.placement(twice, recs))
+    none = {**texts, sweep: texts[sweep].replace("<!-- fig:sweep-2 -->", "").replace("<!-- /fig -->.", ".", 1)}
+    assert any("fig:sweep-2 is on no page" in p for p in publish.placement(none, recs))
+    rendered = publish.render_page(texts[PERF_PAGE], recs)
+    old = publish.hms(publish.med(recs["sweep"], "cold, 2 workers"))
+    assert old not in rendered.split("<!-- perf-figures:begin -->")[1], "the sweep row quotes the older figure"
 
 
 def test_every_benchmark_writes_through_the_record_module():
@@ -81,7 +99,7 @@ def test_every_benchmark_writes_through_the_record_module():
 
 
 def test_le10_target_is_the_studys():
-    from rigfem.studies.le10 import TARGET_SYY
+    from rigfem.verification.le10 import TARGET_SYY
 
     assert tables.LE10_TARGET == TARGET_SYY
 

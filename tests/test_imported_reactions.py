@@ -26,11 +26,12 @@ FAST = {"parts": ["plate_A"], "modes": ["original"], "fidelity": "draft", "frame
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory) -> tuple[list[str], list[str], list[list[str]]]:
     """final-cm's own 360-row CSV: (comment lines, header, rows)."""
-    from rigfem.check import load_check_scene
+    from rigfem.cache import NO_CACHE
+    from rigfem.job import Request, read_job
     from rigfem.dynamics.cycle import simulate
 
     path = tmp_path_factory.mktemp("ref") / "final-cm.csv"
-    write_csv(simulate(load_check_scene("final-cm").linkage, samples=360), path)
+    write_csv(simulate(read_job(Request("final-cm"), NO_CACHE).linkage, samples=360), path)
     lines = path.read_text().splitlines()
     comments = [ln for ln in lines if ln.startswith("#")]
     table = list(csv.reader(ln for ln in lines if not ln.startswith("#")))
@@ -68,7 +69,7 @@ def test_rows_marked_singular_are_refused_past_a_small_share_else_no_peak(tmp_pa
 
 @pytest.mark.parametrize("blank, verdict", [(range(100, 110), "fail"), (range(1, 360), None)])
 def test_a_check_on_mostly_blank_reactions_never_passes(tmp_path, reference, blank, verdict):
-    from rigfem.check import run_check
+    from rigfem.pipeline import Output, Request, run_check
     from rigfem.scene import builtin_scenes
 
     comments, head, rows = reference
@@ -77,10 +78,10 @@ def test_a_check_on_mostly_blank_reactions_never_passes(tmp_path, reference, bla
     overrides = {**FAST, "reactions_csv": str(tmp_path / "r.csv")}
     if verdict is None:  # 359 of 360 rows: refused, one line
         with pytest.raises(InputError, match="359 of 360 rows are marked singular"):
-            run_check(tmp_path / "final-cm.toml", out=tmp_path / "o", overrides=overrides, quiet=True)
+            run_check(Request(tmp_path / "final-cm.toml", overrides), Output(tmp_path / "o"))
         assert not (tmp_path / "o").exists()
         return
-    r = run_check(tmp_path / "final-cm.toml", out=tmp_path / "o", overrides=overrides, quiet=True, pictures=False)
+    r = run_check(Request(tmp_path / "final-cm.toml", overrides), Output(tmp_path / "o", pictures=False))
     assert r["verdict"] == "fail" and r["singular"] and all(p["verdict"] != "pass" for p in r["parts"])
 
 

@@ -61,3 +61,14 @@ def test_every_import_of_the_package_is_a_declared_dependency():
                 if not {norm(d) for d in made_by.get(top, [])} & declared:
                     missing.add(f"{top} ({path.relative_to(ROOT)})")
     assert not missing, f"imported but not declared in pyproject.toml: {sorted(missing)}"
+
+
+def test_every_subpackage_is_in_the_wheel():
+    """pyproject.toml lists its packages by hand: a subpackage missing there is missing from a regular
+    install (rigfem.sweep, .verification and .design were, after the split of rigfem.studies)."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "rigfem").rglob("__init__.py")
+             if "__pycache__" not in p.parts and "geometry" not in p.parts}
+    assert found - listed == set(), f"pyproject.toml [tool.setuptools] packages lacks {sorted(found - listed)}"

@@ -16,7 +16,7 @@ import pytest
 
 from rigfem.io import export_model, run_ccx
 from rigfem.mesh import PartMesh
-from rigfem.studies.le10 import (
+from rigfem.verification.le10 import (
     INNER,
     OUTER,
     PRESSURE,

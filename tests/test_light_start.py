@@ -56,7 +56,7 @@ def test_parts_computes_volumes_once(tmp_path, monkeypatch):
     mods = imported("parts")
     assert not heavy(mods), f"rigfem parts (cached volumes) imported {heavy(mods)[:8]}"
     assert "numpy" not in mods  # the cache reads a volume without numpy (40 ms of a 0.3 s command)
-    assert (tmp_path / "volumes").is_dir()
+    assert (tmp_path / "rigfem-entries" / "volumes").is_dir()
 
 
 def test_a_scene_is_validated_once_per_content(tmp_path, monkeypatch):

@@ -10,7 +10,7 @@ discretisation difference (see results/convergence/).
 
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 
 FAST = {"fidelity": "draft", "samples": 72, "frames": 0}
 
@@ -45,7 +45,7 @@ LIMITS = {
 @pytest.mark.parametrize("scene", sorted(LIMITS))
 def test_reference_scene_limits(scene, tmp_path):
     # final-nc and final-nm break rig rules (transmission angle, hole grid): checked on request only
-    r = run_check(scene, out=tmp_path / scene, overrides=FAST, quiet=True, allow_rule_violations=True)
+    r = run_check(Request(scene, FAST, True), Output(tmp_path / scene))
     assert bool(r["rule_violations"]) == (scene in ("final-nc", "final-nm"))
     got = {(p["name"], p["mode"]): p for p in r["parts"]}
     assert set(got) == set(LIMITS[scene])

@@ -6,6 +6,7 @@ import meshio
 import numpy as np
 import pytest
 
+from rigfem.cache import NO_CACHE
 from rigfem.errors import InputError
 from rigfem.mesh import (
     MeshSettings,
@@ -29,7 +30,7 @@ def cache_in_tmp(tmp_path, monkeypatch):
 def rail700():
     """700 mm rail, coarse 8 mm, refined around the last two holes (a far-end coupling)."""
     part = load_part("rail_size25", {"length": 700})
-    return part, mesh_part(part, MeshSettings(8.0, ("hole_10", "hole_11")), use_cache=False)
+    return part, mesh_part(part, MeshSettings(8.0, ("hole_10", "hole_11")), cache=NO_CACHE)
 
 
 def tet_volumes(pm):
@@ -102,7 +103,7 @@ def test_refinement_only_at_the_loaded_holes(rail700):
                                           ("PF_4b_003_v2", ("screw_1", "screw_2", "screw_3", "screw_4"))])
 def test_plate_and_iprofile_groups_quality_and_volume(name, refine):
     part = load_part(name)
-    pm = mesh_part(part, MeshSettings(8.0, refine), use_cache=False)
+    pm = mesh_part(part, MeshSettings(8.0, refine), cache=NO_CACHE)
     assert all(len(t) > 0 for t in pm.surfaces.values())
     assert set(refine) <= set(pm.holes) and set(refine) <= set(pm.surfaces)
     assert pm.quality["min"] >= 0.1
@@ -120,7 +121,7 @@ def test_filleted_iprofile_where_hxt_leaves_a_flat_tet_still_meshes():
     mesh_part falls back to gmsh's Delaunay and meets the quality threshold."""
     part = load_part("PF_4b_003_v2", {"height": 70})
     assert part["fillet_radius"] == 3
-    pm = mesh_part(part, MeshSettings(6.0), use_cache=False)
+    pm = mesh_part(part, MeshSettings(6.0), cache=NO_CACHE)
     assert pm.quality["min"] >= 0.1 and (tet_volumes(pm) > 0).all()
     # the fillet group: four quarter cylinders r = 3 along the 40 mm length, (pi/2)*3*40 each
     tri = pm.points[pm.surfaces["fillets"]]
@@ -130,7 +131,7 @@ def test_filleted_iprofile_where_hxt_leaves_a_flat_tet_still_meshes():
 
 
 def test_plate_screws_on_x_axis_at_two_pitches():
-    pm = mesh_part(load_part("PF_4b_006"), MeshSettings(10.0), use_cache=False)
+    pm = mesh_part(load_part("PF_4b_006"), MeshSettings(10.0), cache=NO_CACHE)
     assert pm.holes["screw_1"].center[0] == pytest.approx(-60) and pm.holes["screw_2"].center[0] == pytest.approx(60)
     assert pm.holes["bore"].radius == pytest.approx(26) and pm.holes["bore"].depth == pytest.approx(15)
 
@@ -144,13 +145,13 @@ def test_quality_reported_and_above_threshold(rail700):
 def test_quality_below_threshold_names_part_and_parameter():
     part = load_part("PF_4b_003_v2")
     with pytest.raises(InputError, match=r"PF_4b_003_v2.*size"):
-        mesh_part(part, MeshSettings(10.0, min_quality=0.99), use_cache=False)
+        mesh_part(part, MeshSettings(10.0, min_quality=0.99), cache=NO_CACHE)
 
 
 def test_identical_input_gives_identical_mesh():
     part = load_part("PF_4b_003_v2")
-    a = mesh_part(part, MeshSettings(6.0, ("screw_1",)), use_cache=False)
-    b = mesh_part(part, MeshSettings(6.0, ("screw_1",)), use_cache=False)
+    a = mesh_part(part, MeshSettings(6.0, ("screw_1",)), cache=NO_CACHE)
+    b = mesh_part(part, MeshSettings(6.0, ("screw_1",)), cache=NO_CACHE)
     assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
     assert all(np.array_equal(a.surfaces[k], b.surfaces[k]) for k in a.surfaces)
 
@@ -170,7 +171,7 @@ def test_cache_hit_on_repeat_and_miss_on_change(tmp_path):
 def test_memory_guard_refuses_before_meshing():
     part = load_part("rail_size25", {"length": 1000})
     with pytest.raises(InputError, match=r"increase size_mm \(--size\)"):
-        mesh_part(part, MeshSettings(0.1), use_cache=False)
+        mesh_part(part, MeshSettings(0.1), cache=NO_CACHE)
 
 
 def test_estimate_within_factor_two_of_actual(rail700):
@@ -181,7 +182,7 @@ def test_estimate_within_factor_two_of_actual(rail700):
 
 def test_unknown_refine_group_is_input_error():
     with pytest.raises(InputError, match="hole_99"):
-        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(8.0, ("hole_99",)), use_cache=False)
+        mesh_part(load_part("rail_size25", {"length": 700}), MeshSettings(8.0, ("hole_99",)), cache=NO_CACHE)
 
 
 def test_quadratic_export_puts_midnodes_on_the_hole_walls_geometry(rail700, tmp_path):
@@ -211,7 +212,7 @@ def test_custom_geo_part_with_physical_groups(tmp_path):
                    'Physical Surface("pin") = {7};\nPhysical Surface("base") = {5};\nPhysical Volume("block") = {3};\n')
     part = load_part(str(geo))
     assert part.kind == "custom"
-    pm = mesh_part(part, MeshSettings(3.0, ("pin",)), use_cache=False)
+    pm = mesh_part(part, MeshSettings(3.0, ("pin",)), cache=NO_CACHE)
     assert set(pm.surfaces) == {"pin", "base"}
     assert tet_volumes(pm).sum() == pytest.approx(40 * 20 * 10 - math.pi * 16 * 10, rel=5e-3)
     h = pm.holes["pin"]  # fitted cylinder
@@ -261,11 +262,11 @@ def test_custom_brep_wrapped_in_geo_and_unnamed_brep_rejected(tmp_path):
         gmsh.model.occ.synchronize()
         gmsh.write(str(tmp_path / "washer.brep"))
     with pytest.raises(InputError, match="no named surface"):
-        mesh_part(load_part(str(tmp_path / "washer.brep")), MeshSettings(4.0), use_cache=False)
+        mesh_part(load_part(str(tmp_path / "washer.brep")), MeshSettings(4.0), cache=NO_CACHE)
     geo = tmp_path / "washer.geo"
     geo.write_text('SetFactory("OpenCASCADE");\nMerge "washer.brep";\n'
                    'Physical Surface("bore") = {7};\nPhysical Volume("washer") = {1};\n')
-    pm = mesh_part(load_part(str(geo)), MeshSettings(4.0, ("bore",)), use_cache=False)
+    pm = mesh_part(load_part(str(geo)), MeshSettings(4.0, ("bore",)), cache=NO_CACHE)
     assert tet_volumes(pm).sum() == pytest.approx(30 * 30 * 8 - math.pi * 25 * 8, rel=5e-3)
     assert pm.holes["bore"].radius == pytest.approx(5, abs=1e-6)
 
@@ -280,8 +281,8 @@ def test_concentrators_meshed_at_half_the_refined_size():
         return np.median(np.linalg.norm(p[:, 1] - p[:, 0], axis=1))
 
     loaded = ("screw_3", "screw_4")
-    plain = mesh_part(post, MeshSettings(6.0, loaded + ("fillets",), 1.2), use_cache=False)
-    conc = mesh_part(post, MeshSettings(6.0, loaded, 1.2, concentrate=("fillets",)), use_cache=False)
+    plain = mesh_part(post, MeshSettings(6.0, loaded + ("fillets",), 1.2), cache=NO_CACHE)
+    conc = mesh_part(post, MeshSettings(6.0, loaded, 1.2, concentrate=("fillets",)), cache=NO_CACHE)
     assert 0.35 < fillet_edge(conc) / fillet_edge(plain) < 0.7
     assert 0.5 < conc.meta["estimate_tets"] / len(conc.tets) < 2
 

@@ -6,14 +6,15 @@ import time
 
 import pytest
 
-from rigfem.check import load_check_scene, solve_scene
+from rigfem.cache import from_environment
+from stages import solved
 
 FAST = {"parts": ["plate_A", "plate_B"], "fidelity": "draft", "samples": 72, "frames": 0, "modes": ["cycle"]}
 
 
 @pytest.fixture(scope="module")
 def results():
-    return solve_scene(load_check_scene("final-cm", FAST))[1]
+    return solved("final-cm", FAST)[2]
 
 
 def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_path, monkeypatch):
@@ -35,7 +36,7 @@ def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_
         raise AssertionError("drawn in this process")
 
     monkeypatch.setattr(pc, "part_pictures", not_here)  # the children import their own
-    with pc.started_part_pictures(jobs["children"]) as wait:
+    with pc.started_part_pictures(jobs["children"], from_environment()) as wait:
         children = wait()
     assert children == here and len(children) == 2
     names = sorted(p.name for p in (tmp_path / "here").iterdir())
@@ -43,7 +44,7 @@ def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_
     for name in names:
         assert (tmp_path / "children" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
     monkeypatch.setattr("rigfem.mesh.worker.call", not_here)
-    with pc.started_part_pictures(jobs["copied"]) as wait:  # warm: copied, no child started
+    with pc.started_part_pictures(jobs["copied"], from_environment()) as wait:  # warm: copied, no child started
         assert wait() == here
     assert sorted(p.name for p in (tmp_path / "copied").iterdir()) == names
 
@@ -60,7 +61,7 @@ def test_an_error_while_they_draw_ends_the_children_first(results, tmp_path, mon
         return len([p for p in mp.active_children() if p.name == "rigfem-pictures"])
 
     with pytest.raises(RuntimeError, match="stop"):
-        with pc.started_part_pictures(jobs):
+        with pc.started_part_pictures(jobs, from_environment()):
             t0 = time.monotonic()
             while drawing() < 2 and time.monotonic() - t0 < 30:  # both children have started
                 time.sleep(0.01)

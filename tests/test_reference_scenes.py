@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark scripts import each other as siblings
@@ -42,8 +42,7 @@ def test_band_rule_catches_a_moved_peak_and_a_changed_verdict():
 
 
 def test_plate_a_draft_stays_in_the_committed_band(tmp_path):
-    new = run_check("final-cm", out=tmp_path / "o", quiet=True,
-                    overrides={"parts": ["plate_A"], "fidelity": "draft", "frames": 0})
+    new = run_check(Request("final-cm", {"parts": ["plate_A"], "fidelity": "draft", "frames": 0}), Output(tmp_path / "o"))
     assert [p["name"] for p in new["parts"]] == ["plate_A", "plate_A"]
     assert compare.band_problems(committed("final-cm"), new) == []
 
@@ -52,7 +51,6 @@ def test_plate_a_draft_stays_in_the_committed_band(tmp_path):
 @pytest.mark.parametrize("scene", SCENES)
 def test_reference_scene_is_unchanged_within_its_bands(scene, tmp_path):
     old = committed(scene)
-    new = run_check(scene, out=tmp_path / "o", quiet=True, allow_rule_violations=bool(old["rule_violations"]),
-                    overrides={"fidelity": old["settings"]["fidelity"], "frames": 0})
+    new = run_check(Request(scene, {"fidelity": old["settings"]["fidelity"], "frames": 0}, bool(old["rule_violations"])), Output(tmp_path / "o"))
     assert len(new["parts"]) == len(old["parts"])
     assert compare.band_problems(old, new) == []

@@ -51,11 +51,11 @@ def test_markdown_and_json(tmp_path):
 @pytest.fixture(scope="module")
 def two_plates(tmp_path_factory):
     """A draft check of two parts whose peaks differ (plate_A, post_B), original mode only."""
-    from rigfem.check import run_check
+    from rigfem.pipeline import Output, Request, run_check
 
     out = tmp_path_factory.mktemp("tables") / "final-cm"
-    report = run_check("final-cm", out=out, quiet=True, overrides={
-        "fidelity": "draft", "parts": ["plate_A", "post_B"], "modes": ["original"], "frames": 0})
+    report = run_check(Request("final-cm", {
+        "fidelity": "draft", "parts": ["plate_A", "post_B"], "modes": ["original"], "frames": 0}), Output(out))
     return report, out
 
 

@@ -9,7 +9,7 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.cli import main
 from rigfem.report.html import render_html
 from said import one_line
@@ -34,8 +34,7 @@ class _Page(HTMLParser):
 @pytest.fixture(scope="module")
 def checked(tmp_path_factory):
     out = tmp_path_factory.mktemp("html") / "final-cm"
-    report = run_check("final-cm", out=out, quiet=True,
-                       overrides={"fidelity": "draft", "parts": ["plate_A"], "frames": 2})
+    report = run_check(Request("final-cm", {"fidelity": "draft", "parts": ["plate_A"], "frames": 2}), Output(out))
     return report, out
 
 

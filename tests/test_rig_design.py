@@ -1,4 +1,4 @@
-"""From a synthesised four-bar to rig configurations (rigfem.studies.rig_design and
+"""From a synthesised four-bar to rig configurations (rigfem.design.rig_design and
 ``rigfem synthesize --rig``): every candidate buildable, its error re-measured independently
 by the general planar solver, the ranking right, the stress verdict the sweep's."""
 
@@ -11,8 +11,8 @@ from rigfem.linkage import four_bar
 from rigfem.linkage.mechanisms import build
 from rigfem.linkage.synthesis import check_three_position, synthesize_function, three_position
 from rigfem.scene import load_scene
-from rigfem.studies import SweepParams, build_bases, evaluate
-from rigfem.studies.rig_design import _function_error, rig_fourbars, snap_function, snap_motion, stress_verdicts
+from rigfem.sweep import SweepParams, build_bases, evaluate
+from rigfem.design.rig_design import _function_error, rig_fourbars, snap_function, snap_motion, stress_verdicts
 from said import one_line
 
 FUNCTION = ("x*log(x)", 1.0, 3.0, 20.0, 60.0, 80.0, 45.0, 2.0)
@@ -123,7 +123,7 @@ def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():
 
     p = SweepParams(check=CHECK)
     cands = [{"lengths_mm": dict(b2=480.0, b3=840.0, b4=780.0, d=1020.0), "branch": b} for b in ("open", "crossed")]
-    stress_verdicts(cands, p=p)
+    stress_verdicts(cands, p)
     bases = build_bases(p)
     for c in cands:
         row = evaluate(dict(c["lengths_mm"], branch=c["branch"]), p, bases)

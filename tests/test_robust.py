@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from rigfem.cache import NO_CACHE, Cache
+from rigfem.context import Context
 from rigfem.errors import InputError
 from said import one_line
 
@@ -90,7 +92,7 @@ def test_100_m_rail_refused_from_its_dimensions_before_gmsh(monkeypatch):
     part = load_part("rail_size25", {"length": 100_000})
     t0 = time.perf_counter()
     with pytest.raises(InputError) as e:
-        mesh_part(part, MeshSettings(6.0), use_cache=False)
+        mesh_part(part, MeshSettings(6.0), cache=NO_CACHE)
     assert time.perf_counter() - t0 < 5.0
     msg = str(e.value)
     assert "\n" not in msg and "tets" in msg and "GiB" in msg and "s of meshing" in msg
@@ -117,17 +119,18 @@ def test_allow_large_lifts_the_limit(tmp_path, monkeypatch):
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
     part = load_part("PF_4b_006")
     with pytest.raises(InputError, match="at least about"):  # from the dimensions, before gmsh
-        mesh_part(part, MeshSettings(12.0), use_cache=False, machine_gib=1e-7)
+        mesh_part(part, MeshSettings(12.0), cache=NO_CACHE, machine_gib=1e-7)
     monkeypatch.setenv(ALLOW_LARGE_ENV, "1")
-    pm = mesh_part(part, MeshSettings(12.0), use_cache=False, machine_gib=1e-7)
+    pm = mesh_part(part, MeshSettings(12.0), cache=NO_CACHE, machine_gib=1e-7)
     assert len(pm.tets) > 0 and pm.meta["estimate_tets"] > 0
 
 
 # ----------------------------------------------------------------------------- §4 distributed runs
 def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monkeypatch):
-    import rigfem.studies.sweep as sweep
+    import rigfem.sweep.run as sweep
+    from rigfem.sweep.run import SweepOptions
     from rigfem.errors import ComputeError
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.configs import SweepParams
 
     def no_bases(*a, **k):
         raise AssertionError("unit solutions built before the scheduler was contacted")
@@ -135,7 +138,7 @@ def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monke
     monkeypatch.setattr(sweep, "build_bases", no_bases)
     t0 = time.perf_counter()
     with pytest.raises(ComputeError) as e:
-        sweep.run_sweep(SweepParams(), tmp_path / "work", scheduler="tcp://127.0.0.1:1", progress=False)
+        sweep.run_sweep(SweepParams(), Context(Cache(tmp_path / "work", 10**9)), SweepOptions(scheduler="tcp://127.0.0.1:1"))
     took = time.perf_counter() - t0
     print(f"unreachable scheduler refused in {took:.2f} s: {e.value}")
     assert took < 15.0
@@ -145,12 +148,13 @@ def test_unreachable_scheduler_fails_in_seconds_before_the_bases(tmp_path, monke
 @pytest.mark.parametrize("address", ["tcp://127.0.0.1:70000", "tcp://127.0.0.1:0", "http://127.0.0.1:8786",
                                      "tcp://127.0.0.1", "tcp://:8786", "tcp://host name:1"])
 def test_bad_scheduler_address_is_bad_input(tmp_path, monkeypatch, address):
-    import rigfem.studies.sweep as sweep
-    from rigfem.studies.sweep_configs import SweepParams
+    import rigfem.sweep.run as sweep
+    from rigfem.sweep.run import SweepOptions
+    from rigfem.sweep.configs import SweepParams
 
     monkeypatch.setattr(sweep, "build_bases", lambda *a, **k: pytest.fail("bases built for a bad address"))
     with pytest.raises(InputError, match="scheduler"):
-        sweep.run_sweep(SweepParams(), tmp_path / "work", scheduler=address, progress=False)
+        sweep.run_sweep(SweepParams(), Context(Cache(tmp_path / "work", 10**9)), SweepOptions(scheduler=address))
 
 
 @pytest.mark.parametrize("address, code, words", [("tcp://127.0.0.1:70000", 2, "[1, 65535]"),
@@ -163,94 +167,6 @@ def test_sweep_cli_scheduler_exit_codes(tmp_path, address, code, words):
     print(f"sweep --scheduler {address}: exit {r.returncode} in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == code and took < 30.0
     assert words in one_line(r.stderr)
-
-
-# ----------------------------------------------------------------------------- §6 the cache environment
-@pytest.fixture
-def fresh_usable():
-    from rigfem.mesh.cache import _usable
-
-    _usable.cache_clear()
-    yield
-    _usable.cache_clear()
-
-
-@pytest.mark.parametrize("where", ["file", "proc"])
-def test_unusable_cache_folder_runs_without_a_cache_and_says_so_once(tmp_path, where):
-    cache = tmp_path / "cache-file" if where == "file" else Path("/proc/rigfem-cache-test")
-    if where == "file":
-        cache.write_text("a user's file\n")
-    r = subprocess.run([*RIGFEM, "mesh", "PF_4b_006", "--size", "12", "--out", str(tmp_path / "p.vtu")],
-                       capture_output=True, text=True, env=_env(tmp_path, RIGFEM_CACHE=str(cache)), timeout=300)
-    assert r.returncode == 0, r.stderr
-    line = one_line(r.stderr)
-    assert "running without a cache" in line and str(cache) in line
-    assert (tmp_path / "p.vtu").stat().st_size > 0
-    if where == "file":
-        assert cache.read_text() == "a user's file\n"
-
-
-def test_cache_as_file_in_process_warns_once(tmp_path, monkeypatch, caplog, fresh_usable):
-    import logging
-
-    from rigfem.mesh import MeshSettings, mesh_part
-    from rigfem.rig import load_part
-
-    (tmp_path / "c").write_text("x")
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "c"))
-    with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
-        a = mesh_part(load_part("PF_4b_006"), MeshSettings(12.0))
-        b = mesh_part(load_part("PF_4b_006"), MeshSettings(12.0))
-    assert (a.meta["cache"], b.meta["cache"]) == ("miss", "miss")
-    assert len([r for r in caplog.records if "without a cache" in r.getMessage()]) == 1
-
-
-def test_least_recently_used_entries_are_evicted(tmp_path, monkeypatch, fresh_usable):
-    from rigfem.mesh.cache import entries, read_entry, write_entry
-
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
-    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "2.6e-6")  # 2600 bytes: two entries of about 1.1 kB fit
-    blob = lambda d: (d / "x.bin").write_bytes(os.urandom(1000))  # noqa: E731
-    a, b, c = (tmp_path / "meshes" / n for n in "abc")
-    assert write_entry(a, {"n": "a"}, blob) and write_entry(b, {"n": "b"}, blob)
-    now = time.time()
-    os.utime(a / "manifest.json", (now - 100, now - 100))
-    os.utime(b / "manifest.json", (now - 50, now - 50))
-    assert read_entry(a, {"n": "a"}) == a  # a read makes a the most recently used
-    assert write_entry(c, {"n": "c"}, blob)
-    assert a.exists() and c.exists() and not b.exists()
-    assert sum(e[1] for e in entries()) <= 2600
-
-
-def test_bad_cache_limit_is_one_line(tmp_path, monkeypatch, capsys):
-    from rigfem.cli import main
-
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
-    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "-1")
-    assert main(["cache"]) == 2
-    err = capsys.readouterr().err
-    assert "RIGFEM_CACHE_MAX_GB" in one_line(err) and "-1" in err
-
-
-def test_cache_command_shows_and_clears_only_rigfems_entries(tmp_path, monkeypatch, capsys, fresh_usable):
-    from rigfem.cli import main
-    from rigfem.mesh.cache import write_entry
-
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
-    monkeypatch.setenv("RIGFEM_CACHE_MAX_GB", "1")
-    for kind, n in (("meshes", 2), ("solutions", 1)):
-        for i in range(n):
-            assert write_entry(tmp_path / kind / f"e{i}", {"i": i}, lambda d: (d / "a.bin").write_bytes(b"1" * 5000))
-    (tmp_path / "notes.txt").write_text("mine")
-    assert main(["cache"]) == 0
-    out = capsys.readouterr().out
-    assert str(tmp_path) in out and "meshes: 2 entries" in out and "solutions: 1 entries" in out
-    assert "total 3 entries" in out and "of 1 GB" in out
-    assert re.search(r"meshes: 2 entries, 10\.\d kB", out) and "e-0" not in out  # a small cache in kB, not 1e-05 GB
-    assert main(["cache", "--clear"]) == 0
-    assert re.search(r"removed 3 entries, 1\d\.\d kB", capsys.readouterr().out)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
-    assert main(["cache"]) == 0 and "total 0 entries" in capsys.readouterr().out
 
 
 # ----------------------------------------------------------------------------- §2 whole files

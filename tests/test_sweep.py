@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import gzip
 
 import numpy as np
@@ -15,16 +16,11 @@ from rigfem.errors import InputError
 from rigfem.fe import solve_cases
 from rigfem.loads import part_cases
 from rigfem.rig import fourbar_rules
-from rigfem.studies import (
-    SweepParams,
-    build_bases,
-    case_peak,
-    enumerate_configs,
-    evaluate,
-    run_sweep,
-    superposed_peaks,
-)
-from rigfem.studies.sweep_bases import case_key
+from rigfem.cache import Cache
+from rigfem.context import Context
+from rigfem.sweep import SweepOptions, SweepParams, build_bases, case_peak, enumerate_configs, evaluate, run_sweep
+from rigfem.sweep.bases import case_key
+from rigfem.sweep.superpose import superposed_peaks
 
 #: coarse meshes and three parts (a rail, a plate, the post) keep the default tests fast
 CHECK = (("order", 1), ("size_mm", 14.0), ("local_size_mm", 7.0), ("bearing_directions", 4),
@@ -124,7 +120,7 @@ def test_bounded_peak_is_exact_for_any_coefficients(bases):
 
 
 def _spec_case(params, key):
-    from rigfem.studies.sweep_bases import _basis_specs
+    from rigfem.sweep.bases import _basis_specs
 
     specs = _basis_specs(params, params.settings())
     refine = sorted({g for k, (c, _) in specs.items() if k[:2] == key[:2] for g in c.refine})
@@ -134,13 +130,13 @@ def _spec_case(params, key):
 def test_against_run_check(params, bases, tmp_path):
     """End to end against rigfem.check.run_check: plates and posts on the same mesh agree to
     1e-4; rails within 10 % (run_check refines only the loaded holes, the sweep every hole)."""
-    from rigfem.check import run_check
+    from rigfem.pipeline import Output, Request, run_check
 
     scene = tmp_path / "cfg.toml"
     scene.write_text("[linkage]\ntype = \"four-bar\"\n" + "".join(f"{k} = {v}\n" for k, v in FINAL.items())
                      + "speed_hz = 1.0\nmasses = \"rig\"\n")
-    rep = run_check(scene, out=tmp_path / "rc", overrides={**dict(CHECK), "parts": list(dict(CHECK)["parts"]),
-                                                             "frames": 0}, quiet=True)
+    rep = run_check(Request(scene, {**dict(CHECK), "parts": list(dict(CHECK)["parts"]),
+                                                             "frames": 0}), Output(tmp_path / "rc"))
     row = evaluate(FINAL, params, bases)
     for p in rep["parts"]:
         got = row[f"{p['name']}_{p['mode']}_util_pct"]
@@ -153,22 +149,24 @@ CONFIGS = [NO_LOOP, FINAL, TOGGLE, SMALL, dict(b2=60.0, b3=840.0, b4=840.0, d=15
 
 
 def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
-    full = run_sweep(params, tmp_path, configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
+    full = run_sweep(params, Context(Cache(tmp_path, 10**9)), SweepOptions(chunk_size=2, configs=tuple(CONFIGS), bases=bases))
     assert list(full["status"]) == ["cannot assemble", "ok", "toggle", "ok", "ok"]
     assert full.attrs["compute_seconds"] > 0
     num = full.select_dtypes("number")
     assert not np.isinf(num.to_numpy()).any() and num[full["status"] == "ok"].notna().all().all()
-    chunk = sorted(tmp_path.glob("*/chunk_*/rows.csv"))
-    text = "".join(c.read_text().lower() for c in chunk)
+    chunk = {json.dumps(json.loads((f.parent / "manifest.json").read_text())["inputs"]["configs"]): f
+             for f in tmp_path.glob("rigfem-entries/sweep_chunks/*/rows.csv")}
+    text = "".join(c.read_text().lower() for c in chunk.values())
     assert "nan" not in text and "inf" not in text
     assert len(chunk) == 3
-    chunk[1].write_text(chunk[1].read_text()[:40])  # a damaged (truncated) chunk is computed again
-    import rigfem.studies.sweep as sw
+    second = chunk[json.dumps(CONFIGS[2:4])]
+    second.write_text(second.read_text()[:40])  # a damaged (truncated) chunk is computed again
+    import rigfem.sweep.run as sw
 
     calls = []
     real = sw.run_chunk
-    monkeypatch.setattr(sw, "run_chunk", lambda c, p, b: calls.append(c) or real(c, p, b))
-    again = run_sweep(params, tmp_path, configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
+    monkeypatch.setattr(sw, "run_chunk", lambda c, p, b: calls.append(c) or real(c, p, b))  # the chunks it computes
+    again = run_sweep(params, Context(Cache(tmp_path, 10**9)), SweepOptions(chunk_size=2, configs=tuple(CONFIGS), bases=bases))
     assert calls == [CONFIGS[2:4]]
     pd.testing.assert_frame_equal(full, again)
 
@@ -176,19 +174,17 @@ def test_resume_gives_the_same_table(params, bases, tmp_path, monkeypatch):
 def test_dask_equals_serial(params, bases, tmp_path):
     from dask.distributed import LocalCluster
 
-    serial = run_sweep(params, tmp_path / "serial", configs=CONFIGS, chunk_size=2, bases=bases,
-                       progress=False)
+    serial = run_sweep(params, Context(Cache(tmp_path / "serial", 10**9)), SweepOptions(chunk_size=2, configs=tuple(CONFIGS), bases=bases))
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp", host="127.0.0.1",
                       dashboard_address=None) as cluster:
-        dist = run_sweep(params, tmp_path / "dask", configs=CONFIGS, chunk_size=2, bases=bases,
-                         scheduler=cluster.scheduler_address, progress=False)
+        dist = run_sweep(params, Context(Cache(tmp_path / "dask", 10**9)), SweepOptions(chunk_size=2, scheduler=cluster.scheduler_address, configs=tuple(CONFIGS), bases=bases))
     pd.testing.assert_frame_equal(serial, dist)
 
 
 def test_report_files(params, bases, tmp_path):
-    from rigfem.studies import write_report
+    from rigfem.sweep import write_report
 
-    table = run_sweep(params, tmp_path / "w", configs=CONFIGS, chunk_size=5, bases=bases, progress=False)
+    table = run_sweep(params, Context(Cache(tmp_path / "w", 10**9)), SweepOptions(chunk_size=5, configs=tuple(CONFIGS), bases=bases))
     files = write_report(table, params, tmp_path / "out")
     assert files == ["sweep_four-bar.csv.gz", "map_four-bar_d_b3.png", "map_four-bar_b4_b3.png", "worst_four-bar.md",
                      "sweep_four-bar.html", "explorer.html"]
@@ -213,19 +209,19 @@ def test_cli_bad_input(capsys):
 def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
     """The CLI keeps finished chunks as cache entries, so a second run into another folder reads
     them; with an unusable cache they go to ``--out``/.work."""
-    import rigfem.studies.sweep
+    import rigfem.sweep.run
     from rigfem.cli import main
     from rigfem.errors import ComputeError
 
     seen = []
 
-    def record(p, work_dir, **kw):
-        seen.append(work_dir)
+    def record(p, ctx, options):
+        seen.append(ctx.cache.root)
         raise ComputeError("stop here")
-    monkeypatch.setattr(rigfem.studies.sweep, "run_sweep", record)
+    monkeypatch.setattr(rigfem.sweep.run, "run_sweep", record)
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
     assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "a")]) == 3
-    assert seen[-1] == tmp_path / "cache" / "sweep_chunks"
+    assert seen[-1] == tmp_path / "cache"
     (tmp_path / "file").write_text("not a folder")
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "file"))
     assert main(["sweep", "--four-bar", "--quiet", "--out", str(tmp_path / "b")]) == 3
@@ -235,33 +231,20 @@ def test_cli_stores_chunks_in_the_cache(tmp_path, monkeypatch):
 @pytest.mark.heavy
 def test_default_local_cluster_equals_serial(params, bases, tmp_path):
     """The CLI's default path: a LocalCluster of worker processes inside this process."""
-    serial = run_sweep(params, tmp_path / "serial", configs=CONFIGS, chunk_size=2, bases=bases,
-                       progress=False)
-    local = run_sweep(params, tmp_path / "local", configs=CONFIGS, chunk_size=2, bases=bases, workers=2,
-                      progress=False)
+    serial = run_sweep(params, Context(Cache(tmp_path / "serial", 10**9)), SweepOptions(chunk_size=2, configs=tuple(CONFIGS), bases=bases))
+    local = run_sweep(params, Context(Cache(tmp_path / "local", 10**9), workers=2), SweepOptions(chunk_size=2, configs=tuple(CONFIGS), bases=bases))
     pd.testing.assert_frame_equal(serial, local)
 
 
-def test_stored_chunks_are_keyed_by_geometry_masses_and_code(monkeypatch):
-    """A sweep resumed after a change to a part file, the mass catalogue or the code that
-    computes a row (meshing, FE, dynamics, loads, verdict) must not reuse chunks computed before it."""
-    import rigfem.mesh.cache
-    import rigfem.rig.catalogue
-    from rigfem.rig import PartDef
-
+def test_stored_chunks_are_keyed_by_the_package(monkeypatch):
+    """A sweep resumed after any change to the package (a part file, the mass catalogue, the code
+    that computes a row) must not reuse chunks computed before it: its key holds the package hash
+    (tests/test_cache.py edits a copy of the package)."""
     p = SweepParams()
     k0 = p.key()
     assert SweepParams().key() == k0
-    with monkeypatch.context() as m:
-        m.setattr(rigfem.mesh.cache, "code_hash", lambda *files: "edited" if "dynamics/*.py" in files else "")
-        assert p.key() != k0
-    with monkeypatch.context() as m:
-        m.setattr(rigfem.rig.catalogue, "RIG_MASSES",
-                  dataclasses.replace(rigfem.rig.catalogue.RIG_MASSES, rail_kg_m=2.7))
-        assert p.key() != k0
-    with monkeypatch.context() as m:
-        m.setattr(PartDef, "content_hash", lambda self: "edited")
-        assert p.key() != k0
+    monkeypatch.setattr("rigfem.cache.package_hash", lambda: "edited")
+    assert p.key() != k0
 
 
 @pytest.mark.heavy  # meshes and solves every part again in two child processes (~12 s)
@@ -293,20 +276,19 @@ def test_bases_mapped_from_a_folder_equal_the_ones_held(params, bases, tmp_path)
         assert len(pickle.dumps(m.S)) < 1000 and np.array_equal(pickle.loads(pickle.dumps(m.S)), b.S)
 
 
-def test_the_first_error_of_a_bases_child_ends_the_other_at_once(params, monkeypatch):
+def test_the_first_error_of_a_bases_child_ends_the_other_at_once(params, monkeypatch, tmp_path):
     """The second child's error is raised at once, without waiting for the first (the largest
     part), which sees its cancel event (a real child is ended within a poll)."""
     import threading
     import time
 
-    from rigfem.fe import partcase
-    from rigfem.mesh import worker
+    from rigfem.mesh import mesher, worker
 
     lock, meshed, seen = threading.Lock(), [], []
 
-    def fake_mesh(case, settings):  # the first part's mesh at once, the others a little later
+    def fake_mesh(part, settings, cache=None):  # the first part's mesh at once, the others a little later
         with lock:
-            meshed.append(case)
+            meshed.append(part)
             first = len(meshed) == 1
         if not first:
             time.sleep(0.5)
@@ -320,8 +302,9 @@ def test_the_first_error_of_a_bases_child_ends_the_other_at_once(params, monkeyp
             raise worker.ComputeError("unit bases cancelled")
         raise InputError("a part that cannot be solved")
 
-    monkeypatch.setattr(partcase, "mesh_case", fake_mesh)
+    monkeypatch.setattr(mesher, "mesh_part", fake_mesh)
     monkeypatch.setattr(worker, "call", fake_call)
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))  # no basis stored: the children must build them
     t0 = time.perf_counter()
     with pytest.raises(InputError, match="cannot be solved"):
         build_bases(params, workers=2)

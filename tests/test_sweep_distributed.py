@@ -16,7 +16,9 @@ import pandas as pd
 import pytest
 from test_sweep import CHECK, CONFIGS
 
-from rigfem.studies import SweepParams, build_bases, run_sweep
+from rigfem.cache import Cache
+from rigfem.context import Context
+from rigfem.sweep import SweepOptions, SweepParams, build_bases, run_sweep
 
 DASK = shutil.which("dask", path=str(Path(sys.executable).parent)) or shutil.which("dask")
 
@@ -73,9 +75,10 @@ def test_sweep_on_cli_started_cluster_equals_serial(dask_cluster, tmp_path):
 
     params = SweepParams(check=CHECK)
     bases = build_bases(params)
-    serial = run_sweep(params, tmp_path / "serial", configs=CONFIGS, chunk_size=2, bases=bases, progress=False)
-    dist = run_sweep(params, tmp_path / "dask", configs=CONFIGS, chunk_size=2, bases=bases,
-                     scheduler=dask_cluster, progress=False)
+    serial = run_sweep(params, Context(Cache(tmp_path / "serial", 10**9)),
+                       SweepOptions(2, configs=tuple(CONFIGS), bases=bases))
+    dist = run_sweep(params, Context(Cache(tmp_path / "dask", 10**9)),
+                     SweepOptions(2, dask_cluster, configs=tuple(CONFIGS), bases=bases))
     pd.testing.assert_frame_equal(serial, dist)
     with Client(dask_cluster) as client:  # the chunks ran in the two worker processes, not here
         pids = client.run(os.getpid)

@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
-from rigfem.check import run_check
+from rigfem.pipeline import Output, Request, run_check
 from rigfem.cli import main
 from rigfem.errors import InputError
 from said import one_line
@@ -24,12 +24,12 @@ QUICK = {"fidelity": "draft", "frames": 0}
 @pytest.fixture(scope="module")
 def no_torque(tmp_path_factory):
     """final-cm's own reaction history as CSV, without its torque column; and a scene that states it."""
-    from rigfem.check import load_check_scene
     from rigfem.dynamics import simulate
     from rigfem.io import write_csv
+    from stages import job_of
 
     d = tmp_path_factory.mktemp("csv")
-    write_csv(simulate(load_check_scene("final-cm").linkage, samples=360), d / "full.csv")
+    write_csv(simulate(job_of("final-cm").linkage, samples=360), d / "full.csv")
     rows = []
     for line in (d / "full.csv").read_text().splitlines():
         if line.startswith("#"):
@@ -48,7 +48,7 @@ def no_torque(tmp_path_factory):
 
 def test_csv_without_torque_is_refused_naming_the_column(no_torque, capsys):
     with pytest.raises(InputError, match="no driver-torque column .*torque_Nm.*reactions_csv_missing"):
-        run_check(no_torque / "silent.toml", out=no_torque / "x", quiet=True, overrides=QUICK)
+        run_check(Request(no_torque / "silent.toml", QUICK), Output(no_torque / "x"))
     assert main(["check", "final-cm", "--reactions-csv", str(no_torque / "notorque.csv"),
                  "--out", str(no_torque / "y"), "--parts", "plate_A", "--fidelity", "draft"]) == 2
     err = capsys.readouterr().err
@@ -92,9 +92,8 @@ def test_lost_torque_leaves_the_crank_undecided_not_passed(no_torque, capsys):
     md = (out / "report.md").read_text()
     assert md.index("ASSUMED") < md.index("Overall verdict") and "free-body imbalance" in md
     assert "ASSUMED" in (out / "report.html").read_text()
-    ref = run_check("final-cm", out=no_torque / "ref", quiet=True,
-                    overrides={**QUICK, "parts": ["crank_rail"], "modes": ["cycle"],
-                               "reactions_csv": str(no_torque / "full.csv")})
+    ref = run_check(Request("final-cm", {**QUICK, "parts": ["crank_rail"], "modes": ["cycle"],
+                               "reactions_csv": str(no_torque / "full.csv")}), Output(no_torque / "ref"))
     (p,) = ref["parts"]
     assert p["verdict"] == "pass" and ref["assumed"] == []
     assert max(p["solve"]["imbalance"]["force_pct"], p["solve"]["imbalance"]["moment_pct"]) < 1.0
@@ -112,9 +111,9 @@ def test_scene_nothing_loads_is_refused(tmp_path, capsys):
 
 def test_unloaded_part_among_loaded_ones_is_not_a_pass(tmp_path, monkeypatch, capsys):
     """A part whose every load is zero is reported "not loaded"; the overall verdict is not PASS."""
-    import rigfem.check
+    import rigfem.pipeline
 
-    real = rigfem.check.part_cases
+    real = rigfem.pipeline.part_cases
 
     def one_unloaded(h, pk, settings):
         cases = real(h, pk, settings)
@@ -122,7 +121,7 @@ def test_unloaded_part_among_loaded_ones_is_not_a_pass(tmp_path, monkeypatch, ca
             if case.name == "plate_B":
                 case.coef[:] = 0.0
         return cases
-    monkeypatch.setattr(rigfem.check, "part_cases", one_unloaded)
+    monkeypatch.setattr(rigfem.pipeline, "part_cases", one_unloaded)
     code = main(["check", "final-cm", "--out", str(tmp_path / "o"), "--parts", "plate_A,plate_B",
                  "--modes", "original", "--fidelity", "draft", "--frames", "0", "--quiet"])
     assert code == 1
@@ -178,7 +177,7 @@ def test_bad_solution_entry_is_recomputed_and_logged_once(small, caplog, damage,
 
     model, sup, loads, root = small
     first = cached_solve(model(), sup, loads)
-    (f,) = (root / "solutions").rglob(f"{array}.npy")
+    (f,) = (root / "rigfem-entries" / "solutions").rglob(f"{array}.npy")
     DAMAGE[damage](f)
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
         again = cached_solve(model(), sup, loads)
@@ -197,7 +196,7 @@ def test_bad_mesh_entry_is_recomputed_and_logged_once(tmp_path, monkeypatch, cap
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path))
     part = load_part("PF_4b_003_v2")
     a = mesh_part(part, MeshSettings(8.0))
-    (f,) = (tmp_path / "meshes").rglob("*.npz")
+    (f,) = (tmp_path / "rigfem-entries" / "meshes").rglob("*.npz")
     f.write_bytes(f.read_bytes()[: len(f.read_bytes()) // 2])
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
         b = mesh_part(part, MeshSettings(8.0))
@@ -208,13 +207,20 @@ def test_bad_mesh_entry_is_recomputed_and_logged_once(tmp_path, monkeypatch, cap
 
 
 def test_entry_of_other_inputs_is_not_read(tmp_path, caplog):
-    from rigfem.mesh.cache import read_entry, write_entry
+    """An entry whose manifest names other inputs (a hash collision, or a hand-made folder) is not
+    read: discarded, logged, computed again."""
+    import json
 
-    d = tmp_path / "e"
-    assert write_entry(d, {"a": 1}, lambda t: (t / "x.txt").write_text("1"))
-    assert read_entry(d, {"a": 1}) == d
+    from rigfem.cache import Cache
+
+    cache = Cache(tmp_path, 10**9)
+    assert cache.put("t", {"a": 1}, lambda t: (t / "x.txt").write_text("1"))
+    assert cache.get("t", {"a": 1}, lambda e: e.text("x.txt")) == "1"
+    d = cache.entry_folder("t", {"a": 1})
+    man = json.loads((d / "manifest.json").read_text())
+    (d / "manifest.json").write_text(json.dumps({**man, "inputs": {"a": 2}}))
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
-        assert read_entry(d, {"a": 2}) is None
+        assert cache.get("t", {"a": 1}, lambda e: e.text("x.txt")) is None
     assert not d.exists() and "other inputs" in caplog.text
 
 
@@ -224,15 +230,17 @@ def test_zero_energy_solution_is_never_served(small, caplog):
     non-zero load is discarded and recomputed: the invariant cannot be cached away."""
     import dataclasses
 
-    from rigfem.fe import cached_solve, check_energy, save_solution, solution_inputs
-    from rigfem.mesh.cache import cache_dir, entry_key
+    from rigfem.cache import from_environment
+    from rigfem.fe import cached_solve, check_energy, solution_inputs
+    from rigfem.fe.cache import _save_solution
 
     model, sup, loads, root = small
     first = cached_solve(model(), sup, loads)
     assert check_energy(first) == ""
     inputs = solution_inputs(first.model, sup, loads, "auto", 1e-10)
-    shutil.rmtree(cache_dir() / "solutions" / entry_key(inputs))
-    save_solution(dataclasses.replace(first, U=np.zeros_like(first.U)), inputs)
+    cache = from_environment()
+    shutil.rmtree(cache.entry_folder("solutions", inputs))
+    cache.put("solutions", inputs, lambda t: _save_solution(dataclasses.replace(first, U=np.zeros_like(first.U)), t))
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
         again = cached_solve(model(), sup, loads)
     assert "no strain energy" in caplog.text
@@ -250,7 +258,7 @@ def test_loaded_part_with_zero_peak_cannot_be_computed(tmp_path, monkeypatch, ca
     def no_stress(*a, **k):
         sol = real(*a, **k)
         return dataclasses.replace(sol, nodal_stress=np.zeros_like(sol.nodal_stress))
-    monkeypatch.setattr(rigfem.fe.partcase, "cached_solve", no_stress)
+    monkeypatch.setattr(rigfem.fe.partcase, "cached_solve", no_stress)  # the solver's answer, where the part solve asks
     code = main(["check", "final-cm", "--out", str(tmp_path / "o"), "--parts", "plate_A", "--modes", "original",
                  "--fidelity", "draft", "--frames", "0", "--quiet"])
     assert code == 3

@@ -2,14 +2,15 @@
 are cache entries keyed by everything they come from (issue 26); a changed input draws or computes
 again, and a damaged entry is discarded, logged and made again."""
 
-import json
 import logging
 import shutil
 
 import numpy as np
 import pytest
 
-from rigfem.check import load_check_scene, run_check, solve_scene
+from rigfem.cache import Cache, from_environment
+from rigfem.pipeline import Output, Request, run_check
+from stages import solved
 
 FAST = {"parts": ["plate_A"], "fidelity": "draft", "samples": 72, "frames": 3, "modes": ["cycle"]}
 
@@ -26,21 +27,21 @@ def test_cached_picture_is_copied_changed_inputs_draw_again_and_damage_is_discar
                                                                                      caplog):
     from rigfem.report.picture_cache import cached
 
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    cache = Cache(tmp_path / "cache", 10**9)
     calls = []
     for k in range(3):
         (tmp_path / str(k)).mkdir()
-    first = cached("t", {"field": "f1"}, tmp_path / "0", _drawer(calls))
-    again = cached("t", {"field": "f1"}, tmp_path / "1", _drawer(calls))
+    first = cached("t", {"field": "f1"}, tmp_path / "0", _drawer(calls), cache)
+    again = cached("t", {"field": "f1"}, tmp_path / "1", _drawer(calls), cache)
     assert len(calls) == 1 and again == first  # the warm call copied, it did not draw
     assert (tmp_path / "1" / "a.png").read_bytes() == (tmp_path / "0" / "a.png").read_bytes() == b"picture 1"
-    cached("t", {"field": "f2"}, tmp_path / "2", _drawer(calls))
+    cached("t", {"field": "f2"}, tmp_path / "2", _drawer(calls), cache)
     assert len(calls) == 2  # another field: drawn again
-    (stored,) = [p for p in (tmp_path / "cache" / "pictures").rglob("a.png")
+    (stored,) = [p for p in (tmp_path / "cache").rglob("pictures/*/a.png")
                  if (p.parent / "result.json").read_text().find("a.png") >= 0 and p.read_bytes() == b"picture 1"]
     stored.write_bytes(b"picture X")  # damaged in the cache
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
-        cached("t", {"field": "f1"}, tmp_path / "0", _drawer(calls))
+        cached("t", {"field": "f1"}, tmp_path / "0", _drawer(calls), cache)
     assert len(calls) == 3 and "discarded" in caplog.text  # discarded, drawn again
     assert (tmp_path / "0" / "a.png").read_bytes() == b"picture 3"
 
@@ -49,15 +50,15 @@ def test_fallback_picture_is_not_stored(tmp_path, monkeypatch):
     """A matplotlib fallback (no OpenGL) is drawn every time: a machine with OpenGL draws the real one."""
     from rigfem.report.picture_cache import cached
 
-    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    cache = Cache(tmp_path / "cache", 10**9)
     calls = []
 
     def draw(d):
         calls.append(d)
         (d / "a.png").write_bytes(b"fallback")
         return {"renderer": "matplotlib"}, ["a.png"]
-    cached("t", {"x": 1}, tmp_path, draw)
-    cached("t", {"x": 1}, tmp_path, draw)
+    cached("t", {"x": 1}, tmp_path, draw, cache)
+    cached("t", {"x": 1}, tmp_path, draw, cache)
     assert len(calls) == 2
 
 
@@ -71,11 +72,11 @@ def warm(tmp_path_factory):
     root = tmp_path_factory.mktemp("warm")
     mp = pytest.MonkeyPatch()
     mp.setenv("RIGFEM_CACHE", str(root / "cache"))
-    run_check("final-cm", out=root / "cold", overrides=FAST, quiet=True)
+    run_check(Request("final-cm", FAST), Output(root / "cold"))
     drawn = []  # every 3-D render and every matplotlib picture saved
     mp.setattr(views, "render", lambda *a, **k: drawn.append("render"))
     mp.setattr(matplotlib.figure.Figure, "savefig", lambda *a, **k: drawn.append("savefig"))
-    run_check("final-cm", out=root / "warm", overrides=FAST, quiet=True)
+    run_check(Request("final-cm", FAST), Output(root / "warm"))
     yield root, drawn
     mp.undo()
 
@@ -96,8 +97,7 @@ def test_changed_field_draws_the_part_again(warm, monkeypatch):
 
     root, _ = warm
     monkeypatch.setenv("RIGFEM_CACHE", str(root / "cache"))
-    cs = load_check_scene("final-cm", FAST)
-    _, (r,), _ = solve_scene(cs, on_final=lambda r: None)  # every unit solution: any combination
+    _, _, (r,) = solved("final-cm", FAST, whole=True)  # every unit solution: any combination
     drawn = []
     monkeypatch.setattr(pictures, "part_pictures", lambda *a, **k: drawn.append(a) or {"files": {}})
     entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
@@ -111,30 +111,29 @@ def test_changed_field_draws_the_part_again(warm, monkeypatch):
 
 
 def test_peak_sweep_is_cached_and_a_wrong_stored_peak_is_discarded(warm, monkeypatch, caplog):
+    from rigfem.cache import array_digest, save_arrays
     from rigfem.fe import Solution, peak_sweep
-    from rigfem.mesh.cache import save_arrays, write_entry
 
     root, _ = warm
     monkeypatch.setenv("RIGFEM_CACHE", str(root / "cache"))
-    _, (r,), _ = solve_scene(load_check_scene("final-cm", FAST), on_final=lambda r: None)  # every unit solution
+    cache = from_environment()
+    _, _, (r,) = solved("final-cm", FAST, whole=True)  # every unit solution
     sol = r.solution
     assert sol.key  # a cached solution knows its entry
     C = r.coef[::7] * 1.25  # rows no check asked for yet
     ref = Solution.peak_sweep(sol, C)
-    vals, nodes = peak_sweep(sol, C)  # computed and stored
+    vals, nodes = peak_sweep(sol, C, cache)  # computed and stored
     assert np.array_equal(vals, ref[0]) and np.array_equal(nodes, ref[1])
     monkeypatch.setattr(Solution, "peak_sweep", lambda *a: pytest.fail("a stored sweep was computed again"))
-    again = peak_sweep(sol, C)
+    again = peak_sweep(sol, C, cache)
     assert np.array_equal(again[0], vals) and np.array_equal(again[1], nodes)
-    (folder,) = [e.parent for e in (root / "cache" / "sweeps").rglob("manifest.json")
-                 if np.array_equal(np.load(e.parent / "peak.npy"), vals)]
-    inputs = json.loads((folder / "manifest.json").read_text())["inputs"]
-    shutil.rmtree(folder)
-    write_entry(folder, inputs, lambda t: save_arrays(t, {"peak": vals * 0.5, "node": nodes}))  # checksums fine
+    inputs = {"solution": sol.key, "C": array_digest(np.atleast_2d(C))}
+    shutil.rmtree(cache.entry_folder("sweeps", inputs))
+    cache.put("sweeps", inputs, lambda t: save_arrays(t, {"peak": vals * 0.5, "node": nodes}))  # checksums fine
     monkeypatch.undo()
     monkeypatch.setenv("RIGFEM_CACHE", str(root / "cache"))
     with caplog.at_level(logging.WARNING, logger="rigfem.cache"):
-        healed = peak_sweep(sol, C)
+        healed = peak_sweep(sol, C, cache)
     assert "not the stress at its node" in caplog.text
     assert np.array_equal(healed[0], vals)
 

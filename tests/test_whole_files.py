@@ -9,8 +9,8 @@ from matplotlib.animation import PillowWriter
 
 from rigfem.linkage import crank_angles, four_bar, linkage_motion
 from rigfem.report.motion import motion_gif
-from rigfem.studies.sweep_configs import SweepParams
-from rigfem.studies.sweep_report import write_report
+from rigfem.sweep.configs import SweepParams
+from rigfem.sweep.report import write_report
 
 
 def test_sweep_report_interrupted_mid_csv_leaves_nothing(tmp_path, monkeypatch):

@@ -185,8 +185,11 @@ def main(argv: list[str] | None = None) -> int:
         os.environ[ALLOW_LARGE_ENV] = "1"
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
+        from rigfem.cache import from_environment
+
+        from_environment()  # the cache's folder and limit: one rule, checked before any command runs
         with (contextlib.nullcontext() if getattr(args, "quiet", False) else
-              heartbeat(_what(args), on_terminal=_quiet_bar(args))):   # --quiet: no progress of any kind
+              heartbeat(_what(args))):   # --quiet: no progress of any kind
             code = int(args._run(args) or 0)
         sys.stdout.flush()
         return code
@@ -243,11 +246,6 @@ def _os_error(exc: OSError, args: argparse.Namespace) -> int:
 def _what(args: argparse.Namespace) -> str:
     """The command (and task) a progress line names."""
     return " ".join(str(w) for w in (args.command, getattr(args, "task", None)) if w)
-
-
-def _quiet_bar(args: argparse.Namespace) -> bool:
-    """True if the command draws no bar of its own on a terminal (check and sweep do)."""
-    return args.command not in ("check", "sweep")
 
 
 if __name__ == "__main__":

@@ -20,27 +20,29 @@ def _size(b: int) -> str:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--clear", action="store_true",
-                   help="remove every entry rigfem stored (folders with a manifest); nothing else is touched")
+                   help="remove every entry rigfem stored (signed, under its own subfolder); nothing else is touched")
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigfem.mesh.cache import MAX_GB_ENV, cache_dir, clear, entries, max_bytes, usable
+    from rigfem.cache import CACHE_ENV, DEFAULT_GB, ENTRIES, MAX_GB_ENV, from_environment
 
-    root, limit = cache_dir(), max_bytes()
-    if args.clear:
-        n, size = clear() if root.is_dir() else (0, 0)  # only rigfem's entries: a user's files stay
-        print(f"cache {root}: removed {n} entries, {_size(size)}")
+    cache = from_environment()
+    if cache.root is None:
+        print(f"no usable cache folder ({CACHE_ENV}): rigfem runs without a cache")
         return 0
-    found = entries(root) if root.is_dir() else []
+    if args.clear:
+        n, size = cache.clear()  # only rigfem's entries: nothing else in the folder is touched
+        print(f"cache {cache.root}: removed {n} entries, {_size(size)}")
+        return 0
+    found = cache.entries()
     count, size = Counter(), Counter()
     for folder, b, _ in found:
-        kind = folder.relative_to(root).parts[0] if folder.parent != root else "other"
-        count[kind] += 1
-        size[kind] += b
-    state = "" if usable() else " (not usable: rigfem runs without a cache)"
-    print(f"cache {root}{state} (RIGFEM_CACHE)")
+        count[folder.parent.name] += 1
+        size[folder.parent.name] += b
+    print(f"cache {cache.root} ({CACHE_ENV}; rigfem's entries under {ENTRIES}/)")
     for kind in sorted(count):
         print(f"  {kind}: {count[kind]} entries, {_size(size[kind])}")
-    print(f"total {len(found)} entries, {_size(sum(size.values()))} of {_size(limit)} "
-          f"({MAX_GB_ENV}; least recently used entries are removed past it)")
+    print(f"total {len(found)} entries, {_size(sum(size.values()))} of {_size(cache.max_bytes)} "
+          f"({MAX_GB_ENV}, default a quarter of the free disk within {DEFAULT_GB[0]:g}-{DEFAULT_GB[1]:g} GB; "
+          f"least recently used entries are removed past it)")
     return 0

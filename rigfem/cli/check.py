@@ -14,7 +14,7 @@ from pathlib import Path
 from rigfem.cli.exitcodes import EXIT
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import check_place, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import plain
 from rigfem.settings import REFERENCE_SCENE
 
@@ -80,12 +80,22 @@ def _summary(r: dict) -> str:
                      f"{p['surface']}{why}")
     lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
-    lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa)")
+    scope = f"; checked {r['left_out']}" if r.get("left_out") else ""
+    lines.append(f"overall: {r['verdict'].upper()} (limit {r['limit_mpa']:.0f} MPa{scope})")
     return "\n".join(lines)
 
 
+class _Verdict(OBSERVER.__class__):
+    """The command line's progress, and the summary printed as soon as the verdicts are known."""
+
+    def decided(self, report: dict) -> None:  # before the pictures and files are written
+        print(_summary(report), flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
-    from rigfem.check import run_check
+    from rigfem.cache import from_environment
+    from rigfem.context import Context
+    from rigfem.pipeline import Output, Request, run_check
     from rigfem.scene import builtin_scenes
 
     if args.list:
@@ -95,13 +105,11 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.out is not None:
         check_place("--out", args.out, folder=True)
-    def verdict(r: dict) -> None:  # printed before the pictures and files are written
-        print(_summary(r), flush=True)
-
-    report = run_check(args.scene, out=args.out, force=args.force, overrides=_overrides(args),
-                       quiet=args.quiet, solver=args.solver, export_inp=args.export_inp,
-                       allow_rule_violations=args.allow_rule_violations, on_stage=stage,
-                       pictures=not args.no_pictures, on_verdict=None if args.json else verdict)
+    request = Request(args.scene, _overrides(args), args.allow_rule_violations)
+    output = Output(Path(args.out) if args.out is not None else None, args.force, not args.no_pictures,
+                    args.export_inp)
+    ctx = Context(from_environment(), OBSERVER if args.json else _Verdict(), args.solver)
+    report = run_check(request, output, ctx)
     if args.json:
         print(json.dumps(report, indent=2))
     out = Path(args.out) if args.out is not None else Path("results") / report["scene"]

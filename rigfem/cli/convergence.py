@@ -15,9 +15,9 @@ from pathlib import Path
 
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_file, write_text, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import InputError, check_range, plain
-from rigfem import studies  # lazy (lazy_loader): the FE stack loads when a study runs, not for --help
+from rigfem import verification  # lazy (lazy_loader): the FE stack loads when a study runs, not for --help
 from rigfem.settings import FIDELITY, MODES, PARTS, REFERENCE_SCENE
 
 HELP = "mesh convergence (h and p) of each part's peak von Mises: Richardson limit, order, error vs time"
@@ -30,10 +30,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"scene (file or built-in name) or a part of {REFERENCE_SCENE} (e.g. plate_A)")
     p.add_argument("--mode", help="original | cycle (default both)")
     p.add_argument("--levels", default="4", help="h levels, 3..8 (default 4)")
-    p.add_argument("--ratio", default=str(studies.RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
+    p.add_argument("--ratio", default=str(verification.RATIO), help="size ratio between h levels, 1.1..2 (default √2)")
     p.add_argument("--max-gib", default="12", help="refuse an h level predicted above this memory (GiB)")
-    p.add_argument("--extra-levels", default=str(studies.EXTEND),
-                   help=f"finer h levels added while a peak is not converging, 0..3 (default {studies.EXTEND})")
+    p.add_argument("--extra-levels", default=str(verification.EXTEND),
+                   help=f"finer h levels added while a peak is not converging, 0..3 (default {verification.EXTEND})")
     p.add_argument("--no-presets", action="store_true", help="h sequence only (no draft/standard/P1 steps)")
     p.add_argument("--out", default="results/convergence",
                    help="folder: a new one, or with --force one rigfem wrote (studies accumulate there)")
@@ -68,7 +68,7 @@ def table(res: dict) -> str:
             row += f" {s['modes'][m][q]:.2f} | {_pct(err)} |"
         lines.append(row)
     lines += ["", "'away': peak away from the I-profile's sharp web-flange corners (fillet_radius = 0 only) "
-              f"(nodes farther than {studies.AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
+              f"(nodes farther than {verification.AWAY_MM:g} mm)" if any(q == "away_mpa" for _, q in cols) else "", ""]
     for m in res["modes"]:
         for qty, a in res["modes"][m].items():
             ex = a.get("extrapolation")
@@ -131,7 +131,7 @@ def plot(res: dict, path: Path) -> None:
                     e = max(abs(a["errors"][s["label"]]), 1e-6) * 100
                     ax.loglog(t_of(s), e, "s" if s["kind"] == "preset" else "^", color=f"C{i}")
                     ax.annotate(s["label"], (t_of(s), e), fontsize=7)
-    for p, t in studies.TARGETS.items():
+    for p, t in verification.TARGETS.items():
         ax.axhline(100 * t, color="grey", lw=0.6, ls=":")
         ax.annotate(f"{p} target", (0.01, 100 * t), xycoords=("axes fraction", "data"), fontsize=7,
                     va="bottom")
@@ -182,7 +182,7 @@ def summary(results: list[dict]) -> str:
     """summary.md: per part, mode and preset the cost and the error against the extrapolated peak."""
     lines = ["# Convergence summary: what each preset costs and how accurate it is", "",
              "Error = preset peak vs the Richardson-extrapolated peak of the h sequence (P2, three finest "
-             "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in studies.TARGETS.items()) + ". "
+             "levels). Targets: " + ", ".join(f"{p} ≤ {100 * t:g} %" for p, t in verification.TARGETS.items()) + ". "
              "Time and memory are per step and cover both modes of a part (one mesh, shared solves). "
              "Presets: " + "; ".join(f"{n}: P{f.order}, {f.size_mm:g}/{f.near_mm:g} mm, "
                                      f"{f.bearing_directions} dirs" for n, f in FIDELITY.items()) + ".",
@@ -220,17 +220,17 @@ def summary(results: list[dict]) -> str:
               "Per part and mode, the coarsest level of the h sequence whose peak is within the target "
               "of the extrapolated peak (and every finer level is too); a preset meeting the target on "
               "every part needs sizes no larger than the finest of these.", "",
-              "| part | mode | " + " | ".join(f"{p} ≤ {100 * t:g} %" for p, t in studies.TARGETS.items()) + " |",
-              "|---|---|" + "---|" * len(studies.TARGETS)]
+              "| part | mode | " + " | ".join(f"{p} ≤ {100 * t:g} %" for p, t in verification.TARGETS.items()) + " |",
+              "|---|---|" + "---|" * len(verification.TARGETS)]
     for res in results:
         hs = [s for s in res["steps"] if s["kind"] == "h"]
         for m, a, ex in _quantities(res):
             if not ex or not ex["converging"]:
-                lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in studies.TARGETS)
+                lines.append(f"| {res['part']} | {m} | " + " | ".join("n/a (not converging)" for _ in verification.TARGETS)
                              + " |")
                 continue
             cells = []
-            for t in studies.TARGETS.values():
+            for t in verification.TARGETS.values():
                 ok = [s for i, s in enumerate(hs) if all(_abs_err(a, x["label"]) <= t for x in hs[i:])]
                 t_s = ok[0].get("cpu_seconds") if ok else None
                 cost = (f"{t_s:.0f} s CPU" if t_s else f"{ok[0]['seconds']:.0f} s wall") if ok else ""
@@ -250,23 +250,22 @@ def _targets(target: str) -> tuple[str, list[str] | None]:
 
 def _command(a: argparse.Namespace) -> str:
     opts = [f"--mode {a.mode}" if a.mode else "", f"--levels {a.levels}" if a.levels != "4" else "",
-            f"--ratio {a.ratio}" if a.ratio != str(studies.RATIO) else "", "--no-presets" if a.no_presets else "",
+            f"--ratio {a.ratio}" if a.ratio != str(verification.RATIO) else "", "--no-presets" if a.no_presets else "",
             f"--max-gib {a.max_gib}" if a.max_gib != "12" else "",
-            f"--extra-levels {a.extra_levels}" if a.extra_levels != str(studies.EXTEND) else ""]
+            f"--extra-levels {a.extra_levels}" if a.extra_levels != str(verification.EXTEND) else ""]
     return " ".join(["rigfem convergence", a.target, *[o for o in opts if o]])
 
 
 def run(args: argparse.Namespace) -> int:
     if args.mode is not None and args.mode not in MODES:
         raise InputError(f"--mode {args.mode!r} must be one of {', '.join(MODES)}")
-    levels = check_range("--levels", args.levels, 3, 8)
-    if levels != int(levels):
-        raise InputError(f"--levels = {args.levels!r} must be a whole number in [3, 8]")
-    ratio = check_range("--ratio", args.ratio, 1.1, 2.0)
-    max_gib = check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB")
     n_extra = check_range("--extra-levels", args.extra_levels, 0, 3)
     if n_extra != int(n_extra):
         raise InputError(f"--extra-levels = {args.extra_levels!r} must be a whole number in [0, 3]")
+    spec = verification.StudySpec(check_range("--levels", args.levels, 3, 8), check_range("--ratio", args.ratio, 1.1, 2.0),
+                                  (args.mode,) if args.mode else None,
+                                  check_range("--max-gib", args.max_gib, 0.5, 1024.0, "GiB"),
+                                  presets=not args.no_presets, extend=int(n_extra))
     if args.render and not Path(args.out).is_dir():
         raise InputError(f"--out = {args.out!r}: no such folder to render")
     out = new_folder("--out", args.out, args.force or args.render)
@@ -274,28 +273,29 @@ def run(args: argparse.Namespace) -> int:
         for path in sorted(out.glob("*.json")):
             res = json.loads(path.read_text())
             if "steps" in res:
-                _write(studies.analyse(res), out, path.stem)
+                _write(verification.analyse(res), out, path.stem)
     else:
         scene, parts = _targets(args.target)
-        from rigfem.check import load_check_scene
+        from rigfem.cache import from_environment
+        from rigfem.job import Request
 
-        broken = load_check_scene(scene, None, args.allow_rule_violations).rule_violations
+        request = Request(scene, {"parts": list(parts)} if parts else {}, args.allow_rule_violations)
+        job, by_part = verification.scene_cases(request, from_environment())
+        settings, broken = job.settings, list(job.rule_violations)
         for v in broken:
             print(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)", flush=True)
-        settings, by_part = studies.scene_cases(scene, parts, allow_rule_violations=True)
         mark_folder(out)
         for name, cases_for in by_part.items():
             stem = name if args.mode is None else f"{name}_{args.mode}"
             extra = {"scene": scene, "command": _command(args), "rule_violations": broken}
 
-            def save(partial: dict, stem: str = stem, extra: dict = extra) -> None:
-                write_text(out / f"{stem}.json", studies.to_json({**partial, **extra, "partial": True}))
+            class Saving(type(OBSERVER)):  # the command line's progress, and each partial study kept
+                def partial(self, result: dict, stem: str = stem, extra: dict = extra) -> None:
+                    write_text(out / f"{stem}.json", verification.to_json({**result, **extra, "partial": True}))
 
-            res = studies.study(cases_for, settings, int(levels), ratio, modes=[args.mode] if args.mode else None,
-                        max_gib=max_gib, presets=not args.no_presets, on_step=save, extend=int(n_extra),
-                        progress=lambda part, step: stage(f"part {part}: step {step}"))
+            res = verification.study(cases_for, settings, spec, Saving())
             print(_write({**res, **extra}, out, stem))
-    stage("summary")
+    OBSERVER.stage("summary")
     done = [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
     write_text(out / "summary.md", summary([s for s in done if "steps" in s]))
     wrote(out / "summary.md")
@@ -304,7 +304,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _write(res: dict, out: Path, stem: str) -> str:
     """Write <stem>.json, .md and .png; return the Markdown table."""
-    write_text(out / f"{stem}.json", studies.to_json(res))
+    write_text(out / f"{stem}.json", verification.to_json(res))
     md = table(res)
     write_text(out / f"{stem}.md", f"# Convergence: {res['scene']} {res['part']}\n\nCommand: "
                                     f"`{res['command']}`\n\n{md}")

@@ -100,7 +100,9 @@ def run(args: argparse.Namespace) -> int:
             check_range(flag, value, lo, SIZE_MM[1], "mm")
     part = rig.load_part(args.part, _overrides(args))
     settings = _settings(args, part.kind)
-    pm = mesh_part(part, settings, use_cache=not args.no_cache)
+    from rigfem.cache import NO_CACHE, from_environment
+
+    pm = mesh_part(part, settings, cache=NO_CACHE if args.no_cache else from_environment())
     write_file(out, lambda tmp: write_mesh(pm, tmp, args.order))
     q, m = pm.quality, pm.meta
     dims = ", ".join(f"{k} {d.value:g}" for k, d in part.dims.items() if d.source == "override")

@@ -20,12 +20,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigfem.cache import from_environment
     from rigfem.mesh.volume import mass_kg  # cached OpenCASCADE volumes (gmsh only on a cache miss)
+
+    cache = from_environment()
 
     print(f"parts in {rig.GEOMETRY_DIR} (mm, kg):")
     for name, (path, _) in rig.known_parts().items():
         part = rig.load_part(name)
-        m = mass_kg(part)
+        m = mass_kg(part, cache)
         dims = ", ".join(f"{k} {part[k]:g}" for k in _KEY_DIMS.get(part.kind, ()))
         note = ""
         if part.kind == "rail":

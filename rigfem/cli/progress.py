@@ -1,8 +1,9 @@
 """Progress of a long command, by stage: after :data:`AFTER_S` seconds a line on stderr naming
 the command, its stage and the elapsed time — redrawn in place on a terminal; plain log lines
 otherwise (CI logs, files): one when each stage begins and one every :data:`EVERY_S` seconds,
-``rigfem <command>: <stage> … <elapsed> s``.  Library code never prints: it takes an
-``on_stage`` callback, and the CLI passes :func:`stage`."""
+``rigfem <command>: <stage> · <done>/<total> <unit> … <elapsed> s``.  Library code never prints: it
+reports to the :class:`rigfem.observer.Observer` of its context, and the CLI's is :data:`OBSERVER`,
+which shows the same on a terminal as in a log."""
 
 from __future__ import annotations
 
@@ -12,7 +13,9 @@ import threading
 import time
 from collections.abc import Iterator
 
-__all__ = ["AFTER_S", "EVERY_S", "heartbeat", "stage"]
+from rigfem.observer import Observer
+
+__all__ = ["AFTER_S", "EVERY_S", "heartbeat", "stage", "OBSERVER"]
 
 AFTER_S, EVERY_S = 2.0, 10.0
 _SPIN = "|/-\\"
@@ -24,12 +27,12 @@ class _Beat:
 
     def __init__(self, what: str, stream, tty: bool) -> None:
         self.what, self.stream, self.tty = what, stream, tty
-        self.stage, self.t0, self.lines = "running", time.monotonic(), 0
+        self.stage, self.t0, self.lines, self.count = "running", time.monotonic(), 0, ""
         self.lock = threading.Lock()
 
     def line(self) -> None:
         """Write the current line (the caller decides when)."""
-        text = f"rigfem {self.what}: {self.stage} … {time.monotonic() - self.t0:.0f} s"
+        text = f"rigfem {self.what}: {self.stage}{self.count} … {time.monotonic() - self.t0:.0f} s"
         with self.lock, contextlib.suppress(OSError, ValueError):
             self.stream.write(f"\r\x1b[K{text} {_SPIN[self.lines % 4]}" if self.tty else text + "\n")
             self.stream.flush()
@@ -42,17 +45,36 @@ def stage(name: str) -> None:
     if not _LIVE:
         return
     beat = _LIVE[-1]
-    beat.stage = name
+    beat.stage, beat.count = name, ""
     if not beat.tty and beat.lines:
         beat.line()
 
 
+def step(done: int, total: int, what: str) -> None:
+    """The running command finished ``done`` of ``total`` counted steps (shown beside the stage)."""
+    if _LIVE:
+        _LIVE[-1].count = f" · {done}/{total} done"
+
+
+class _Progress(Observer):
+    """The command line's observer: stages and counts on the progress line."""
+
+    def stage(self, text: str) -> None:
+        stage(text)
+
+    def step(self, done: int, total: int, what: str) -> None:
+        step(done, total, what)
+
+
+#: the observer every command hands its library calls
+OBSERVER = _Progress()
+
+
 @contextlib.contextmanager
 def heartbeat(what: str, stream=None, after_s: float | None = None, every_s: float | None = None,
-              terminal: bool | None = None, on_terminal: bool = True) -> Iterator[None]:
+              terminal: bool | None = None) -> Iterator[None]:
     """Report ``what`` (the command) with its stage and the elapsed time while the block runs
-    (first after ``after_s``, default :data:`AFTER_S`, then every ``every_s``, default :data:`EVERY_S`);
-    ``on_terminal`` False: nothing on a terminal (the command draws its own bar there)."""
+    (first after ``after_s``, default :data:`AFTER_S`, then every ``every_s``, default :data:`EVERY_S`)."""
     after_s = AFTER_S if after_s is None else after_s
     every_s = EVERY_S if every_s is None else every_s
     stream = stream or sys.stderr
@@ -60,9 +82,6 @@ def heartbeat(what: str, stream=None, after_s: float | None = None, every_s: flo
         tty = stream.isatty() if terminal is None else terminal
     except (AttributeError, ValueError):
         tty = False
-    if tty and not on_terminal:
-        yield
-        return
     beat = _Beat(what, stream, tty)
     stop = threading.Event()
 

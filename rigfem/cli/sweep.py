@@ -39,13 +39,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigfem.cli.outputs import mark_folder, new_folder, wrote
-    from rigfem.cli.progress import stage
+    from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
+    from rigfem.cli.progress import OBSERVER
     from rigfem.errors import InputError, check_range
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.configs import SweepParams
 
     if args.scheduler is not None:
-        from rigfem.studies.sweep import check_scheduler
+        from rigfem.sweep.run import check_scheduler
 
         check_scheduler(args.scheduler)  # bad input before anything; run_sweep connects before any work
     p = SweepParams(linkage_type=args.linkage or "four-bar", speed_hz=args.speed_hz, model=args.model,
@@ -55,17 +55,17 @@ def run(args: argparse.Namespace) -> int:
     check_range("--chunk-size", args.chunk_size, 1, 100_000)
     if not args.report_only:
         from rigfem.mesh.mesher import MACHINE_GIB
-        from rigfem.studies.cost import check_cost, sweep_cost
-        from rigfem.studies.sweep_configs import enumerate_configs
+        from rigfem.sweep.cost import check_cost, sweep_cost
+        from rigfem.sweep.configs import enumerate_configs
 
         configs = enumerate_configs(p)
         check_cost(sweep_cost(p, configs, args.workers), MACHINE_GIB)  # before the folder is made
         if args.scheduler is not None:
-            from rigfem.studies.sweep import reach_scheduler
+            from rigfem.sweep.run import reach_scheduler
 
             reach_scheduler(args.scheduler)  # a Dask scheduler answers there, in seconds
-    from rigfem.studies.sweep import run_sweep
-    from rigfem.studies.sweep_report import write_report
+    from rigfem.sweep.run import run_sweep
+    from rigfem.sweep.report import write_report
 
     if args.report_only:
         import pandas as pd
@@ -78,14 +78,20 @@ def run(args: argparse.Namespace) -> int:
         wrote(out)
         return 0
     mark_folder(out)
-    from rigfem.mesh.cache import cache_dir, usable
+    from rigfem.cache import Cache, from_environment
 
     # finished chunks are verified cache entries: any later run of this sweep (into any folder)
-    # reads them instead of computing them (in --out only when the cache cannot be used)
-    work = cache_dir() / "sweep_chunks" if usable() else out / ".work"
-    table = run_sweep(p, work, chunk_size=args.chunk_size, workers=args.workers, configs=configs,
-                      scheduler=args.scheduler, progress=not args.quiet, on_stage=stage)
-    stage("report")
+    # reads them instead of computing them (in --out/.work only when the cache cannot be used)
+    cache = from_environment()
+    if cache.folder is None:
+        cache = Cache(out / ".work", 1 << 62)
+        write_text(out / ".work" / ".gitignore", "*\n", record=False)  # never in a repository
+    from rigfem.context import Context
+    from rigfem.sweep.run import SweepOptions
+
+    table = run_sweep(p, Context(cache, OBSERVER, workers=args.workers),
+                      SweepOptions(args.chunk_size, args.scheduler, configs=tuple(configs)))
+    OBSERVER.stage("report")
     files = write_report(table, p, out, table.attrs.get("compute_seconds"))
     ok = table[table["status"] == "ok"]
     print(f"{p.linkage_type}: {len(table)} configurations, {len(ok)} computed, "

@@ -1,7 +1,7 @@
 """``rigfem synthesize function|motion``: a four-bar that generates y = f(x) (Freudenstein's
 equation, Chebyshev precision points) or moves a coupler point through three positions, its
 errors and defects; ``--rig`` then ranks the nearest buildable rig configurations, each with
-its rule table and stress verdict (``rigfem.studies.rig_design``).
+its rule table and stress verdict (``rigfem.design.rig_design``).
 
 Angles in degrees counter-clockwise from the ground line O2→O4; lengths in the unit of
 --ground (function) or of the positions (motion); rig lengths in mm.  Exit status with
@@ -15,7 +15,7 @@ import json
 import re
 
 from rigfem.cli.outputs import new_output, write_file, write_text, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.settings import FIDELITY
 
@@ -229,8 +229,8 @@ def _rig_options(args, motion: bool) -> dict | None:
     if fidelity not in FIDELITY:
         raise InputError(f"--fidelity = {fidelity!r} must be one of {', '.join(FIDELITY)}")
     from rigfem.mesh.mesher import MACHINE_GIB
-    from rigfem.studies.cost import check_cost, synthesis_cost
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.sweep.cost import check_cost, synthesis_cost
+    from rigfem.sweep.configs import SweepParams
 
     check_cost(synthesis_cost(SweepParams(fidelity=fidelity), int(top), not args.no_stress), MACHINE_GIB)
     return dict(top=int(top), fidelity=fidelity, stress=not args.no_stress,
@@ -240,18 +240,21 @@ def _rig_options(args, motion: bool) -> dict | None:
 
 def _snap(r: dict, opts: dict, task: str) -> int:
     """Rank the rig configurations into ``r["rig"]``; write the scene; the exit status."""
-    from rigfem.studies.rig_design import snap_function, snap_motion, stress_verdicts
-    from rigfem.studies.sweep_bases import mesh_ahead
-    from rigfem.studies.sweep_configs import SweepParams
+    from rigfem.cache import from_environment
+    from rigfem.context import Context
+    from rigfem.design.rig_design import snap_function, snap_motion, stress_verdicts
+    from rigfem.sweep.bases import mesh_ahead
+    from rigfem.sweep.configs import SweepParams
 
     if r.get("branch") is None:
         raise ComputeError("the synthesised linkage has a branch defect: nothing to snap to the rig")
+    ctx = Context(from_environment(), OBSERVER)
     if opts["stress"]:  # the unit solutions' meshes are made while the rig four-bars are ranked
-        mesh_ahead(SweepParams(fidelity=opts["fidelity"]))
-    stage("ranking the rig four-bars")
+        mesh_ahead(SweepParams(fidelity=opts["fidelity"]), ctx.cache)
+    OBSERVER.stage("ranking the rig four-bars")
     cands = snap_function(r, opts["top"]) if task == "function" else snap_motion(r, opts["top"], opts["scale"])
     if opts["stress"]:
-        stress_verdicts(cands, opts["fidelity"], on_stage=stage)
+        stress_verdicts(cands, SweepParams(fidelity=opts["fidelity"]), ctx)
     r["rig"] = {"candidates": cands, "stress_fidelity": opts["fidelity"] if opts["stress"] else None}
     if opts["scene"] is not None:
         write_text(opts["scene"], _scene_toml(cands[0], task))
@@ -301,8 +304,9 @@ def _rig_text(rig: dict, task: str) -> str:
         if st is None:
             continue
         if "max_util_pct" in st:
+            band = st["parts_band_pct"].get(st["limiting_part"].replace(" (", "_").rstrip(")"), 0.0)
             out.append(f"   stress: {st['verdict'].upper()}, worst {st['max_util_pct']:.1f} % of sigma_u/2 "
-                       f"({st['limiting_part']}, error band {st['error_band_pct']:g} %)")
+                       f"({st['limiting_part']}, error band ±{band:.1f} % of its peak)")
         else:
             out.append(f"   stress: {st['verdict'].upper()} ({st['note']})")
     if rig.get("scene"):

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
-from rigfem.cli.progress import stage
+from rigfem.cli.progress import OBSERVER
 from rigfem.errors import InputError, check_range, check_whole, plain
 from rigfem.settings import REFERENCE_SCENE
 
@@ -55,8 +55,10 @@ def table(rows: list[dict], title: str, command: str, seconds: float) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigfem.check import load_check_scene
-    from rigfem.studies.verify import verify_scene
+    from rigfem.cache import from_environment
+    from rigfem.context import Context
+    from rigfem.job import Request, read_job
+    from rigfem.verification.calculix import verify_job
 
     # every option and the scene are checked before ccx is looked for and before any computation
     if args.against != "calculix":
@@ -65,24 +67,26 @@ def run(args: argparse.Namespace) -> int:
     peak_tol = check_range("--peak-tol", args.peak_tol, 0.0, 100.0, "%")
     disp_tol = check_range("--disp-tol", args.disp_tol, 0.0, 100.0, "%")
     out = new_folder("--out", args.out, args.force) if args.out else None
-    cs = load_check_scene(args.scene, {"fidelity": args.fidelity, "frames": 0}, args.allow_rule_violations)
+    ctx = Context(from_environment(), OBSERVER)
+    job = read_job(Request(args.scene, {"fidelity": args.fidelity, "frames": 0}, args.allow_rule_violations),
+                   ctx.cache)
     if shutil.which("ccx") is None:
         raise InputError("--against calculix needs the ccx program (Debian: apt-get install calculix-ccx)")
     t0 = time.perf_counter()
-    rows = verify_scene(cs, threads=threads, on_stage=stage)
+    rows = verify_job(job, threads, ctx)
     name = Path(str(args.scene)).stem
     command = f"rigfem verify --against calculix {args.scene} --fidelity {args.fidelity} --threads {threads}"
     text = table(rows, f"rigfem vs CalculiX 2.20: scene {name} ({args.fidelity})", command,
                  time.perf_counter() - t0)
-    text = "".join(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)\n" for v in cs.rule_violations) + text
+    text = "".join(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)\n" for v in job.rule_violations) + text
     print(text, end="")
     if out is not None:
-        stage("report")
+        OBSERVER.stage("report")
         mark_folder(out)
         write_text(out / f"calculix_verify_{name}.md", text)
         write_text(out / f"calculix_verify_{name}.json", json.dumps(
             {"scene": name, "fidelity": args.fidelity, "ccx_threads": threads, "command": command,
-             "rule_violations": cs.rule_violations,
+             "rule_violations": list(job.rule_violations),
              "cases": rows}, indent=2) + "\n")
         wrote(out / f"calculix_verify_{name}.md", out / f"calculix_verify_{name}.json")
     ok = all(abs(r["peak_rel_diff"]) * 100 <= peak_tol and r["displacement_rel_diff"] * 100 <= disp_tol

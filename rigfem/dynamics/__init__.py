@@ -10,9 +10,9 @@ import lazy_loader
 __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
-        "history": ["JointHistory", "ReactionHistory", "merge_ranges", "spline_evaluator", "peaks", "summary"],
+        "history": ["JointHistory", "ReactionHistory", "DynamicsOptions", "Reactions", "reactions_of", "merge_ranges", "spline_evaluator", "peaks", "summary"],
         "forces": ["cross", "inertia_load", "applied", "body_loads", "compressor_gas_force", "loaded_linkage"],
-        "cycle": ["MODELS", "simulate", "cycle_history"],
+        "cycle": ["MODELS", "simulate", "cycle_history", "react"],
         "original": ["fourbar_kinematics", "program_kinematics", "original_reactions", "program_reactions", "simulate_original", "original_program"],
         "closed": ["closed_reactions"],
         "solver": ["solve", "reactions"],

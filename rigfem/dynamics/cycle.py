@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.history import ReactionHistory
+from rigfem.dynamics.history import DynamicsOptions, ReactionHistory, Reactions, reactions_of
 from rigfem.dynamics.original import simulate_original
 from rigfem.dynamics.solver import reactions
 from rigfem.errors import InputError
@@ -19,7 +19,7 @@ from rigfem.linkage.model import Linkage, LinkageState
 from rigfem.linkage.state import linkage_state
 from rigfem.settings import MODELS
 
-__all__ = ["MODELS", "simulate", "cycle_history"]
+__all__ = ["MODELS", "simulate", "cycle_history", "react"]
 
 
 def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: float = 1.0,
@@ -64,3 +64,10 @@ def cycle_history(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: 
         raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
                          f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
     return simulate_original(lk, motion, deg, speed_hz)
+
+
+def react(lk: Linkage, motion: LinkageState, options: DynamicsOptions) -> Reactions:
+    """The reactions stage of a check: the linkage's reaction history over the turn its ``motion``
+    covers (``options.samples`` crank angles), with its peaks and summary."""
+    return reactions_of(cycle_history(lk, motion, crank_angles(options.samples), options.speed_hz,
+                                      options.mass_model))

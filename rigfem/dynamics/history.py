@@ -15,12 +15,12 @@ says which.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from rigfem.linkage.loops import singular_ranges
 from rigfem.linkage.model import BodyHistory
 from rigfem.rig.rules import rules_for
 
@@ -55,6 +55,40 @@ class ReactionHistory:
     #: ``crank_deg`` is an evenly spaced full turn (:func:`rigfem.linkage.loops.is_full_turn`, said by
     #: whoever sampled it): peaks and splines wrap round the turn
     full_turn: bool = False
+
+
+@dataclass(frozen=True)
+class DynamicsOptions:
+    """How a check gets its reactions: the crank angles of a turn, the mass model, the crank speed,
+    or an external reaction history (a CSV beside the scene, and the values stated for its missing
+    columns)."""
+
+    samples: int = 360
+    mass_model: str = "rigid-body"
+    speed_hz: float = 1.0
+    reactions_csv: Path | None = None
+    csv_missing: dict | None = None
+
+
+@dataclass(frozen=True)
+class Reactions:
+    """The reactions stage's product: a turn's reaction history, its refined peaks and the
+    summary the report shows (:func:`summary`)."""
+
+    history: ReactionHistory
+    peaks: dict
+    summary: dict
+
+    @property
+    def singular(self) -> list | None:
+        """The toggle crank-angle ranges, where reactions grow without bound (None if none)."""
+        return self.history.meta.get("singular")
+
+
+def reactions_of(h: ReactionHistory) -> Reactions:
+    """A history with its peaks (refined once) and summary."""
+    pk = peaks(h)
+    return Reactions(h, pk, summary(h, pk))
 
 
 #: refined peaks within this relative distance of the largest count as equal (``equal_peaks_deg``)

@@ -12,9 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.dynamics.forces import cross
-from rigfem.dynamics.history import JointHistory, ReactionHistory, merge_ranges, singular_ranges
+from rigfem.dynamics.history import JointHistory, ReactionHistory, merge_ranges
 from rigfem.linkage.general import RCOND_SINGULAR
-from rigfem.linkage.model import CrankDriver, Linkage, LinkageState, Revolute, SliderDriver
+from rigfem.linkage.loops import singular_ranges
+from rigfem.linkage.model import (
+    CrankDriver,
+    Linkage,
+    LinkageState,
+    Revolute,
+    SliderDriver,
+)
 
 __all__ = ["general_reactions"]
 

@@ -15,8 +15,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.dynamics.history import BodyHistory, JointHistory, ReactionHistory, merge_ranges, singular_ranges
-from rigfem.linkage.loops import MU_TOGGLE_DEG, fourbar_angles, transmission_angle_deg
+from rigfem.dynamics.history import (
+    BodyHistory,
+    JointHistory,
+    ReactionHistory,
+    merge_ranges,
+)
+from rigfem.linkage.loops import (
+    MU_TOGGLE_DEG,
+    fourbar_angles,
+    singular_ranges,
+    transmission_angle_deg,
+)
 from rigfem.linkage.mechanisms import crank_angles
 from rigfem.linkage.model import GROUND, Linkage, LinkageState
 from rigfem.rig.catalogue import RIG_MASSES, RIG_RAILS_MM, RigMasses

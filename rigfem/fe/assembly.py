@@ -33,16 +33,7 @@ from skfem.refdom import RefTet, RefTri
 
 from rigfem.errors import InputError
 from rigfem.material import lame
-from rigfem.mesh.cache import (
-    array_digest,
-    cache_dir,
-    cached_arrays,
-    code_hash,
-    entry_key,
-    read_entry,
-    usable,
-    write_entry,
-)
+from rigfem.cache import NO_CACHE, Cache, array_digest, resolve
 from rigfem.mesh.partmesh import PartMesh, quadratic
 
 TET_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
@@ -78,8 +69,9 @@ class FEMesh:
         return 3 * len(self.nodes)
 
 
-def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
-    """P1 or P2 mesh of ``mesh``; P2 follows the curved boundary edges of the PartMesh."""
+def fe_mesh(mesh: PartMesh, order: int = 2, cache: Cache = NO_CACHE) -> FEMesh:
+    """P1 or P2 mesh of ``mesh``; P2 follows the curved boundary edges of the PartMesh (the
+    elements straightened: through ``cache``)."""
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
     p = np.asarray(mesh.points, dtype=float)
@@ -99,24 +91,24 @@ def fe_mesh(mesh: PartMesh, order: int = 2) -> FEMesh:
         return FEMesh(p, t, surfaces, 1, len(p))
     nodes, elements, surf2 = quadratic(dataclasses.replace(mesh, points=p, tets=t, surfaces=surfaces))
     fm = FEMesh(nodes, elements, surf2, 2, len(p))
-    fm.straightened = _straighten_cached(fm)
+    fm.straightened = _straighten_cached(fm, cache)
     return fm
 
 
-def _straighten_cached(fm: FEMesh) -> int:
+def _straighten_cached(fm: FEMesh, cache: Cache) -> int:
     """:func:`_straighten_distorted` through a verified cache entry keyed by the P2 mesh: the
     elements it straightened (a mid-node goes to its chord's midpoint, which depends on the corners
     only), so a warm check skips the Jacobian test of every curved element."""
-    inputs = {"mesh": array_digest(fm.nodes, fm.elements), "code": code_hash("fe/assembly.py")}
     n = len(fm.elements)
-    got, stored = cached_arrays(
-        "straightened", inputs, ("elements",), lambda: {"elements": _straighten_distorted(fm)},
-        lambda a: "" if a["elements"].ndim == 1 and a["elements"].dtype.kind == "i"
-        and np.all((a["elements"] >= 0) & (a["elements"] < n)) else "element numbers out of range")
+    got, stored = cache.cached(
+        "straightened", {"mesh": array_digest(fm.nodes, fm.elements)}, lambda: _straighten_distorted(fm),
+        lambda a, tmp: np.save(tmp / "elements.npy", a), lambda entry: entry.array("elements"),
+        lambda a: "" if a.ndim == 1 and a.dtype.kind == "i"
+        and np.all((a >= 0) & (a < n)) else "element numbers out of range")
     if stored:  # read from the entry: move them (when computed, _straighten_distorted has)
-        _to_chords(fm, got["elements"])
+        _to_chords(fm, got)
         fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
-    return len(got["elements"])
+    return len(got)
 
 
 def _chords(fm: FEMesh, elems: np.ndarray) -> np.ndarray:
@@ -298,50 +290,51 @@ def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
 
 #: True in the child process that compiles the kernels (:func:`compile_kernels`)
 _COMPILING = False
-#: the child compiling the kernels (:func:`start_compiling`); False once waited for (or not startable)
+#: the child compiling the kernels and the cache that records it ran (:func:`start_compiling`);
+#: False once waited for (or not startable)
 _compiler = None
 
 
-def _marker() -> tuple[dict, object]:
-    """Inputs and folder of the cache entry that says the kernels were compiled once."""
+def _marker() -> dict:
+    """Inputs of the cache entry that says the kernels were compiled once."""
     import importlib.metadata
     import sys
 
-    inputs = {"code": code_hash("fe/kernels.py", "fe/assembly.py"), "numba": importlib.metadata.version("numba"),
-              "python": sys.version}
-    return inputs, cache_dir() / "kernels" / entry_key(inputs)
+    return {"numba": importlib.metadata.version("numba"), "python": sys.version}
 
 
-def start_compiling() -> None:
-    """On the first assembly after an install (numba has not compiled the kernels yet) start a
-    child process that compiles them into numba's cache (:func:`compile_kernels`); a caller that
-    knows it will assemble starts it early, so that the compile overlaps the meshing."""
+def start_compiling(cache: Cache) -> None:
+    """On the first assembly after an install (numba has not compiled the kernels yet: no marker
+    in ``cache``) start a child process that compiles them into numba's cache
+    (:func:`compile_kernels`); a caller that knows it will assemble starts it early, so that the
+    compile overlaps the meshing."""
     global _compiler
     import subprocess
     import sys
 
-    if _COMPILING or _compiler is not None or not usable():
-        return
-    inputs, folder = _marker()
-    if read_entry(folder, inputs) is not None:
+    if _COMPILING or _compiler is not None or cache.folder is None or cache.has("kernels", _marker()):
         return
     try:
-        _compiler = subprocess.Popen([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
-                                      "compile_kernels()"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        child = subprocess.Popen([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
+                                  "compile_kernels()"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _compiler = (child, cache)
     except OSError:
         _compiler = False  # compiled here instead, on first use
 
 
-def compiled() -> None:
-    """Wait for the child of :func:`start_compiling`, if one runs, and record that it ran (the
-    marker); a caller that starts processes which assemble calls it first, so they start none."""
+def compiled(cache: Cache | None = None) -> None:
+    """Wait for the child of :func:`start_compiling` (started now with ``cache`` if none was),
+    and record that it ran; a caller that starts processes which assemble calls it first, so they
+    start none."""
     global _compiler
     import subprocess
 
-    start_compiling()
-    child, _compiler = _compiler, False  # from now on nothing more is started or waited for
-    if not child:
+    if _compiler is None:
+        start_compiling(resolve(cache))
+    job, _compiler = _compiler, False  # from now on nothing more is started or waited for
+    if not job:
         return
+    child, marked = job
     try:
         child.wait(timeout=900)
     except BaseException as exc:  # too slow (compiled here instead), or interrupted: it ends here
@@ -350,8 +343,7 @@ def compiled() -> None:
         if not isinstance(exc, subprocess.TimeoutExpired):
             raise
         return
-    inputs, folder = _marker()
-    write_entry(folder, inputs, lambda d: None)
+    marked.put("kernels", _marker(), lambda tmp: None)
 
 
 @functools.lru_cache(maxsize=1)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from rigfem.cache import NO_CACHE, Cache
 from rigfem.errors import InputError
 from rigfem.fe.assembly import FEMesh, fe_mesh, stiffness, volume
 from rigfem.fe.forces import body_basis, body_coefficients, load_vector
@@ -73,8 +74,9 @@ class Model:
 LOCKING_NU = 0.45
 
 
-def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
-    """Build the P1/P2 mesh of ``part``; its stiffness is assembled once, when first needed.
+def build_model(part: PartMesh, material: Material, order: int = 2, cache: Cache = NO_CACHE) -> Model:
+    """Build the P1/P2 mesh of ``part`` (through ``cache``: :func:`rigfem.fe.assembly.fe_mesh`);
+    its stiffness is assembled once, when first needed.
 
     Warns when linear elements meet a nearly incompressible material: they lock and
     under-predict deflection and stress (use order 2).
@@ -84,7 +86,7 @@ def build_model(part: PartMesh, material: Material, order: int = 2) -> Model:
                       f"tetrahedra: volumetric locking under-predicts deflection and stress; use order 2",
                       UserWarning, stacklevel=2)
     t0 = time.perf_counter()
-    fm = fe_mesh(part, order)
+    fm = fe_mesh(part, order, cache)
     return Model(part, material, fm, volume(fm), time.perf_counter() - t0)
 
 

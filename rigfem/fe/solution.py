@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigfem.fe.stress import error_band_pct, zz_error
-from rigfem.fe.tensors import peak_von_mises, principal, von_mises
+from rigfem.tensors import peak_von_mises, principal, von_mises
 
 
 @dataclass(frozen=True)
@@ -120,7 +120,7 @@ class Solution:
     def peak_sweep(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Peak nodal von Mises (n,) and its node (n,) for each row of combinations C (n, k).
 
-        The cheap path for a sweep over crank angles (exact: :func:`rigfem.fe.tensors.peak_von_mises`);
+        The cheap path for a sweep over crank angles (exact: :func:`rigfem.tensors.peak_von_mises`);
         call :meth:`peak` on the worst row for location, surface and error estimate.
         """
         C = np.atleast_2d(np.asarray(C, dtype=float))

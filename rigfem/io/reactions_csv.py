@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.dynamics.history import JointHistory, ReactionHistory, singular_ranges
+from rigfem.dynamics.history import JointHistory, ReactionHistory
 from rigfem.errors import InputError, decode_text, plain, read_at_most
 from rigfem.files import whole_file
-from rigfem.linkage.loops import is_full_turn
+from rigfem.linkage.loops import is_full_turn, singular_ranges
 
 # ----------------------------------------------------------------------------- CSV
 _TORQUE_COLS = ("torque_Nm", "torque", "M2", "driver")

@@ -10,8 +10,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     submod_attrs={
         "geometry": ["gmsh_session", "build", "occ_volume_mm3"],
         "volume": ["volume_mm3", "mass_kg"],
-        "cache": ["cache_dir", "MAX_GB_ENV", "DEFAULT_MAX_GB", "max_bytes", "usable", "entries", "evict", "clear", "code_hash", "entry_key", "array_digest", "read_entry", "read_arrays", "write_entry", "discard", "save_arrays"],
-        "mesher": ["MESH_CODE", "MACHINE_GIB", "TETS_PER_H3", "CURVATURE_MM", "MeshSettings", "curvature_n", "DEFAULT_SIZE", "Estimate", "estimate_tets", "estimate", "estimate_part", "check_estimate", "TETS_PER_S", "SMOOTHED_KINDS", "second_order", "mesh_part", "mesh_inputs", "mesh_folder", "make_mesh", "prefetch"],
+        "mesher": ["MACHINE_GIB", "TETS_PER_H3", "CURVATURE_MM", "MeshSettings", "curvature_n", "DEFAULT_SIZE", "Estimate", "estimate_tets", "estimate", "estimate_part", "check_estimate", "TETS_PER_S", "SMOOTHED_KINDS", "second_order", "mesh_part", "mesh_inputs", "make_mesh", "prefetch"],
         "pool": ["WORKERS", "submit", "take", "cancel"],
         "partmesh": ["Hole", "PartMesh", "fit_cylinder", "quality_summary", "save_npz", "load_npz", "TET10_EDGES", "TRI6_EDGES", "TET_FACES", "TET_FACE_OPPOSITE", "boundary_faces", "face_owners", "quadratic", "to_meshio", "write_mesh"],
     },

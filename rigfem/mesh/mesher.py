@@ -1,4 +1,4 @@
-"""Meshing a part in gmsh: sizes, refinement fields, second-order nodes, memory estimate, the mesh cache."""
+"""Meshing a part in gmsh: sizes, refinement fields, second-order nodes, memory estimate, the mesh cache (:mod:`rigfem.cache`)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigfem.mesh import pool
-from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
+from rigfem.cache import Cache, package_hash, resolve
 from rigfem.mesh.partmesh import (
     PartMesh,
     fit_cylinder,
@@ -18,10 +18,6 @@ from rigfem.mesh.partmesh import (
     save_npz,
 )
 from rigfem.settings import MeshSettings
-
-#: the source files that make a mesh: a change to any of them invalidates the cached meshes
-MESH_CODE = ("mesh/*.py", "rig/parts.py", "settings.py")
-
 
 #: machine memory the estimate is checked against, GiB: this machine's physical memory
 MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
@@ -226,44 +222,41 @@ def check_estimate(est: Estimate, s: MeshSettings, machine_gib: float, what: str
                          f"increase size_mm (--size), or pass rigfem --allow-large")
 
 
-def mesh_part(part, settings: MeshSettings, *, use_cache: bool = True,
+def mesh_part(part, settings: MeshSettings, *, cache: Cache | None = None,
               machine_gib: float = MACHINE_GIB) -> PartMesh:
-    """Mesh a part (``rigfem.rig.parts.PartDef``) with linear tets; cached by content hash.
+    """Mesh a part (``rigfem.rig.parts.PartDef``) with linear tets, through ``cache`` (None: the
+    environment's, :func:`rigfem.cache.resolve`; :data:`rigfem.cache.NO_CACHE`: meshed afresh).
 
     Refuses (InputError) a request whose estimate exceeds ``machine_gib`` (from the part's
     dimensions before gmsh starts, then from the built geometry) and a mesh whose minimum
     minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.  gmsh runs
     in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once.
     """
-    from rigfem.errors import check_range
-
-    check_range("size_mm", settings.size_mm, 0.0, None, "mm", lo_open=True)
-    check_range("local_size_mm", settings.near_mm, 0.0, None, "mm", lo_open=True)
-    check_range("refine_dist_mm", settings.dist_mm, 0.0, None, "mm", lo_open=True)
-    check_range("min_quality", settings.min_quality, 0.0, 1.0)
+    cache = resolve(cache)
     first = estimate_part(part, settings)
     if first is not None:
         check_estimate(first, settings, machine_gib, "would give at least")
     key, inputs = mesh_inputs(part, settings)
-    if use_cache and machine_gib == MACHINE_GIB:
+    if machine_gib == MACHINE_GIB:
         pm = pool.take(key)  # made ahead (prefetch): taken, so the pool keeps no copy of it
         if pm is not None:
             return pm
-    if use_cache and read_entry(mesh_folder(part, key), inputs):
-        pm = load_npz(mesh_folder(part, key) / "mesh.npz")
+    pm = cache.get("meshes", inputs, lambda entry: load_npz(entry.bytes("mesh.npz")))
+    if pm is not None:
         pm.meta["cache"] = "hit"
         return pm
-    return make_mesh(part, settings, key, inputs if use_cache else None, machine_gib)
+    return make_mesh(part, settings, key, inputs, cache, machine_gib)
 
 
-def mesh_state(part, settings: MeshSettings) -> str:
+def mesh_state(part, settings: MeshSettings, cache: Cache) -> str:
     """'ready' (made ahead or cached: :func:`mesh_part` does not wait), 'making' (a mesher process) or 'none'."""
-    made = pool.state(key := mesh_inputs(part, settings)[0])
-    return "ready" if made == "done" or mesh_folder(part, key).exists() else "making" if made == "pending" else "none"
+    key, inputs = mesh_inputs(part, settings)
+    made = pool.state(key)
+    return "ready" if made == "done" or cache.has("meshes", inputs) else "making" if made == "pending" else "none"
 
 
-def prefetch(jobs: list[tuple], keep: bool = False) -> int:
-    """Start meshing every (part, MeshSettings) of ``jobs`` not in the mesh cache in the mesher
+def prefetch(jobs: list[tuple], cache: Cache, keep: bool = False) -> int:
+    """Start meshing every (part, MeshSettings) of ``jobs`` not in ``cache`` in the mesher
     processes of :mod:`rigfem.mesh.pool`, in the order given, so :func:`mesh_part` finds them
     made; returns how many were started.  Jobs of an earlier call never taken (a check that
     stopped early) are cancelled first, unless ``keep`` or asked for again (those go on).  In a
@@ -277,38 +270,37 @@ def prefetch(jobs: list[tuple], keep: bool = False) -> int:
         pool.cancel(spare=frozenset(key for *_, key, _ in keyed))
     started = 0
     for part, settings, key, inputs in keyed:
-        if mesh_folder(part, key).exists():  # mesh_part verifies the cached entry
+        if cache.has("meshes", inputs):  # mesh_part verifies the cached entry
             continue
-        started += pool.submit(key, lambda stop, p=part, s=settings, k=key, i=inputs: make_mesh(p, s, k, i,
+        started += pool.submit(key, lambda stop, p=part, s=settings, k=key, i=inputs: make_mesh(p, s, k, i, cache,
                                                                                                   cancel=stop))
     return started
 
 
 def mesh_inputs(part, settings: MeshSettings) -> tuple[str, dict]:
-    """The cache key of a part's mesh and the inputs it is made of."""
+    """The key of a part's mesh (its identity: the solutions of a mesh are keyed by it) and the
+    inputs it is made of (the package's code is in every cache key)."""
+    import hashlib
+    import json
+
     import gmsh
 
     inputs = {"part": part.name, "geometry": part.content_hash(), "settings": settings.key(),
-              "smooth": part.kind in SMOOTHED_KINDS, "gmsh": gmsh.__version__, "code": code_hash(*MESH_CODE)}
-    return entry_key(inputs), inputs
+              "smooth": part.kind in SMOOTHED_KINDS, "gmsh": gmsh.__version__}
+    text = json.dumps({**inputs, "package": package_hash()}, sort_keys=True, default=str)
+    return f"{part.name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}", inputs
 
 
-def mesh_folder(part, key: str):
-    """The mesh cache entry's folder of a part and key."""
-    return cache_dir() / "meshes" / f"{part.name}-{key}"
-
-
-def make_mesh(part, settings: MeshSettings, key: str, inputs: dict | None, machine_gib: float = MACHINE_GIB,
-              cancel=None) -> PartMesh:
-    """Mesh in the mesher process (:mod:`rigfem.mesh.worker`) and store the mesh in the cache
-    under ``inputs`` (None: not stored); ``cancel`` (a threading.Event) ends the mesher."""
+def make_mesh(part, settings: MeshSettings, key: str, inputs: dict, cache: Cache,
+              machine_gib: float = MACHINE_GIB, cancel=None) -> PartMesh:
+    """Mesh in the mesher process (:mod:`rigfem.mesh.worker`) and store the mesh in ``cache``
+    under ``inputs``; ``cancel`` (a threading.Event) ends the mesher."""
     from rigfem.mesh.worker import call
     from rigfem.settings import allow_large
 
     limit = float("inf") if allow_large() else machine_gib  # the child may not share our environment
     pm = call(_mesh, part, settings, limit, key, cancel=cancel)
-    if inputs is not None:
-        write_entry(mesh_folder(part, key), inputs, lambda d: save_npz(pm, d / "mesh.npz"))
+    cache.put("meshes", inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm
 
 

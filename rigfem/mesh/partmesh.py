@@ -16,7 +16,7 @@ and the memory of the mesh and of a direct P2 solve on it and refuses requests a
 machine (24 GiB), first from the part's dimensions before gmsh starts; gmsh runs in a child
 process that a signal ends at once (:mod:`rigfem.mesh.worker`); after meshing it reports gmsh's minSICN quality (min, p01, p05, median) and
 refuses a mesh below ``min_quality``; then makes the mesh second order (:func:`second_order`).
-Results are cached as .npz in verified cache entries (:mod:`rigfem.mesh.cache`), keyed by the
+Results are cached as .npz in verified cache entries (:mod:`rigfem.cache`), keyed by the
 part definition, the settings, the gmsh version and the meshing code.
 The FE solver builds P2 from :func:`quadratic`; :func:`write_mesh` exports .vtu/.msh (tetra or
 tetra10).
@@ -24,6 +24,7 @@ tetra10).
 
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -121,9 +122,9 @@ def save_npz(pm: PartMesh, path: Path) -> None:
         np.savez_compressed(tmp, **arrays)
 
 
-def load_npz(path: Path) -> PartMesh:
-    """Read a PartMesh written by :func:`save_npz`."""
-    with np.load(path) as z:
+def load_npz(source: Path | bytes | bytearray) -> PartMesh:
+    """Read a PartMesh written by :func:`save_npz` (from a file, or its bytes)."""
+    with np.load(io.BytesIO(source) if isinstance(source, (bytes, bytearray)) else source) as z:
         info = json.loads(str(z["json"]))
         surfaces = {k[5:]: z[k] for k in z.files if k.startswith("surf:")}
         holes = {k[5:]: Hole(z[k][:3].copy(), z[k][3:6].copy(), float(z[k][6]), float(z[k][7]))

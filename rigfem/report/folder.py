@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import errno
 import hashlib
 import os
@@ -32,6 +33,25 @@ from rigfem.files import NO_SPACE, umask
 
 #: the file that marks a folder as written by rigfem (what ``--force`` may replace)
 MARKER = ".rigfem-result"
+
+
+@dataclasses.dataclass(frozen=True)
+class Output:
+    """Where and what a check writes: its result folder (None: ``results/<scene>``; replaced only
+    with ``force``, and only if rigfem wrote it), the PNG pictures, and each part case as a
+    CalculiX deck (``export_inp``)."""
+
+    path: Path | None = None
+    force: bool = False
+    pictures: bool = True
+    export_inp: bool = False
+
+
+def read_report(folder: str | Path) -> dict:
+    """The report dict of a result folder (for pytest limits)."""
+    import json
+
+    return json.loads((Path(folder) / "report.json").read_text())
 
 
 def _existing_parent(p: Path) -> Path:
@@ -64,9 +84,9 @@ def check_names(what: str, text: str, path: Path, base: Path) -> None:
 
 def check_cache_apart(what: str, out: Path) -> None:
     """Refuse a result folder that holds rigfem's cache folder or lies inside it (naming both)."""
-    from rigfem.mesh.cache import cache_dir
+    from rigfem.cache import environment_root
 
-    out, cache = Path(os.path.abspath(out)), Path(os.path.abspath(cache_dir()))
+    out, cache = Path(os.path.abspath(out)), Path(os.path.abspath(environment_root()))
     if cache == out or cache.is_relative_to(out):
         raise InputError(f"{what} {plain(out, 100)} holds rigfem's cache folder {plain(cache, 100)} "
                          f"(RIGFEM_CACHE); a result folder is replaced whole, which would delete the cache: "

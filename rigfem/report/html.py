@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rigfem.cache import Cache
 from rigfem.report.document import MODE_TEXT, allowable_label, study_tables
 from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
@@ -17,7 +18,7 @@ from rigfem.report.viewer import viewer_data
 __all__ = ["render_html", "write_html"]
 
 
-def render_html(report: dict, folder: str | Path) -> str:
+def render_html(report: dict, folder: str | Path, cache: Cache | None = None) -> str:
     """The HTML page of a check report whose pictures and animation frames lie in ``folder``."""
     folder = Path(folder)
     r = report
@@ -30,7 +31,7 @@ def render_html(report: dict, folder: str | Path) -> str:
     # link only files that are in the folder (a committed report may come without its VTU files)
     present = [f for f in files if (folder / f).is_file() and f != "report.html"]
     vtk = [f for f in present if f.endswith((".vtu", ".pvd")) and not f[:-4].rsplit("_", 1)[-1].isdigit()]
-    viewer = viewer_data(folder, present, r["limit_mpa"])
+    viewer = viewer_data(folder, present, r["limit_mpa"], cache)
     return render_page(
         "report.html.j2", r=r, cfg=r["configuration"], s=r["settings"], torque=r.get("torque_Nm"),
         pictures=pictures, mode_text=MODE_TEXT, vtk=vtk, others=[f for f in present if f not in vtk
@@ -41,8 +42,8 @@ def render_html(report: dict, folder: str | Path) -> str:
         tables=markdown_html("\n".join(study_tables(r))))
 
 
-def write_html(report: dict, folder: str | Path) -> Path:
+def write_html(report: dict, folder: str | Path, cache: Cache | None = None) -> Path:
     """Write ``report.html`` into the result folder (pictures already there)."""
     path = Path(folder) / "report.html"
-    path.write_text(render_html(report, folder), encoding="utf-8")
+    path.write_text(render_html(report, folder, cache), encoding="utf-8")
     return path

@@ -2,14 +2,13 @@
 
 Rendering a part's pictures costs seconds (pyvista and matplotlib); a warm check draws the same
 pictures again from the same cached solution.  Each call below hashes everything its picture is
-drawn from (the field arrays, the mesh, the titles and labels, the report code that draws them
-and the plotting libraries' versions) into the key of a verified cache entry
-(:mod:`rigfem.mesh.cache`: a SHA-256 per file, a corrupt entry is discarded and drawn again) under
-``$RIGFEM_CACHE/pictures``, and a hit copies the stored PNG files: byte for byte the pictures a
-cold run drew, without pyvista.  A fallback picture (matplotlib,
-where no OpenGL runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU
-field files of a cached solution (:func:`write_vtu`) are stored the same way, keyed by the
-solution's entry and the load combination.
+drawn from (the field arrays, the mesh, the titles and labels and the plotting libraries'
+versions; the package's code is in every key) into the key of a verified cache entry
+(:mod:`rigfem.cache`, kind ``pictures``), and a hit copies the stored files: byte for byte the
+pictures a cold run drew, without pyvista.  A fallback picture (matplotlib, where no OpenGL
+runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU field files of a
+cached solution (:func:`write_vtu`) are stored the same way, keyed by the solution's entry and
+the load combination.
 
 The drawing code (matplotlib) is imported only where a picture is drawn, so a warm check, which
 draws none, does not import it.
@@ -21,20 +20,19 @@ import contextlib
 import dataclasses
 import functools
 import gc
+import itertools
 import json
-import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 
-from rigfem.mesh.cache import array_digest, cache_dir, code_hash, entry_key, read_entry, write_entry
+from rigfem.cache import Cache, Entry, array_digest, resolve
 from rigfem.memory import trim_heap
 
-#: the source files that draw the pictures: an edit invalidates every stored picture
-PICTURE_CODE = ("report/pictures.py", "report/views.py", "report/vtu.py", "report/picture_cache.py",
-                "mesh/partmesh.py")
 _RESULT = "result.json"
+#: numbers the calls of started_part_pictures (their jobs' keys in the pool)
+_RUNS = itertools.count()
 
 
 @functools.lru_cache(maxsize=None)
@@ -51,26 +49,26 @@ def _versions() -> dict[str, str]:
     return out
 
 
-def _lookup(kind: str, inputs: dict, folder: Path) -> tuple[dict | None, Path, dict]:
-    """The stored result of a picture (its files copied into ``folder``), or None; its entry and
-    full inputs."""
-    inputs = {"kind": kind, **inputs, "code": code_hash(*PICTURE_CODE), "libraries": _versions()}
-    entry = cache_dir() / "pictures" / entry_key(inputs)
-    if read_entry(entry, inputs) is not None:
-        try:
-            stored = json.loads((entry / _RESULT).read_text())
-            for name in stored["files"]:
-                shutil.copyfile(entry / name, folder / name)
-            return stored["result"], entry, inputs
-        except (OSError, ValueError, KeyError, TypeError):
-            pass  # verified, yet unreadable here: draw it
-    return None, entry, inputs
+def _full(kind: str, inputs: dict) -> dict:
+    return {"kind": kind, **inputs, "libraries": _versions()}
 
 
-def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[dict, list[str]]]) -> dict:
+def _lookup(kind: str, inputs: dict, folder: Path, cache: Cache) -> dict | None:
+    """The stored result of a picture (its files copied into ``folder``), or None."""
+    def load(entry: Entry) -> dict:
+        stored = entry.json(_RESULT)
+        for name in stored["files"]:
+            entry.copy(name, folder / name)
+        return stored["result"]
+
+    return cache.get("pictures", _full(kind, inputs), load)
+
+
+def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[dict, list[str]]],
+           cache: Cache) -> dict:
     """``draw(folder)`` -> (result, file names it wrote in ``folder``), or the stored files copied
-    into ``folder`` and the stored result when an entry of ``inputs`` is in the cache."""
-    result, entry, inputs = _lookup(kind, inputs, folder)
+    into ``folder`` and the stored result when ``cache`` holds an entry of ``inputs``."""
+    result = _lookup(kind, inputs, folder, cache)
     if result is not None:
         return result
     result, files = draw(folder)
@@ -78,10 +76,10 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
 
         def write(tmp: Path) -> None:
             for name in files:
-                shutil.copyfile(folder / name, tmp / name)
+                (tmp / name).write_bytes((folder / name).read_bytes())
             (tmp / _RESULT).write_text(json.dumps({"files": files, "result": result}))
 
-        write_entry(entry, inputs, write)
+        cache.put("pictures", _full(kind, inputs), write)
     return result
 
 
@@ -98,8 +96,8 @@ def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowa
 
 
 def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
-                  folder: str | Path, zoom_mm: float = 30.0) -> dict:
-    """:func:`rigfem.report.pictures.part_pictures` through the cache (same arguments, same result)."""
+                  folder: str | Path, zoom_mm: float = 30.0, cache: Cache | None = None) -> dict:
+    """:func:`rigfem.report.pictures.part_pictures` through ``cache`` (same arguments, same result)."""
 
     def draw(d: Path) -> tuple[dict, list[str]]:
         from rigfem.report import pictures
@@ -107,7 +105,8 @@ def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allow
         out = pictures.part_pictures(r, c, entry, limit, label, allowable, d, zoom_mm)
         return out, list(out["files"].values())
 
-    return cached("part", _part_inputs(r, c, entry, limit, label, allowable, zoom_mm), Path(folder), draw)
+    return cached("part", _part_inputs(r, c, entry, limit, label, allowable, zoom_mm), Path(folder), draw,
+                  resolve(cache))
 
 
 def _one_combination(r, c: np.ndarray):
@@ -121,17 +120,17 @@ def _one_combination(r, c: np.ndarray):
     return dataclasses.replace(r, solution=one, cycle_nodes=None, cycle_stress=None)
 
 
-def _draw_all(jobs: list[tuple]) -> list[dict]:
+def _draw_all(jobs: list[tuple], cache: Cache) -> list[dict]:
     out = []
     for job in jobs:
-        out.append(part_pictures(*job))
+        out.append(part_pictures(*job, cache=cache))
         gc.collect()  # the part's VTK objects and what they hold, before the next part is drawn
         trim_heap()
     return out
 
 
 @contextlib.contextmanager
-def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Callable[[], list[dict]]]:
+def started_part_pictures(jobs: list[tuple], cache: Cache, workers: int = 2) -> Iterator[Callable[[], list[dict]]]:
     """Start :func:`part_pictures` of every job (a tuple of its arguments); yields the function
     that waits for their results, in order.
 
@@ -147,7 +146,8 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
 
     done, todo = {}, []
     for i, (r, c, entry, limit, label, allowable, folder, *zoom) in enumerate(jobs):
-        got = _lookup("part", _part_inputs(r, c, entry, limit, label, allowable, *(zoom or [30.0])), Path(folder))[0]
+        got = _lookup("part", _part_inputs(r, c, entry, limit, label, allowable, *(zoom or [30.0])), Path(folder),
+                      cache)
         if got is None:
             todo.append(i)
         else:
@@ -159,19 +159,20 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
     if not todo or mp.current_process().daemon:
         shares = []
     slim = [[(_one_combination(jobs[i][0], jobs[i][1]), *jobs[i][1:]) for i in share] for share in shares]
-    keys = [(f"pictures-{id(jobs)}-{share[0]}", share) for share in shares]
+    run = next(_RUNS)  # keys of this call's own: an id() of a list could be a finished call's again
+    keys = [(f"pictures-{run}-{share[0]}", share) for share in shares]
 
     def wait() -> list[dict]:
         for key, share in keys:
             done.update(zip(share, pool.take(key) or []))
         for i in todo:
             if i not in done:  # no children here, or a job cancelled: here
-                done[i] = part_pictures(*jobs[i])
+                done[i] = part_pictures(*jobs[i], cache=cache)
         return [done[i] for i in range(len(jobs))]
 
     try:
         for (key, _), part in zip(keys, slim):
-            pool.submit(key, lambda stop, part=part: call(_draw_all, part, cancel=stop, what="pictures"))
+            pool.submit(key, lambda stop, part=part: call(_draw_all, part, cache, cancel=stop, what="pictures"))
         yield wait
     except BaseException:
         for fut in pool.cancel():  # the children end before the caller removes their folder
@@ -182,8 +183,9 @@ def started_part_pictures(jobs: list[tuple], workers: int = 2) -> Iterator[Calla
         raise
 
 
-def utilisation_plot(r, limit: float, path: str | Path, label: str, allowable: str) -> Path:
-    """:func:`rigfem.report.pictures.utilisation_plot` through the cache."""
+def utilisation_plot(r, limit: float, path: str | Path, label: str, allowable: str,
+                     cache: Cache | None = None) -> Path:
+    """:func:`rigfem.report.pictures.utilisation_plot` through ``cache``."""
     path = Path(path)
     inputs = {"curve": array_digest(r.case.rows, r.vm_rows), "limit": limit, "label": label, "allowable": allowable,
               "name": path.name}
@@ -194,12 +196,12 @@ def utilisation_plot(r, limit: float, path: str | Path, label: str, allowable: s
         pictures.utilisation_plot(r, limit, d / path.name, label, allowable)
         return {}, [path.name]
 
-    cached("utilisation", inputs, path.parent, draw)
+    cached("utilisation", inputs, path.parent, draw, resolve(cache))
     return path
 
 
-def reactions_plot(h, path: str | Path) -> None:
-    """:func:`rigfem.report.pictures.reactions_plot` through the cache."""
+def reactions_plot(h, path: str | Path, cache: Cache | None = None) -> None:
+    """:func:`rigfem.report.pictures.reactions_plot` through ``cache``."""
     path = Path(path)
     joints = sorted(h.joints)
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(0, bool)
@@ -213,10 +215,10 @@ def reactions_plot(h, path: str | Path) -> None:
         pictures.reactions_plot(h, d / path.name)
         return {}, [path.name]
 
-    cached("reactions", inputs, path.parent, draw)
+    cached("reactions", inputs, path.parent, draw, resolve(cache))
 
 
-def plot_peaks(results: list, limit: float, path: Path, allowable: str) -> None:
+def plot_peaks(results: list, limit: float, path: Path, allowable: str, cache: Cache | None = None) -> None:
     """The peaks-over-the-cycle picture of :mod:`rigfem.report.pictures` through the cache."""
     cycle = [r for r in results if r.mode == "cycle"]
     inputs = {"curves": array_digest(*(a for r in cycle for a in (r.case.rows, r.vm_rows))),
@@ -229,23 +231,23 @@ def plot_peaks(results: list, limit: float, path: Path, allowable: str) -> None:
         pictures._plot_peaks(results, limit, d / Path(path).name, allowable)
         return {}, [Path(path).name]
 
-    cached("peaks", inputs, Path(path).parent, draw)
+    cached("peaks", inputs, Path(path).parent, draw, resolve(cache))
 
 
-def write_vtu(path: str | Path, sol, c=None, allowable: float | None = None, compact: bool = False) -> Path:
+def write_vtu(path: str | Path, sol, c, allowable: float, cache: Cache | None = None) -> Path:
     """:func:`rigfem.report.vtu.write_vtu` through the cache when ``sol`` is a cached solution
-    (its entry's key names its mesh, loads and code); written directly otherwise."""
+    (its entry's key names its mesh and loads); written directly otherwise."""
     from rigfem.report.vtu import write_vtu as write
 
     path = Path(path)
     if not sol.key:
-        return write(path, sol, c, allowable, compact)
+        return write(path, sol, c, allowable)
     inputs = {"solution": sol.key, "c": array_digest(np.asarray(c, dtype=float)), "allowable": allowable,
-              "compact": compact, "name": path.name}
+              "name": path.name}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
-        write(d / path.name, sol, c, allowable, compact)
+        write(d / path.name, sol, c, allowable)
         return {}, [path.name]
 
-    cached("vtu", inputs, path.parent, draw)
+    cached("vtu", inputs, path.parent, draw, resolve(cache))
     return path

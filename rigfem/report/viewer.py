@@ -16,7 +16,7 @@ import meshio
 import numpy as np
 
 from rigfem.files import file_sha256
-from rigfem.mesh.cache import cache_dir, code_hash, entry_key, read_entry, write_entry
+from rigfem.cache import Cache, resolve
 
 __all__ = ["viewer_data"]
 
@@ -54,27 +54,22 @@ def _part(pvd: Path, limit_mpa: float) -> dict | None:
             "peak": [float(u.max()) for u in util]}
 
 
-def _cached_part(pvd: Path, limit_mpa: float) -> dict | None:
+def _cached_part(pvd: Path, limit_mpa: float, cache: Cache) -> dict | None:
     """:func:`_part` through a verified cache entry keyed by the SHA-256 of the animation's files:
     a warm check wrote the same frames, and reading them back with meshio costs a second."""
     series = [pvd.parent / f for _, f in _DATASET.findall(pvd.read_text())]
     if not series or not all(f.is_file() for f in series):
         return None
     inputs = {"files": [file_sha256(f) for f in [pvd, *series]], "limit_mpa": limit_mpa,
-              "code": code_hash("report/viewer.py"), "meshio": meshio.__version__}
-    entry = cache_dir() / "viewer" / entry_key(inputs)
-    if read_entry(entry, inputs) is not None:
-        try:
-            return json.loads((entry / "part.json").read_text())
-        except (OSError, ValueError):
-            pass
-    part = _part(pvd, limit_mpa)
-    write_entry(entry, inputs, lambda tmp: (tmp / "part.json").write_text(json.dumps(part)))
+              "meshio": meshio.__version__}
+    part, _ = cache.cached("viewer", inputs, lambda: _part(pvd, limit_mpa),
+                           lambda part, tmp: (tmp / "part.json").write_text(json.dumps(part)),
+                           lambda entry: entry.json("part.json"))
     return part
 
 
-def viewer_data(folder: Path, files: list[str], limit_mpa: float) -> list[dict]:
+def viewer_data(folder: Path, files: list[str], limit_mpa: float, cache: Cache | None = None) -> list[dict]:
     """One entry per part with a cycle animation among ``files`` (none if the folder has none)."""
-    parts = [_cached_part(folder / f, limit_mpa) for f in files
+    parts = [_cached_part(folder / f, limit_mpa, resolve(cache)) for f in files
              if f.endswith("_cycle.pvd") and (folder / f).is_file()]
     return [p for p in parts if p is not None]

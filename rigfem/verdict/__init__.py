@@ -9,7 +9,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(
     __name__,
     submod_attrs={
         "criterion": ["Verdict", "LIMIT_FACTOR", "IMBALANCE_TOL", "allowable_stress", "half_ultimate", "overall"],
-        "fatigue": ["marin_endurance", "goodman"],
-        "part": ["settled", "verdict_of"],
+        "fatigue": ["Marin", "marin_endurance", "goodman"],
+        "part": ["Outcome", "PartVerdict", "Verdicts", "Target", "judge"],
     },
 )

@@ -13,9 +13,10 @@ Engineering Design*, 10th ed., §6-9 and §6-12).
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
-from rigfem.errors import check_range
+from rigfem.errors import ComputeError
 
 
 @dataclass(frozen=True)
@@ -38,9 +39,11 @@ LIMIT_FACTOR = 0.5
 
 
 def allowable_stress(sigma_u_mpa: float, factor: float = LIMIT_FACTOR) -> float:
-    """The allowable stress ``factor·σu`` (MPa): the one place the criterion's limit is computed."""
-    su = check_range("sigma_u", sigma_u_mpa, 0.0, unit="MPa", lo_open=True)
-    return check_range("limit_factor", factor, 0.0, 1.0, lo_open=True) * su
+    """The allowable stress ``factor·σu`` (MPa): the one place the criterion's limit is computed.
+    σu and the factor come validated (:class:`rigfem.material.Material`, the scene's schema)."""
+    if not (sigma_u_mpa > 0 and 0 < factor <= 1):
+        raise ComputeError(f"allowable stress of sigma_u = {sigma_u_mpa!r} MPa and factor {factor!r}: not a limit")
+    return factor * sigma_u_mpa
 
 
 #: largest relative imbalance of a free body's loads (force over the applied load Σ|F|, moment
@@ -68,8 +71,9 @@ def half_ultimate(peak_mpa: float, sigma_u_mpa: float, error_pct: float = 0.0,
     >>> half_ultimate(30.0, 750.0, imbalance=(0.001, 0.4)).reason
     'free body out of balance: force 0.1 %, moment 40.0 % (tolerance 5 %)'
     """
-    peak = check_range("peak von Mises", peak_mpa, 0.0, unit="MPa")
-    err = check_range("error estimate", error_pct, 0.0, unit="%")
+    peak, err = float(peak_mpa), float(error_pct)
+    if not (math.isfinite(peak) and math.isfinite(err) and peak >= 0 and err >= 0):  # the FE's invariant
+        raise ComputeError(f"peak von Mises {peak_mpa!r} MPa with error estimate {error_pct!r} %: not a stress")
     limit = allowable_stress(sigma_u_mpa, factor)
     lo, hi = peak * (1 - err / 100), peak * (1 + err / 100)
     verdict = "pass" if hi < limit else "fail" if lo >= limit else "undecided"

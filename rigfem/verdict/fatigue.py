@@ -2,36 +2,45 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from rigfem.errors import InputError, check_range
-from rigfem.fe.tensors import von_mises
+from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.tensors import von_mises
 from rigfem.material import LOADING, RELIABILITY, SURFACE
 
 
-def marin_endurance(sigma_u_mpa: float, surface: str = "machined", size_mm: float = 19.0,
-                    loading: str = "combined", reliability: float = 0.9,
-                    temperature_factor: float = 1.0) -> dict:
-    """Marin-corrected endurance limit Se = ka·kb·kc·kd·ke·Se' with Se' = 0.5·Sut (Sut ≤ 1400 MPa).
+@dataclass(frozen=True)
+class Marin:
+    """The Marin factors' inputs (Shigley §6-9), checked as they are made: the surface finish, the
+    critical section's equivalent diameter d_e (mm, 2.79-254: for a non-rotating rectangle h×b,
+    d_e = 0.808·√(h·b), the size-25 rail ≈ 19 mm), the loading, the reliability and kd."""
 
-    ``size_mm`` is the equivalent diameter d_e of the critical section (for a non-rotating
-    rectangle h×b, d_e = 0.808·√(h·b): the size-25 rail gives ≈ 19 mm).
-    """
-    su = check_range("sigma_u", sigma_u_mpa, 0.0, unit="MPa", lo_open=True)
-    if surface not in SURFACE:
-        raise InputError(f"fatigue surface {surface!r} is not one of {', '.join(SURFACE)}")
-    if loading not in LOADING:
-        raise InputError(f"fatigue loading {loading!r} is not one of {', '.join(LOADING)}")
-    if reliability not in RELIABILITY:
-        raise InputError(f"fatigue reliability {reliability!r} is not one of "
-                         f"{', '.join(str(r) for r in RELIABILITY)}")
-    d = check_range("fatigue size_mm", size_mm, 2.79, 254.0, unit="mm")
-    a, b = SURFACE[surface]
+    surface: str = "machined"
+    size_mm: float = 19.0
+    loading: str = "combined"
+    reliability: float = 0.9
+    temperature_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name, value, allowed in (("surface", self.surface, SURFACE), ("loading", self.loading, LOADING),
+                                     ("reliability", self.reliability, RELIABILITY)):
+            if value not in allowed:
+                raise InputError(f"fatigue {name} {value!r} is not one of {', '.join(str(v) for v in allowed)}")
+        check_range("fatigue size_mm", self.size_mm, 2.79, 254.0, unit="mm")
+        check_range("fatigue temperature_factor", self.temperature_factor, 0.0, 1.0, lo_open=True)
+
+
+def marin_endurance(sigma_u_mpa: float, **factors) -> dict:
+    """Marin-corrected endurance limit Se = ka·kb·kc·kd·ke·Se' with Se' = 0.5·Sut (Sut ≤ 1400 MPa);
+    ``factors``: the fields of :class:`Marin` (σu comes validated: :class:`rigfem.material.Material`)."""
+    m, su = Marin(**factors), sigma_u_mpa
+    d = m.size_mm
+    a, b = SURFACE[m.surface]
     ka = a * su ** b
-    kb = 1.0 if loading == "axial" else ((d / 7.62) ** -0.107 if d <= 51 else 1.51 * d ** -0.157)
-    kc = LOADING[loading]
-    kd = check_range("fatigue temperature_factor", temperature_factor, 0.0, 1.0, lo_open=True)
-    ke = RELIABILITY[reliability]
+    kb = 1.0 if m.loading == "axial" else ((d / 7.62) ** -0.107 if d <= 51 else 1.51 * d ** -0.157)
+    kc, kd, ke = LOADING[m.loading], m.temperature_factor, RELIABILITY[m.reliability]
     se_prime = 0.5 * su if su <= 1400 else 700.0
     return {"se_prime_mpa": se_prime, "ka": ka, "kb": kb, "kc": kc, "kd": kd, "ke": ke,
             "se_mpa": ka * kb * kc * kd * ke * se_prime}
@@ -46,10 +55,8 @@ def goodman(history: np.ndarray, sigma_u_mpa: float, **marin) -> dict:
     n = 1 / (σa'/Se + σm'/Sut).  Returns the critical point (smallest n).
     """
     h = np.asarray(history, dtype=float)
-    if h.ndim != 3 or h.shape[-1] != 6 or h.shape[0] < 2 or h.shape[1] < 1:
-        raise InputError(f"stress history must have shape (angles >= 2, points >= 1, 6), got {h.shape}")
-    if not np.all(np.isfinite(h)):
-        raise InputError("stress history contains NaN or infinity")
+    if h.ndim != 3 or h.shape[-1] != 6 or h.shape[0] < 2 or h.shape[1] < 1 or not np.all(np.isfinite(h)):
+        raise ComputeError(f"a stress history must be finite, of shape (angles >= 2, points >= 1, 6): {h.shape}")
     end = marin_endurance(sigma_u_mpa, **marin)
     hi, lo = h.max(axis=0), h.min(axis=0)
     sa, sm = von_mises((hi - lo) / 2), von_mises((hi + lo) / 2)

@@ -1,139 +1,126 @@
-"""The verdict of one solved part case: its peak against the criterion, with the caveats that shaped it."""
+"""The verdict stage: every part case's outcome against the criterion, and what the whole check says.
+
+One stage for every path that gives a verdict (``rigfem check``, the sweep, the rig design): the
+measured error band of each peak, the lost-load guard (a free body out of balance is undecided),
+a part nothing loads is *not loaded* (never a pass), a broken rig rule fails the configuration,
+and a check of a subset of the parts or modes says what it left out.
+"""
 
 from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 
 from rigfem.errors import ComputeError
-from rigfem.fe.model import LOCKING_NU
-from rigfem.fe.partcase import CaseResult
-from rigfem.rig.parts import load_part
-from rigfem.verdict.criterion import IMBALANCE_TOL, half_ultimate
+from rigfem.settings import MODES, PARTS
+from rigfem.verdict.criterion import Verdict, allowable_stress, half_ultimate, overall
 from rigfem.verdict.fatigue import goodman
 
-
-#: what a P1 (linear tetrahedron) report says: a known under-predictor of bending stress
-P1_NOTE = ("linear tetrahedra (order 1) under-predict bending stress: on the standard mesh they read the reference "
-           "parts' peaks 12-29 % low (results/convergence/summary.md); the error band uses the P1 factor on the "
-           "ZZ estimate (results/convergence/band_coverage.md); use order 2 for a verdict")
+__all__ = ["Outcome", "PartVerdict", "Verdicts", "Target", "judge"]
 
 
-#: element type and order, as the mesh table names it
-ELEMENT = {1: "tetrahedron, 4-node linear (C3D4)", 2: "tetrahedron, 10-node quadratic (C3D10)"}
+@dataclasses.dataclass(frozen=True)
+class Outcome:
+    """What the FE says of one part case: all a verdict is made of (MPa, deg).
+
+    A check's FE stage gives it (:attr:`rigfem.fe.partcase.CaseResult.outcome`); the sweep's
+    superposed unit bases give the same fields without a solution (:mod:`rigfem.sweep.superpose`),
+    so both are judged by one verdict stage (:func:`judge`)."""
+
+    name: str
+    part: str
+    mode: str
+    peak_mpa: float
+    error_pct: float  #: the error band's half-width, % of the peak (the calibrated ZZ estimate)
+    crank_deg: float
+    imbalance: tuple[float, float] = (0.0, 0.0)  #: relative (force, moment) imbalance of a free body
+    loaded: bool = True  #: False when every load of the case is zero
+    cycle_stress: np.ndarray | None = None  #: (rows, points, 6) stress history where the peak may be, MPa
 
 
-def _profile_caveat(res: CaseResult) -> list[str]:
-    """A rail whose section is heavier than the catalogue's is stiffer and stronger than the real one."""
-    part = load_part(res.case.part, res.case.params or None)
-    ref = part.reference.get("linear_mass_catalogue")
-    if part.kind != "rail" or ref is None:
-        return []
-    kg_m = res.solution.model.volume * part.density * 1e-9 / (part["length"] / 1000.0)
-    if kg_m <= 1.05 * ref.value:
-        return []
-    return [f"rail section {kg_m:.2f} kg/m against the catalogue's {ref.value:g} kg/m: the modelled profile "
-            f"is stiffer and stronger than the real one, so this stress is likely low (a 3.1 kg/m profile "
-            f"carried 1.8-2.1x the rectangle's peak: results/rail_profile/study.md)"]
+@dataclasses.dataclass(frozen=True)
+class PartVerdict:
+    """One part case's verdict: its outcome, the σu/2 verdict with its band, and the Goodman check."""
+
+    outcome: Outcome
+    verdict: Verdict
+    fatigue: dict | None = None  #: Goodman at the critical point of a cycle case (its ``point`` among the candidates)
+
+    @property
+    def band_mpa(self) -> float:
+        """The band's half-width, MPa."""
+        return self.verdict.peak_mpa * self.verdict.error_pct / 100.0
 
 
-def _fatigue(res: CaseResult, settings) -> dict | None:
-    """Goodman check of the stress cycle at the nodes that peak at some crank angle (cycle cases)."""
-    if res.cycle_nodes is None:
-        return None
-    fat = goodman(res.cycle_stress, settings.material.sigma_u, **settings.fatigue)
-    fat["node"] = int(res.cycle_nodes[fat.pop("point")])
-    fat["location_mm"] = [float(v) for v in res.solution.model.mesh.nodes[fat["node"]]]
-    return fat
+@dataclasses.dataclass(frozen=True)
+class Verdicts:
+    """Every part case's verdict, the stress verdict over them, the configuration's verdict (a broken
+    rig rule fails it) and the parts and modes left out of a check of a subset ("" when none)."""
+
+    parts: tuple[PartVerdict, ...]
+    stress: str
+    overall: str
+    limit_mpa: float  #: the allowable stress the peaks were judged against
+    rule_violations: tuple[str, ...] = ()
+    left_out: str = ""
+
+    @property
+    def governing(self) -> PartVerdict | None:
+        """The case with the highest utilisation (None when nothing was computed)."""
+        return max(self.parts, key=lambda p: p.verdict.utilisation_pct, default=None)
 
 
-def _size_at(fm, node: int) -> float:
-    """Mean edge length (mm) of the elements around ``node``: the mesh size where the peak is."""
-    t = fm.elements[(fm.elements == node).any(1), :4]
-    x = fm.nodes[t]
-    edges = [x[:, i] - x[:, j] for i, j in ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))]
-    return float(np.mean(np.linalg.norm(np.stack(edges), axis=-1)))
+@dataclasses.dataclass(frozen=True)
+class Target:
+    """The refinement policy's judge (:class:`rigfem.fe.ladder.Judge`): a case is settled when a
+    finer mesh cannot change what the report says of it — its band does not straddle the limit
+    and its half-width ``peak·error_pct/100`` is within the preset's reporting target,
+    ``settings.target_pct`` % of the allowable (a part nothing loads is settled; a free body out
+    of balance is not a matter of mesh and is judged by the band alone)."""
+
+    settings: object  #: rigfem.settings.CheckSettings
+
+    def settled(self, outcome: Outcome, shrink: float = 1.0) -> bool:
+        """True when ``outcome`` is settled with its band narrowed ``shrink`` times (a finer level's best case)."""
+        s, err = self.settings, outcome.error_pct * shrink
+        v = half_ultimate(outcome.peak_mpa, s.material.sigma_u, err, s.limit_factor, loaded=outcome.loaded)
+        if v.verdict == "not loaded":
+            return True
+        return v.verdict != "undecided" and outcome.peak_mpa * err <= s.target_pct * v.limit_mpa
 
 
-def balance(sol, c: np.ndarray) -> dict:
-    """Free-body balance of the combination ``c``: Σ applied loads (pins and body forces) and Σ support
-    reactions, forces (N) and moments about the part frame's origin (N·mm); their sum is ≈ 0."""
-    alld = np.arange(len(sol.F))
-    app = sol.resultants(alld, sol.loads(c)[:, None])[0]
-    reaction = sol.reaction(c)[:, None]
-    sup = {n: sol.resultants(d, reaction)[0] for n, d in sol.support_dofs.items()}
-    tot_s = np.sum(list(sup.values()), axis=0) if sup else np.zeros(6)
-    v3 = lambda v: [float(t) for t in v]  # noqa: E731
-    return {"applied_N": v3(app[:3]), "applied_Nmm": v3(app[3:]), "supports_N": v3(tot_s[:3]),
-            "supports_Nmm": v3(tot_s[3:]),
-            "supports": {n: {"force_N": v3(v[:3]), "moment_Nmm": v3(v[3:])} for n, v in sup.items()},
-            "residual_N": float(np.linalg.norm(app[:3] + tot_s[:3])),
-            "residual_Nmm": float(np.linalg.norm(app[3:] + tot_s[3:]))}
+def _left_out(settings) -> str:
+    """What a check of a subset did not check: '' when every part and mode was checked."""
+    every = PARTS.get(settings.linkage_type, {})
+    out = []
+    if len(settings.parts) < len(every):
+        missing = [p for p in every if p not in settings.parts]
+        out.append(f"{len(settings.parts)} of {len(every)} parts (not {', '.join(missing)})")
+    if len(settings.modes) < len(MODES):
+        out.append(f"{' and '.join(settings.modes)} mode only")
+    return ", ".join(out)
 
 
-def settled(res: CaseResult, settings, shrink: float = 1.0) -> bool:
-    """True when a finer mesh cannot change what the report says of a case: its band does not
-    straddle the limit (:func:`half_ultimate`) and its half-width ``peak·error_pct/100`` is within
-    the preset's reporting target, ``settings.target_pct`` % of the allowable (a part nothing loads
-    is settled; a free body out of balance is not a matter of mesh and is judged by the band alone).
-    With ``shrink`` < 1, whether it would be with its band that many times narrower (a finer
-    level's best case: :func:`rigfem.fe.partcase.best_shrink`)."""
-    pk = res.peak
-    err = pk.error_pct * shrink
-    v = half_ultimate(pk.value, settings.material.sigma_u, err, settings.limit_factor,
-                      loaded=bool(np.any(res.coef != 0)))
-    if v.verdict == "not loaded":
-        return True
-    return v.verdict != "undecided" and pk.value * err <= settings.target_pct * v.limit_mpa
-
-
-def verdict_of(res: CaseResult, settings) -> dict:
-    """Report entry of a case result (plain data, MPa, mm, deg)."""
-    mat = settings.material
-    pk = res.peak
-    loaded = bool(np.any(res.coef != 0))
-    if loaded and not pk.value > 0:  # an invariant no cache entry can hide: load without stress is a bug
-        raise ComputeError(f"part {res.case.name} ({res.mode}): loaded, but its peak von Mises is {pk.value!r} MPa")
-    v = half_ultimate(pk.value, mat.sigma_u, pk.error_pct, settings.limit_factor, res.imbalance, loaded)
-    sol = res.solution
-    c = res.coef[res.row]
-    eq = float(np.max(sol.equilibrium_error))
-    out = {
-        "name": res.case.name, "part": res.case.part, "mode": res.mode,
-        "peak_mpa": v.peak_mpa, "crank_deg": float(res.case.rows[res.row]),
-        "surface": pk.surface, "location_mm": [round(float(t), 3) for t in pk.xyz],
-        "error_pct": v.error_pct, "limit_mpa": v.limit_mpa, "utilisation_pct": v.utilisation_pct,
-        "verdict": v.verdict, "reason": v.reason,
-        "max_displacement_mm": float(np.linalg.norm(sol.displacement(c), axis=1).max()),
-        "fatigue": _fatigue(res, settings),
-        "mesh": {"element": ELEMENT[sol.model.mesh.order],
-                 "nodes": int(len(res.mesh.points)), "tets": int(len(res.mesh.tets)),
-                 "fe_nodes": int(len(sol.model.mesh.nodes)),
-                 "size_at_peak_mm": _size_at(sol.model.mesh, pk.node),
-                 "dofs": int(sol.model.mesh.ndof), "order": settings.order,
-                 "quality_min": float(res.mesh.quality.get("min", 0.0)),
-                 "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
-                 "straightened": int(sol.model.mesh.straightened),
-                 "cache": res.mesh.meta.get("cache", ""),
-                 "level": res.level, "stopped": res.stopped, "ladder": res.ladder},
-        "solve": {"method": sol.method, "load_cases": int(sol.cases),
-                  "rows": int(len(res.case.rows)),
-                  "residual_max": float(sol.residuals.max()), "equilibrium_error": eq,
-                  "imbalance": {"force_pct": 100 * res.imbalance[0], "moment_pct": 100 * res.imbalance[1],
-                                "tolerance_pct": 100 * IMBALANCE_TOL},
-                  "seconds": {k: round(t, 3) for k, t in res.seconds.items()}},
-        "balance": balance(sol, c),
-        "notes": list(res.case.notes),
-    }
-    if v.reason:
-        out["notes"].insert(0, v.reason)
-    out["notes"] += _profile_caveat(res)
-    if settings.order == 1:
-        out["notes"].append(P1_NOTE)
-    if settings.order == 1 and mat.nu >= LOCKING_NU:
-        out["notes"].append(f"linear elements with nu = {mat.nu:g}: volumetric locking under-predicts stress; "
-                            f"use order 2")
-    if 1e-3 < max(res.imbalance) <= IMBALANCE_TOL:
-        out["notes"].append(f"free-body loads were out of balance by up to {100 * res.imbalance[0]:.1f} % "
-                            f"(force), {100 * res.imbalance[1]:.1f} % (moment) (FE vs dynamics mass "
-                            f"distribution); removed by inertia relief")
-    return out
+def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] = (),
+          singular: list | None = None) -> Verdicts:
+    """The verdicts of ``outcomes`` under ``settings`` (a :class:`rigfem.settings.CheckSettings`:
+    material, limit factor, fatigue).  The configuration fails when it breaks a rig rule
+    (``rule_violations``), whatever its stresses, and when its linkage passes a toggle
+    (``singular``: the crank-angle ranges where its reactions grow without bound)."""
+    parts = []
+    for o in outcomes:
+        if o.loaded and not o.peak_mpa > 0:  # an invariant no cache entry can hide: load without stress is a bug
+            raise ComputeError(f"part {o.name} ({o.mode}): loaded, but its peak von Mises is {o.peak_mpa!r} MPa")
+        v = half_ultimate(o.peak_mpa, settings.material.sigma_u, o.error_pct, settings.limit_factor, o.imbalance,
+                          o.loaded)
+        fatigue = None
+        if o.cycle_stress is not None and np.size(o.cycle_stress):
+            fatigue = goodman(o.cycle_stress, settings.material.sigma_u, **settings.fatigue)
+        parts.append(PartVerdict(o, v, fatigue))
+    stress = ("fail" if singular else overall([{"verdict": p.verdict.verdict} for p in parts]) if parts
+              else "undecided")
+    return Verdicts(tuple(parts), stress, "fail" if rule_violations else stress,
+                    allowable_stress(settings.material.sigma_u, settings.limit_factor), tuple(rule_violations),
+                    _left_out(settings))

@@ -42,13 +42,17 @@ import resource
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 
 import numpy as np
 
-from rigfem.errors import InputError, check_range
+from rigfem.cache import Cache
+from rigfem.job import Job, Request, read_job
+from rigfem.observer import SILENT, Observer
+from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.mesh.mesher import estimate
 from rigfem.settings import FIDELITY, PRESET_ERROR_PCT
 
@@ -207,8 +211,9 @@ def _cpu() -> float:
 
 def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
     """Solve the cases at one setting: peaks per mode, DOFs, seconds, memory (in this process)."""
-    from rigfem.fe.partcase import solve_cases
-    from rigfem.fe.tensors import von_mises
+    from rigfem.context import Context
+    from rigfem.fe.executor import Plan, solve_cases
+    from rigfem.tensors import von_mises
 
     rss0 = _peak_rss_mib()
     for _, c in cases:  # a cycle case carries its unit bearing loads in exactly n_dir directions
@@ -218,18 +223,10 @@ def _run_step(cases: list, settings, spec: StepSpec, isolate: bool) -> dict:
                              f"not {spec.bearing_directions}")
     s = dataclasses.replace(settings, order=spec.order, size_mm=spec.size_mm,
                             local_size_mm=spec.local_size_mm, bearing_directions=spec.bearing_directions)
-    with tempfile.TemporaryDirectory(prefix="rigfem-conv-") as cache:
-        old = os.environ.get("RIGFEM_CACHE")
-        os.environ["RIGFEM_CACHE"] = cache  # mesh every step afresh: its time is part of the cost
-        try:
-            t0, c0 = time.perf_counter(), _cpu()
-            results = solve_cases(cases, s)
-            seconds, cpu = time.perf_counter() - t0, _cpu() - c0
-        finally:
-            if old is None:
-                os.environ.pop("RIGFEM_CACHE")
-            else:
-                os.environ["RIGFEM_CACHE"] = old
+    with tempfile.TemporaryDirectory(prefix="rigfem-conv-") as folder:  # every step meshed afresh: its
+        t0, c0 = time.perf_counter(), _cpu()                              # time is part of the cost
+        results = solve_cases(cases, s, Plan(frames=None), Context(Cache(Path(folder), 1 << 62)))
+        seconds, cpu = time.perf_counter() - t0, _cpu() - c0
     modes = {}
     for r in results:
         S = r.solution.nodal_stress
@@ -263,13 +260,9 @@ def h_levels(levels: int, ratio: float = RATIO, finest: tuple[float, float] | No
              order: int = 2, beyond: int = 0) -> list[StepSpec]:
     """The h sequence coarse → fine: (global, local) size × ratio^k, level ``levels - 1`` at
     ``finest``, then ``beyond`` finer levels (run only while a peak is not converging)."""
-    levels = int(check_range("--levels", levels, 3, 8))
-    ratio = check_range("--ratio", ratio, 1.1, 2.0)
     g, loc = finest or (FIDELITY["fine"].size_mm, FIDELITY["fine"].near_mm)
-    if order not in (1, 2):
-        raise InputError(f"order = {order!r} must be 1 or 2")
-    return [StepSpec(f"h{k}", "h", order, g * ratio ** (levels - 1 - k), loc * ratio ** (levels - 1 - k),
-                     H_DIRECTIONS) for k in range(levels + max(int(beyond), 0))]
+    return [StepSpec(f"h{k}", "h", order, g * ratio ** (int(levels) - 1 - k), loc * ratio ** (int(levels) - 1 - k),
+                     H_DIRECTIONS) for k in range(int(levels) + max(int(beyond), 0))]
 
 
 def preset_steps() -> list[StepSpec]:
@@ -289,49 +282,74 @@ def _predicted_gib(prev: dict | None, spec: StepSpec) -> float:
     return estimate(int(prev["tets"] * grow)).gib
 
 
-def study(cases_for: Callable[[int], list], settings, levels: int = 4, ratio: float = RATIO,
-          modes: Sequence[str] | None = None, max_gib: float = 12.0, isolate: bool = True,
-          presets: bool = True, progress=None, finest: tuple[float, float] | None = None, order: int = 2,
-          on_step: Callable[[dict], None] | None = None, extend: int = EXTEND) -> dict:
+@dataclasses.dataclass(frozen=True)
+class StudySpec:
+    """How a convergence study runs: ``levels`` h levels (3-8) ``ratio`` apart (1.1-2) ending at
+    ``finest`` (global, local size mm; default the ``fine`` preset's) at element ``order``, up to
+    ``extend`` finer ones while a peak is not converging, within ``max_gib`` (0.5-1024 GiB) per
+    step; the presets too (``presets``); each step in a fresh process (``isolate``: its memory
+    measured); only ``modes`` (None: every mode)."""
+
+    levels: int = 4
+    ratio: float = RATIO
+    modes: tuple[str, ...] | None = None
+    max_gib: float = 12.0
+    isolate: bool = True
+    presets: bool = True
+    finest: tuple[float, float] | None = None
+    order: int = 2
+    extend: int = EXTEND
+
+    def __post_init__(self) -> None:
+        if check_range("--levels", self.levels, 3, 8) != int(self.levels):
+            raise InputError(f"--levels = {self.levels!r} must be a whole number in [3, 8]")
+        check_range("--ratio", self.ratio, 1.1, 2.0)
+        check_range("--max-gib", self.max_gib, 0.5, 1024.0, "GiB")
+        check_range("--extra-levels", self.extend, 0, 3)
+        if self.order not in (1, 2):
+            raise InputError(f"order = {self.order!r} must be 1 or 2")
+
+
+def study(cases_for: Callable[[int], list], settings, plan: StudySpec = StudySpec(),
+          observer: Observer = SILENT) -> dict:
     """Convergence study of one part: ``cases_for(n_dir)`` gives its [(mode, PartCase)] with
-    ``n_dir`` bearing directions (see :func:`scene_cases`).  ``on_step(partial result)`` after
-    every step (to save progress).  A step whose process dies (e.g. killed out of memory) ends
-    the h sequence and is listed in ``refused``.  While a peak is not converging, up to
-    ``extend`` finer levels are added (:func:`needs_finer`)."""
-    check_range("--max-gib", max_gib, 0.5, 1024.0, "GiB")
+    ``n_dir`` bearing directions (see :func:`scene_cases`).  The observer hears each step begin and
+    gets the partial result after every step (``observer.partial``: to save progress).  A step
+    whose process dies (e.g. killed out of memory) ends the h sequence and is listed in
+    ``refused``.  While a peak is not converging, up to ``plan.extend`` finer levels are added
+    (:func:`needs_finer`)."""
+    modes = plan.modes
     first = [(m, c) for m, c in cases_for(H_DIRECTIONS) if modes is None or m in modes]
     if not first:
         raise InputError(f"--mode {list(modes or [])}: no case of this part in that mode")
     name = first[0][1].name
-    out = {"part": name, "part_def": first[0][1].part, "params": first[0][1].params, "ratio": ratio,
-           "h_directions": H_DIRECTIONS, "fine_is_finest": finest is None and order == 2, "steps": [],
+    out = {"part": name, "part_def": first[0][1].part, "params": first[0][1].params, "ratio": plan.ratio,
+           "h_directions": H_DIRECTIONS, "fine_is_finest": plan.finest is None and plan.order == 2, "steps": [],
            "refused": []}
     steps, refused = out["steps"], out["refused"]
 
     def run(spec: StepSpec) -> bool:
-        if progress:
-            progress(name, spec.label)
+        observer.stage(f"part {name}: step {spec.label}")
         cases = [(m, c) for m, c in cases_for(spec.bearing_directions) if modes is None or m in modes]
         try:
-            steps.append(run_step(cases, settings, spec, isolate))
+            steps.append(run_step(cases, settings, spec, plan.isolate))
         except BrokenProcessPool:
             refused.append(f"{spec.label}: the step's process was killed (out of memory on the shared "
                            f"machine?)")
             return False
-        if on_step:
-            on_step(analyse(out) if len([s for s in steps if s["kind"] == "h"]) else out)
+        observer.partial(analyse(out) if len([s for s in steps if s["kind"] == "h"]) else out)
         return True
 
-    for k, spec in enumerate(h_levels(levels, ratio, finest, order, beyond=extend)):
-        if k >= int(levels) and not needs_finer(analyse(out)):
+    for k, spec in enumerate(h_levels(plan.levels, plan.ratio, plan.finest, plan.order, beyond=plan.extend)):
+        if k >= int(plan.levels) and not needs_finer(analyse(out)):
             break
         need = _predicted_gib(steps[-1] if steps else None, spec)
-        if need > max_gib:
-            refused.append(f"{spec.label}: about {need:.3g} GiB predicted > --max-gib {max_gib:g}")
+        if need > plan.max_gib:
+            refused.append(f"{spec.label}: about {need:.3g} GiB predicted > --max-gib {plan.max_gib:g}")
             break
         if not run(spec):
             break
-    if presets:
+    if plan.presets:
         for spec in preset_steps():
             run(spec)
     if not [s for s in steps if s["kind"] == "h"]:
@@ -405,30 +423,26 @@ def _analyse(hs: list[dict], steps: list[dict], mode: str, fine_is_finest: bool,
     return res
 
 
-def scene_cases(scene: str, parts: Sequence[str] | None = None, overrides: dict | None = None,
-                allow_rule_violations: bool = False) -> tuple[object, dict[str, Callable[[int], list]]]:
-    """Check settings and {part: cases_for} of a scene, ``cases_for(n_dir)`` giving the part's
-    [(mode, PartCase)] with ``n_dir`` bearing directions (the dynamics run once).  A scene that
-    breaks a rig rule is refused unless ``allow_rule_violations`` (as by rigfem check)."""
-    from rigfem.check import load_check_scene
-    from rigfem.dynamics.cycle import simulate
-    from rigfem.dynamics.history import peaks
+def scene_cases(request: Request, cache: Cache) -> tuple[Job, dict[str, Callable[[int], list]]]:
+    """The job and {part: cases_for} of a check's request, ``cases_for(n_dir)`` giving the
+    part's [(mode, PartCase)] with ``n_dir`` bearing directions: the check's own stages (the job,
+    its motion and reactions, computed once; a scene that breaks a rig rule is refused unless the
+    request allows it, as by rigfem check)."""
+    from rigfem.dynamics.cycle import react
+    from rigfem.linkage.state import linkage_state
     from rigfem.loads.cases import part_cases
 
-    o = dict(overrides or {})
-    if parts:
-        o["parts"] = list(parts)
-    cs = load_check_scene(scene, o, allow_rule_violations)
-    h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
-    if h.meta.get("singular"):
-        raise InputError(f"{scene}: the linkage passes a toggle (singular) position; no part loads")
-    pk = peaks(h)
-    s = cs.settings
+    job = read_job(request, cache)
+    reactions = react(job.linkage, linkage_state(job.linkage, job.crank_deg, job.scene.speed_hz), job.dynamics)
+    if reactions.singular:
+        raise ComputeError(f"{job.scene.name}: the linkage passes a toggle (singular) position: its reactions "
+                           f"are unbounded there, so no part case can be solved")
+    h, pk, s = reactions.history, reactions.peaks, job.settings
 
     def builder(name: str) -> Callable[[int], list]:
         return lambda n_dir: part_cases(h, pk, dataclasses.replace(s, parts={name: s.parts[name]},
                                                                    bearing_directions=n_dir))
-    return s, {name: builder(name) for name in s.parts}
+    return job, {name: builder(name) for name in s.parts}
 
 
 def to_json(result: dict) -> str:

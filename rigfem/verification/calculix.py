@@ -12,11 +12,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rigfem.errors import InputError
-from rigfem.fe.tensors import von_mises
+from rigfem.tensors import von_mises
 from rigfem.io.calculix import CcxResult, export_model, run_ccx
 
 if TYPE_CHECKING:
-    from rigfem.check import CheckScene
+    from rigfem.context import Context
+    from rigfem.job import Job
 
 
 @dataclass
@@ -84,22 +85,19 @@ def cross_check(model: Any, supports: list, cases: list | None = None, solution:
         return compare(solution, run_ccx(deck, threads=threads, workdir=workdir), coef)
 
 
-def verify_scene(cs: CheckScene, threads: int = 1, solver: str = "auto", on_stage=None) -> list[dict]:
-    """``rigfem check``'s part cases of a loaded scene (:func:`rigfem.check.load_check_scene`),
-    each critical load combination re-solved by ccx.
-
-    The scene is loaded (and so validated) by the caller, before ccx is looked for.  One entry
-    per part case: name, mode, DOF and the :class:`Comparison` fields.  Raises
-    :class:`CalculixError` when ccx is missing; a scene at a toggle has no cases.  ``on_stage(text)``
-    hears each stage as it begins (dynamics, meshing/solving part X, CalculiX part X).
-    """
-    from rigfem.check import solve_scene
+def verify_job(job: Job, threads: int = 1, ctx: Context | None = None) -> list[dict]:
+    """``rigfem check``'s part cases of a read job (:func:`rigfem.job.read_job`: the scene is
+    validated by the caller, before ccx is looked for), each critical load combination re-solved
+    by ccx on the same model.  One entry per part case: name, mode, DOF and the :class:`Comparison`
+    fields; a linkage at a toggle has none.  Raises :class:`CalculixError` when ccx is missing."""
+    from rigfem.context import default_context
     from rigfem.fe.partcase import supports_of
+    from rigfem.pipeline import solve_job
 
+    ctx = default_context(ctx)
     out = []
-    for r in solve_scene(cs, solver, on_stage=on_stage)[1]:
-        if on_stage:
-            on_stage(f"CalculiX part {r.case.name} ({r.mode})")
+    for r in solve_job(job, ctx).results:
+        ctx.observer.stage(f"CalculiX part {r.case.name} ({r.mode})")
         (c,) = cross_check(r.solution.model, supports_of(r.case), solution=r.solution, coef=r.coef[[r.row]],
                            threads=threads)
         out.append({"part": r.case.name, "mode": r.mode, "dof": int(r.solution.model.mesh.ndof),

@@ -16,7 +16,7 @@ import pandas as pd
 from rigfem.files import whole_file
 from rigfem.report.pages import json_script, render_page
 from rigfem.rig.rules import fourbar_rules, slider_crank_rules
-from rigfem.studies.sweep_configs import JOINTS, LENGTHS
+from rigfem.sweep.configs import JOINTS, LENGTHS
 
 __all__ = ["explorer_data", "write_explorer"]
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from rigfem.errors import InputError
 from rigfem.settings import MAX_JOB_HOURS, allow_large
-from rigfem.studies.sweep_configs import SweepParams
+from rigfem.sweep.configs import SweepParams
 
 __all__ = ["SECONDS_PER_ANGLE", "BYTES_PER_ANGLE", "JobCost", "turning", "bases_cost", "sweep_cost",
            "synthesis_cost", "check_cost"]
@@ -48,11 +48,11 @@ def turning(p: SweepParams, configs: list[dict]) -> int:
 
 def bases_cost(p: SweepParams, workers: int = 1) -> JobCost:
     """The unit solutions of ``p``'s parts at its fidelity: memory of the largest parts solved at
-    once (meshing or their direct P2 solves; :func:`rigfem.studies.sweep_bases.parallel_bases`
+    once (meshing or their direct P2 solves; :func:`rigfem.sweep.bases.parallel_bases`
     of them with ``workers``), meshing time of all of them; from their dimensions, nothing built."""
     from rigfem.mesh.mesher import estimate_part
     from rigfem.rig.parts import load_part
-    from rigfem.studies.sweep_bases import parallel_bases
+    from rigfem.sweep.bases import parallel_bases
 
     s = p.settings()
     gibs, seconds = [], 0.0

@@ -1,7 +1,7 @@
 """Reference shapes with closed-form answers: boxes (skfem) and gmsh OCC parts with holes.
 
 Used by the FE tests (tests/fe_shapes.py re-exports them) and by the band-coverage study
-(:mod:`rigfem.studies.band_coverage`), so the meshes the closed forms are checked on have one home.
+(:mod:`rigfem.verification.band_coverage`), so the meshes the closed forms are checked on have one home.
 """
 
 from __future__ import annotations

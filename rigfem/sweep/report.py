@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from rigfem.files import whole_file
-from rigfem.studies.sweep import JOINTS, LENGTHS, SweepParams
+from rigfem.sweep.run import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
 WORST = 15
@@ -236,7 +236,7 @@ def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float 
 
 def write_pages(table: pd.DataFrame, p: SweepParams, out: Path, markdown: str, maps: list[str]) -> list[str]:
     """The sweep's HTML page and the design-space explorer, from its table, Markdown and maps."""
-    from rigfem.studies.explorer import write_explorer
+    from rigfem.sweep.explorer import write_explorer
 
     page = f"sweep_{p.linkage_type}.html"
     with whole_file(out / page) as tmp:

@@ -5,7 +5,7 @@ The band ``peak·(1 ± e)`` is an estimate (ZZ-type recovery discrepancy × a pe
 with a known converged value ``truth ± u·truth``; it is *inside* when
 ``|truth − peak| ≤ e·peak + u·truth``.  Cases:
 
-* closed forms (:mod:`rigfem.studies.shapes`): the Lamé cylinder's bore (exact), a finite plate with
+* closed forms (:mod:`rigfem.verification.shapes`): the Lamé cylinder's bore (exact), a finite plate with
   a hole (Peterson's Kt fit, ±1 %), a simply supported beam under its own weight (bending,
   3ρgL²/H, ±(H/2L)² for the elasticity correction), P1 and P2, meshed at each preset's sizes
   (measurement) and at other sizes (calibration);
@@ -47,8 +47,8 @@ def closed_form_case(case: str, order: int, size: float, local: float) -> dict:
     """Solve one closed-form case: peak von Mises, raw ZZ estimate, truth and its relative uncertainty."""
     from rigfem.fe import FixedComponents, Gravity, Pressure, SurfaceForce, Symmetry, build_model, solve
     from rigfem.material import get_material
-    from rigfem.studies.closed_form import plate_hole_peak_mpa
-    from rigfem.studies.shapes import box, plate_with_hole, quarter_ring
+    from rigfem.verification.closed_form import plate_hole_peak_mpa
+    from rigfem.verification.shapes import box, plate_with_hole, quarter_ring
 
     mat = get_material("rig_steel")
     sym = [Symmetry("xsym"), Symmetry("ysym"), Symmetry("zsym")]

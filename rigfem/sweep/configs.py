@@ -1,5 +1,5 @@
 """The rig sweep's parameters and the configurations it enumerates: every mountable rail
-geometry and hole of a linkage type, with its rig rules (:mod:`rigfem.studies.sweep`).
+geometry and hole of a linkage type, with its rig rules (:mod:`rigfem.sweep.run`).
 
 Units: mm, Hz, deg.
 """
@@ -17,7 +17,7 @@ from rigfem.rig.catalogue import RIG_RAILS_MM
 from rigfem.rig.layout import RailLayout, rail_layout
 from rigfem.rig.rules import HOLE_PITCH_MM, MIN_GROUND_MM, fourbar_rules, slider_crank_rules
 from rigfem.schema import validate_check
-from rigfem.settings import FIDELITY, MODELS, PARTS, PLATE, RAIL, CheckSettings, check_settings
+from rigfem.settings import FIDELITY, MODELS, PLATE, RAIL, CheckSettings, check_settings
 
 TYPES = ("four-bar", "slider-crank")
 
@@ -88,20 +88,11 @@ class SweepParams:
 
     def key(self) -> str:
         """Short hash of the parameters and of everything else a stored chunk depends on: the
-        part files, the mass catalogue and the source files that compute a row (a change to any
-        of them must not resume from chunks computed before it)."""
-        from rigfem.fe.cache import SOLUTION_CODE
-        from rigfem.mesh.cache import code_hash
-        from rigfem.rig.catalogue import RIG_MASSES
-        from rigfem.rig.parts import load_part
+        whole package (its code, part files and mass catalogue: a change to any of them must not
+        resume from chunks computed before it)."""
+        from rigfem.cache import package_hash
 
-        parts = sorted({spec["part"] for spec in PARTS[self.linkage_type].values()})
-        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS,
-                   parts={n: load_part(n).content_hash() for n in parts},
-                   masses=dataclasses.asdict(RIG_MASSES),
-                   code=code_hash(*SOLUTION_CODE, "studies/sweep*.py", "linkage/*.py", "dynamics/*.py", "loads/*.py",
-                                  "rig/*.py", "verdict/*.py", "settings.py", "schema.py", "fe/partcase.py",
-                                  "fe/tensors.py"))
+        src = dict(dataclasses.asdict(self), orig_dirs=ORIGINAL_DIRECTIONS, package=package_hash())
         return hashlib.sha256(json.dumps(src, sort_keys=True).encode()).hexdigest()[:12]
 
 

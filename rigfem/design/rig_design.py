@@ -3,7 +3,7 @@
 A synthesised linkage (``rigfem.linkage.synthesis``) has any lengths; the rig builds only
 lengths on the 60 mm hole grid that obey every rig rule (geometry/RIG.md §2).  This module ranks the
 rig's four-bars by how well they do the wanted job and attaches each one's rule table and
-stress verdict (the sweep's superposed unit solutions, ``rigfem.studies.sweep.evaluate``):
+stress verdict (the sweep's superposed unit solutions, ``rigfem.sweep.run.evaluate``):
 
 * function generation (:func:`snap_function`): the structural error does not depend on the
   scale, so *every* mountable, rule-abiding four-bar is evaluated (both assembly branches,
@@ -28,15 +28,16 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.context import Context, default_context
 from rigfem.errors import ComputeError, InputError
 from rigfem.linkage.expression import parse_function
 from rigfem.linkage.kinematics import fourbar_motion
 from rigfem.linkage.loops import BRANCHES, fourbar_angles
 from rigfem.linkage.synthesis import crank_in_order
 from rigfem.rig.rules import HOLE_PITCH_MM, fourbar_rules
-from rigfem.studies.sweep import evaluate
-from rigfem.studies.sweep_bases import build_bases
-from rigfem.studies.sweep_configs import SweepParams, enumerate_configs
+from rigfem.sweep.run import evaluate
+from rigfem.sweep.bases import build_bases
+from rigfem.sweep.configs import SweepParams, enumerate_configs
 
 __all__ = ["rig_fourbars", "snap_function", "snap_motion", "rule_table", "stress_verdicts"]
 
@@ -235,25 +236,25 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
     return uniq[:top]
 
 
-def stress_verdicts(candidates: list[dict], fidelity: str = "draft", p: SweepParams | None = None,
-                    on_stage=None) -> None:
+def stress_verdicts(candidates: list[dict], p: SweepParams | None = None, ctx: Context | None = None) -> None:
     """Add each candidate's stress check (``stress``: verdict, worst utilisation and part, per-part
-    utilisation) from the sweep's unit solutions (built once, cached on disk); ``p`` overrides
-    the sweep parameters (its own fidelity then).  ``on_stage(text)`` hears each stage."""
-    p = p or SweepParams(fidelity=fidelity)
-    if on_stage:
-        on_stage(f"unit solutions at {p.fidelity} (cached after the first run)")
+    utilisation and error band) from the sweep's unit solutions (built once, cached on disk) and the
+    check's verdict stage (:func:`rigfem.sweep.run.evaluate`); ``p`` the sweep parameters (default
+    draft fidelity)."""
+    p = p or SweepParams(fidelity="draft")
+    ctx = default_context(ctx)
+    ctx.observer.stage(f"unit solutions at {p.fidelity} (cached after the first run)")
     with tempfile.TemporaryDirectory(prefix="rigfem-bases-") as folder:  # the bases mapped, not held
-        bases = build_bases(p, folder=Path(folder))
+        bases = build_bases(p, ctx.solver, folder=Path(folder), cache=ctx.cache)
         for k, c in enumerate(candidates):
-            if on_stage:
-                on_stage(f"stress verdict {k + 1} of {len(candidates)}")
+            ctx.observer.stage(f"stress verdict {k + 1} of {len(candidates)}")
             row = evaluate(dict(c["lengths_mm"], branch=c["branch"]), p, bases)
             if row.get("status") != "ok":
                 c["stress"] = {"verdict": "undecided", "note": row.get("note") or row.get("status")}
                 continue
             parts = {k[:-len("_util_pct")]: float(v) for k, v in row.items() if k.endswith("_util_pct")}
+            bands = {k[:-len("_band_pct")]: float(v) for k, v in row.items() if k.endswith("_band_pct")}
             c["stress"] = {"verdict": row["verdict"], "max_util_pct": float(row["max_util_pct"]),
                            "limiting_part": row["limiting_part"], "fidelity": p.fidelity,
-                           "error_band_pct": float(row["error_pct"]), "parts_util_pct": parts,
+                           "parts_util_pct": parts, "parts_band_pct": bands,
                            "peak_torque_Nm": float(row["peak_torque_Nm"])}

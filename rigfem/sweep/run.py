@@ -24,7 +24,6 @@ Units: mm, N, MPa, deg.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import re
 import socket
@@ -36,16 +35,18 @@ import numpy as np
 
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
+from rigfem.cache import Cache
+from rigfem.context import Context
 from rigfem.errors import ComputeError, InputError, check_range
-from rigfem.files import whole_file
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import part_cases
-from rigfem.settings import PRESET_ERROR_PCT, CheckSettings
-from rigfem.verdict.criterion import half_ultimate, overall
+from rigfem.settings import CheckSettings
+from rigfem.verdict.part import judge
 from rigfem.mesh.mesher import MACHINE_GIB
-from rigfem.studies.cost import check_cost, sweep_cost
-from rigfem.studies.sweep_bases import UnitBasis, build_bases, case_key, case_peak, mapped
-from rigfem.studies.sweep_configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
+from rigfem.sweep.cost import check_cost, sweep_cost
+from rigfem.sweep.bases import UnitBasis, build_bases, case_key, mapped
+from rigfem.sweep.superpose import case_outcome
+from rigfem.sweep.configs import JOINTS, LENGTHS, SweepParams, enumerate_configs, rules_row
 
 
 # ----------------------------------------------------------------------------- one configuration
@@ -108,20 +109,17 @@ def evaluate(cfg: dict, p: SweepParams, bases: dict[tuple, UnitBasis] | None,
     row["status"] = "ok"
     if bases is None:
         return row
-    err = PRESET_ERROR_PCT.get(p.fidelity, 0.0)  # the preset's accuracy target as the error band
-    worst, verdicts = ("", 0.0), []
-    for mode, case in part_cases(h, pk, s):
-        peak, deg = case_peak(bases[case_key(case)], case)
-        v = half_ultimate(peak, s.material.sigma_u, err, s.limit_factor, loaded=bool(np.any(case.coef)))
-        row[f"{case.name}_{mode}_mpa"] = peak
-        row[f"{case.name}_{mode}_deg"] = deg
-        row[f"{case.name}_{mode}_util_pct"] = v.utilisation_pct
-        verdicts.append({"verdict": v.verdict})
-        if v.utilisation_pct > worst[1]:
-            worst = (f"{case.name} ({mode})", v.utilisation_pct)
-    row["limiting_part"], row["max_util_pct"] = worst
-    row["error_pct"] = err
-    row["verdict"] = overall(verdicts)  # the check's verdict: pass, fail or undecided
+    verdicts = judge([case_outcome(bases[case_key(case)], case, mode) for mode, case in part_cases(h, pk, s)], s)
+    for pv in verdicts.parts:  # the check's own verdict stage: measured band, lost-load guard, unloaded parts
+        o, v = pv.outcome, pv.verdict
+        row[f"{o.name}_{o.mode}_mpa"] = o.peak_mpa
+        row[f"{o.name}_{o.mode}_deg"] = o.crank_deg
+        row[f"{o.name}_{o.mode}_band_pct"] = v.error_pct
+        row[f"{o.name}_{o.mode}_util_pct"] = v.utilisation_pct
+    worst = verdicts.governing
+    row["limiting_part"] = f"{worst.outcome.name} ({worst.outcome.mode})" if worst else ""
+    row["max_util_pct"] = worst.verdict.utilisation_pct if worst else 0.0
+    row["verdict"] = verdicts.stress  # pass, fail or undecided, as rigfem check judges the same outcomes
     return row
 
 
@@ -137,6 +135,12 @@ def run_chunk(configs: list[dict], p: SweepParams, bases: dict[tuple, UnitBasis]
     return rows
 
 
+def _timed_chunk(configs: list[dict], p: SweepParams, bases) -> tuple[list[dict], float]:
+    """:func:`run_chunk` and its compute seconds (a Dask task)."""
+    t0 = time.perf_counter()
+    return run_chunk(configs, p, bases), time.perf_counter() - t0
+
+
 def _column_order(cols: list[str], p: SweepParams) -> list[str]:
     lead = ["type", *LENGTHS[p.linkage_type]]
     rules = [c for c in cols if c.startswith("rule")]
@@ -145,96 +149,113 @@ def _column_order(cols: list[str], p: SweepParams) -> list[str]:
     return [c for c in lead + rules + rest + tail if c in cols]
 
 
-def _chunk(work: Path, key: str, i: int, configs: list[dict]) -> tuple[Path, dict]:
-    """Folder and inputs of stored chunk ``i`` of the sweep ``key``: a verified cache entry
-    (rigfem.mesh.cache), so a damaged chunk is computed again, never read."""
-    return work / f"chunk_{i:05d}", {"sweep": key, "configs": configs}
+def _chunk_inputs(key: str, configs: list[dict]) -> dict:
+    """The inputs of a stored chunk of the sweep ``key`` (a verified cache entry, kind
+    ``sweep_chunks``: a damaged chunk is computed again, never read)."""
+    return {"sweep": key, "configs": configs}
 
 
-def _write_chunk(work: Path, key: str, i: int, configs: list[dict], rows: list[dict]) -> None:
+def _store_chunk(cache: Cache, key: str, configs: list[dict], rows: list[dict], seconds: float) -> None:
     import pandas as pd
 
-    from rigfem.mesh.cache import read_entry, write_entry
-
-    folder, inputs = _chunk(work, key, i, configs)
     text = pd.DataFrame(rows).to_csv(index=False, float_format="%.10g")
-    if not (write_entry(folder, inputs, lambda d: (d / "rows.csv").write_text(text)) or read_entry(folder, inputs)):
-        raise ComputeError(f"could not store sweep chunk {i} in {work} (disk full or not writable?)")
+
+    def save(tmp: Path) -> None:
+        (tmp / "rows.csv").write_text(text)
+        (tmp / "seconds.json").write_text(json.dumps(seconds))
+
+    if not cache.put("sweep_chunks", _chunk_inputs(key, configs), save) and \
+            not cache.has("sweep_chunks", _chunk_inputs(key, configs)):
+        raise ComputeError(f"could not store a sweep chunk in {cache.folder} (disk full or not writable?)")
 
 
-def run_sweep(p: SweepParams, work_dir, *, chunk_size: int = 64, workers: int = 1,
-              scheduler: str | None = None, distributed: bool | None = None, configs: list[dict] | None = None,
-              progress: bool = True, bases: dict | None = None, solver: str = "auto", on_stage=None,
-              machine_gib: float = MACHINE_GIB):
+def _stored_chunk(cache: Cache, key: str, configs: list[dict]) -> tuple[object, float] | None:
+    """(rows as a DataFrame, compute seconds) of a stored chunk, or None."""
+    import io
+
+    import pandas as pd
+
+    return cache.get("sweep_chunks", _chunk_inputs(key, configs),
+                     lambda e: (pd.read_csv(io.StringIO(e.text("rows.csv")), keep_default_na=False, na_values=[""]),
+                                float(e.json("seconds.json"))),
+                     lambda got: "" if len(got[0]) == len(configs) else "not one row per configuration")
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepOptions:
+    """How a sweep runs: configurations per stored chunk (1-100000), on Dask or not (None: when the
+    context has more than one worker or a ``scheduler`` ``tcp://HOST:PORT`` is given), only some
+    configurations (None: every mountable one), unit bases already built, and the memory limit the
+    job's estimate is held against (GiB)."""
+
+    chunk_size: int = 64
+    scheduler: str | None = None
+    distributed: bool | None = None
+    configs: tuple | None = None
+    bases: dict | None = None
+    machine_gib: float = MACHINE_GIB
+
+    def __post_init__(self) -> None:
+        check_range("chunk_size", self.chunk_size, 1, 100_000)
+
+
+def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions()):
     """Run (or resume) a sweep; return the table (pandas DataFrame, one row per configuration).
 
-    ``work_dir``: where finished chunks are stored (a folder per parameter hash is made in it).
-    ``distributed``: run chunks on Dask (default: when ``workers > 1`` or a ``scheduler`` is
-    given); ``scheduler`` is ``tcp://HOST:PORT`` of an existing cluster, else a LocalCluster
-    with ``workers`` processes runs inside this process; with ``workers`` > 1 the unit bases
-    are built two geometries at a time (:func:`~rigfem.studies.sweep_bases.build_bases`).
-    ``configs``: only these configurations (default: every mountable one).  ``bases``: unit
-    solutions already built for ``p``.
-    The job's cost is estimated from the counts before any work (:mod:`rigfem.studies.cost`;
-    past ``machine_gib`` or the time limit: InputError).  ``on_stage(text)`` hears each stage.
+    Finished chunks are stored in ``ctx.cache`` (with the unit bases, meshes and solutions), so a
+    later run of the same sweep reads them; with no cache everything is computed and nothing
+    resumes.  On Dask, a LocalCluster with ``ctx.workers`` processes runs inside this process unless
+    ``options.scheduler`` names an existing cluster; with ``ctx.workers`` > 1 the unit bases are
+    built two geometries at a time (:func:`~rigfem.sweep.bases.build_bases`).  The job's cost is
+    estimated from the counts before any work (:mod:`rigfem.sweep.cost`; past
+    ``options.machine_gib`` or the time limit: InputError).  ``ctx.observer`` hears each stage and
+    the configurations done.
     """
-
     import pandas as pd
-    from tqdm import tqdm
 
-    from rigfem.mesh.cache import read_entry
-
-    t0 = time.perf_counter()
-    check_range("chunk_size", chunk_size, 1, 100_000)
+    cache, observer, workers = ctx.cache, ctx.observer, ctx.workers
     check_range("workers", workers, 1, 256)
-    configs = enumerate_configs(p) if configs is None else configs
+    configs = enumerate_configs(p) if options.configs is None else list(options.configs)
+    bases, scheduler = options.bases, options.scheduler
     cost = sweep_cost(p, configs, workers, bases=bases is None)
-    check_cost(cost, machine_gib)  # from the counts, before anything is built
-    if scheduler is not None and distributed is not False:
+    check_cost(cost, options.machine_gib)  # from the counts, before anything is built
+    if scheduler is not None and options.distributed is not False:
         reach_scheduler(scheduler)  # in seconds, before the unit solutions are built
-    tag = hashlib.sha256(json.dumps([configs, chunk_size], sort_keys=True).encode()).hexdigest()[:8]
     key = p.key()
-    work = Path(work_dir) / f"{key}-{tag}"
-    work.mkdir(parents=True, exist_ok=True)
-    for path, text in ((Path(work_dir) / ".gitignore", "*\n"),  # stored chunks never enter the repository
-                       (work / "params.json", json.dumps(dataclasses.asdict(p), indent=1, default=str))):
-        with whole_file(path) as tmp:
-            tmp.write_text(text)
-    chunks = [configs[i:i + chunk_size] for i in range(0, len(configs), chunk_size)]
-    todo = [i for i in range(len(chunks)) if read_entry(*_chunk(work, key, i, chunks[i])) is None]
-    bar = tqdm(total=len(configs), unit="cfg", disable=not progress or None, desc=p.linkage_type,
-               initial=sum(len(chunks[i]) for i in range(len(chunks)) if i not in set(todo)))
-    with bar:
-        if todo:
-            if bases is None:
-                if on_stage:
-                    on_stage(f"unit solutions (estimate for the whole sweep: {cost.seconds / 60:.0f} min, "
-                             f"{cost.gib:.2g} GiB)")
-                bar.set_postfix_str("unit solutions")
-                bases = build_bases(p, solver, workers)
-                bar.set_postfix_str("")
-            if distributed is None:
-                distributed = workers > 1 or scheduler is not None
-            if distributed:
-                if on_stage:
-                    on_stage(f"configurations, {len(todo)} chunks on Dask")
-                _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar)
-            else:
-                for k, i in enumerate(todo):
-                    if on_stage:
-                        on_stage(f"configurations, chunk {k + 1} of {len(todo)}")
-                    _write_chunk(work, key, i, chunks[i], run_chunk(chunks[i], p, bases))
-                    bar.update(len(chunks[i]))
-    timing = work / "timing.json"
-    spent = json.loads(timing.read_text())["seconds"] if timing.is_file() else 0.0
-    if todo:  # compute time over every run that computed chunks of this sweep
-        spent += time.perf_counter() - t0
-        with whole_file(timing) as tmp:
-            tmp.write_text(json.dumps({"seconds": spent}))
-    table = pd.concat([pd.read_csv(_chunk(work, key, i, chunks[i])[0] / "rows.csv", keep_default_na=False,
-                                   na_values=[""])
-                       for i in range(len(chunks))], ignore_index=True)
+    size = options.chunk_size
+    chunks = [configs[i:i + size] for i in range(0, len(configs), size)]
+    done = {i: got for i in range(len(chunks)) if (got := _stored_chunk(cache, key, chunks[i])) is not None}
+    todo = [i for i in range(len(chunks)) if i not in done]
+    count = [sum(len(chunks[i]) for i in done)]
+
+    def finished(i: int, rows: list[dict], seconds: float) -> None:
+        _store_chunk(cache, key, chunks[i], rows, seconds)
+        done[i] = (pd.DataFrame(rows), seconds)
+        count[0] += len(chunks[i])
+        observer.step(count[0], len(configs), f"{p.linkage_type} configurations")
+
+    if todo:
+        t0 = time.perf_counter()
+        if bases is None:
+            observer.stage(f"unit solutions (estimate for the whole sweep: {cost.seconds / 60:.0f} min, "
+                           f"{cost.gib:.2g} GiB)")
+            bases = build_bases(p, ctx.solver, workers, cache=cache)
+        per = (time.perf_counter() - t0) / len(todo)  # the bases' time, shared by the chunks computed
+        distributed = options.distributed
+        if distributed is None:
+            distributed = workers > 1 or scheduler is not None
+        if distributed:
+            observer.stage(f"configurations, {len(todo)} chunks on Dask")
+            _run_dask(chunks, todo, p, bases, workers, scheduler, lambda i, rows, s: finished(i, rows, s + per))
+        else:
+            for k, i in enumerate(todo):
+                observer.stage(f"configurations, chunk {k + 1} of {len(todo)}")
+                t1 = time.perf_counter()
+                rows = run_chunk(chunks[i], p, bases)
+                finished(i, rows, time.perf_counter() - t1 + per)
+    table = pd.concat([done[i][0] for i in range(len(chunks))], ignore_index=True)
     table = table[_column_order(list(table.columns), p)]
+    spent = sum(done[i][1] for i in range(len(chunks)))
     table.attrs["compute_seconds"] = spent or None
     return table
 
@@ -289,7 +310,7 @@ def _is_scheduler(address: str, timeout: float) -> bool:
 
 
 
-def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> None:
+def _run_dask(chunks, todo, p, bases, workers, scheduler, finished) -> None:
     from contextlib import nullcontext
 
     import dask
@@ -308,8 +329,7 @@ def _run_dask(chunks, todo, p, bases, work, key, workers, scheduler, bar) -> Non
         if folder is not None:  # same machine: the workers map one copy of the unit fields
             bases = {key: mapped(b, Path(folder)) for key, b in bases.items()}
         [shared] = client.scatter([bases], broadcast=True)  # unit solutions shipped once per worker
-        futures = {client.submit(run_chunk, chunks[i], p, shared, pure=False): i for i in todo}
+        futures = {client.submit(_timed_chunk, chunks[i], p, shared, pure=False): i for i in todo}
         for fut in as_completed(futures):
             i = futures.pop(fut)
-            _write_chunk(work, key, i, chunks[i], fut.result())
-            bar.update(len(chunks[i]))
+            finished(i, *fut.result())
