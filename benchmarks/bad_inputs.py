@@ -1,5 +1,5 @@
-"""Issue 24's examples, tried as a new user would: what rigfem prints now and how long it takes to
-fail (wall time, exit code, peak memory of the process tree, the last line on stderr).
+"""Issue 24's and issue 38's examples, tried as a new user would: what rigfem prints now and how
+long it takes (wall time, exit code, peak memory of the process tree, the last line on stderr).
 
     python benchmarks/bad_inputs.py
 
@@ -35,6 +35,21 @@ EXAMPLES = {
     "scheduler port out of range": ["sweep", "--scheduler", "tcp://127.0.0.1:99999", "--out", "sw"],
     "pole in synthesize function": ["synthesize", "function", "1/(x-2)", "--x", "1", "3", *FN],
     "tiny x range in synthesize function": ["synthesize", "function", "x**2", "--x", "1", "1.000001", *FN],
+    # issue 38
+    "mesh size 1e-300": ["mesh", "PF_4b_006", "--size", "1e-300", "--out", "p.vtu"],
+    "mesh size 1e300": ["mesh", "PF_4b_006", "--size", "1e300", "--out", "p.vtu"],
+    "rhombus (change point at 0 and 180 deg)": ["kinematics", "--four-bar", "500", "500", "500", "500", "--samples", "8"],
+    "kite (reactions)": ["reactions", "--four-bar", "300", "700", "700", "300"],
+    "250-character --csv": ["kinematics", "--samples", "8", "--csv", "k" * 246 + ".csv"],
+    "260-character --csv": ["kinematics", "--samples", "8", "--csv", "k" * 256 + ".csv"],
+}
+#: examples run with something of the environment changed: (argv, extra environment, shell redirection)
+SHELL = {
+    "ASCII-only output encoding": (["--help"], {"PYTHONIOENCODING": "ascii"}, ""),
+    "stdout closed": (["kinematics", "--samples", "8", "--csv", "k.csv"], {}, ">&-"),
+    "file-size limit (ulimit -f 1024)": (["kinematics", "--samples", "100000", "--csv", "big.csv"], {}, "ulimit -f 1024;"),
+    "cache folder inside --out": (["check", "--out", "res", "--force", "--fidelity", "draft", "--quiet"],
+                                  {"RIGFEM_CACHE": "res/cache"}, "mkdir -p res/cache;"),
 }
 
 
@@ -43,10 +58,15 @@ def _last(text: str) -> str:
     return lines[-1][:300] if lines else ""
 
 
+#: on success, the first line of the output naming one of these is what an example prints
+TELLING = ("change points", "peak driver torque")
+
+
 def plain(args: list[str], env: dict, cwd: Path) -> dict:
     r = timed_process([*RIGFEM, *args], env=env, cwd=cwd)
+    out = r["stdout_tail"].strip().split("\n")
     return {"wall_s": r["wall_s"], "exit": r["exit"], "peak_tree_rss_mib": r["peak_tree_rss_mib"],
-            "prints": _last(r["stderr_tail"]) or r["stdout_tail"].strip().split("\n")[0][:300],
+            "prints": _last(r["stderr_tail"]) or next((ln for ln in out if any(t in ln for t in TELLING)), out[0])[:300],
             "files_left": sorted(os.listdir(cwd))}
 
 
@@ -69,6 +89,49 @@ def cache_is_a_file(env: dict, cwd: Path) -> dict:
     return r
 
 
+def shell(args: list[str], extra: dict, redirect: str, env: dict, cwd: Path) -> dict:
+    """``args`` run by bash with ``redirect`` (a prefix ending in ';' or a redirection) and ``extra``."""
+    pre, post = (redirect, "") if redirect.endswith(";") else ("", redirect)
+    cmd = f"{pre} {' '.join([*RIGFEM, *args])} {post}; echo $? >&2"
+    t0 = time.perf_counter()
+    r = subprocess.run(["bash", "-c", cmd], env={**env, **extra}, cwd=cwd, capture_output=True, text=True)
+    lines = [ln for ln in r.stderr.strip().splitlines() if ln.strip()]
+    return {"wall_s": time.perf_counter() - t0, "exit": int(lines[-1]), "prints": _last("\n".join(lines[:-1])) or
+            r.stdout.strip().split("\n")[0][:300], "files_left": sorted(os.listdir(cwd))}
+
+
+def million(env: dict, cwd: Path) -> dict:
+    """The largest valid kinematics output, its JSON thrown away: time and peak memory."""
+    r = timed_process(["bash", "-c", " ".join([*RIGFEM, "kinematics", "--samples", "1000000", "--json"]) + " >/dev/null"],
+                      env=env, cwd=cwd)
+    return {"wall_s": r["wall_s"], "exit": r["exit"], "peak_tree_rss_mib": r["peak_tree_rss_mib"],
+            "prints": _last(r["stderr_tail"]) or f"(the JSON; peak {r['peak_tree_rss_mib']:.0f} MiB)",
+            "files_left": sorted(os.listdir(cwd))}
+
+
+def big_scene(env: dict, cwd: Path) -> dict:
+    with open(cwd / "big.toml", "wb") as fh:
+        fh.truncate(4 * 2**30)   # sparse
+    r = plain(["kinematics", "big.toml"], env, cwd)
+    r["files_left"] = [f for f in r["files_left"] if f != "big.toml"]
+    return r
+
+
+def blank_reactions(env: dict, cwd: Path) -> dict:
+    """final-cm's own reaction CSV with 359 of its 360 rows blank and marked singular."""
+    subprocess.run([*RIGFEM, "reactions", "--csv", "r.csv"], env=env, cwd=cwd, capture_output=True, check=True)
+    lines = (cwd / "r.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith(("#", "crank"))]
+    rows = [ln for ln in lines if ln[:1].isdigit()]
+    blank = [",".join([r.split(",")[0], *[""] * (r.count(",") - 1), "1"]) for r in rows[1:]]
+    (cwd / "r.csv").write_text("\n".join(head + rows[:1] + blank) + "\n")
+    (cwd / ".rigfem-outputs.json").unlink(missing_ok=True)
+    r = plain(["check", "final-cm", "--reactions-csv", "r.csv", "--fidelity", "draft", "--quiet", "--out", "res"],
+              env, cwd)
+    r["files_left"] = [f for f in r["files_left"] if f != "r.csv"]
+    return r
+
+
 def head(env: dict, cwd: Path) -> dict:
     cmd = " ".join([*RIGFEM, "kinematics", "--samples", "20000", "--json"]) + " | head -1 >/dev/null; echo ${PIPESTATUS[0]}"
     t0 = time.perf_counter()
@@ -79,18 +142,31 @@ def head(env: dict, cwd: Path) -> dict:
 
 def main() -> int:
     samples = {}
-    for name, args in [*EXAMPLES.items(), ("Ctrl-C during meshing", None), ("cache folder is a file", None),
-                       ("rigfem kinematics | head -1", None)]:
+    custom = {"Ctrl-C during meshing": (ctrl_c, "rigfem mesh rail_size25 --size 2.5 --out r.vtu, then Ctrl-C after 4 s"),
+              "cache folder is a file": (cache_is_a_file, "RIGFEM_CACHE=<a file> rigfem cache"),
+              "rigfem kinematics | head -1": (head, "rigfem kinematics --samples 20000 --json | head -1"),
+              "4 GB scene file": (big_scene, "rigfem kinematics big.toml  # a sparse 4 GB file"),
+              "a million angles as JSON": (million, "rigfem kinematics --samples 1000000 --json >/dev/null"),
+              "359 of 360 reaction rows blank and singular":
+                  (blank_reactions, "rigfem check final-cm --reactions-csv r.csv --fidelity draft --out res  "
+                                    "# r.csv: rigfem reactions --csv, rows 2-360 blank, singular = 1")}
+    for name in [*EXAMPLES, *custom, *SHELL]:
         with tempfile.TemporaryDirectory() as tmp:
             cwd = Path(tmp) / "work"
             cwd.mkdir()
             env = cold_env(Path(tmp) / "caches")
-            row = (plain(args, env, cwd) if args is not None else ctrl_c(env, cwd) if name.startswith("Ctrl-C")
-                   else cache_is_a_file(env, cwd) if name.startswith("cache") else head(env, cwd))
-        row["command"] = ("rigfem " + " ".join(args)) if args is not None else {
-            "Ctrl-C during meshing": "rigfem mesh rail_size25 --size 2.5 --out r.vtu, then Ctrl-C after 4 s",
-            "cache folder is a file": "RIGFEM_CACHE=<a file> rigfem cache",
-            "rigfem kinematics | head -1": "rigfem kinematics --samples 20000 --json | head -1"}[name]
+            if name in EXAMPLES:
+                row = plain(EXAMPLES[name], env, cwd)
+                row["command"] = "rigfem " + " ".join(a if len(a) < 60 else f"<{len(a)} characters>"
+                                                      for a in EXAMPLES[name])
+            elif name in custom:
+                row, row["command"] = custom[name][0](env, cwd), custom[name][1]
+            else:
+                args, extra, redirect = SHELL[name]
+                row = shell(args, extra, redirect, env, cwd)
+                pre, post = (redirect, "") if redirect.endswith(";") else ("", redirect)
+                row["command"] = " ".join(x for x in (pre, *(f"{k}={v}" for k, v in extra.items()), "rigfem",
+                                                      *args, post) if x)
         print(f"{name}: exit {row['exit']} in {row['wall_s']:.2f} s: {row['prints']}", flush=True)
         samples[name] = [row]
     slowest = max(r[0]["wall_s"] for r in samples.values())

@@ -289,15 +289,17 @@ def malloc_trim(rec: dict) -> str:
 
 
 def bad_inputs(rec: dict) -> str:
-    lines = head(rec, "Issue 24's examples: what rigfem prints and how long it takes to fail")
+    lines = head(rec, "Issue 24's and 38's examples: what rigfem prints and how long it takes")
     lines += ["Each example is its own process in an empty folder with an empty cache; the time is the wall "
-              "time of the process (Ctrl-C: from the signal to its end).", "",
-              "| example | command | exit | time (s) | files left | what rigfem prints (last line on stderr, else first on stdout) |",
-              "|---|---|---:|---:|---|---|"]
+              "time of the process (Ctrl-C: from the signal to its end), the memory the peak RSS of its "
+              "process tree where measured.", "",
+              "| example | command | exit | time (s) | peak MiB | files left | what rigfem prints (last line on stderr, else first on stdout) |",
+              "|---|---|---:|---:|---:|---|---|"]
     for name, (r,) in rec["samples"].items():
         name, cmd, msg = (t.replace("|", r"\|") for t in (name, r["command"], r["prints"]))
         left = ", ".join(r["files_left"]) or "none"
-        lines.append(f"| {name} | `{cmd}` | {r['exit']} | {r['wall_s']:.2f} | {left} | {msg} |")
+        mib = f"{r['peak_tree_rss_mib']:.0f}" if r.get("peak_tree_rss_mib") is not None else "-"
+        lines.append(f"| {name} | `{cmd}` | {r['exit']} | {r['wall_s']:.2f} | {mib} | {left} | {msg} |")
     lines += ["", f"Slowest to fail: {rec['derived']['slowest_s']:.1f} s."]
     return "\n".join(lines) + "\n"
 

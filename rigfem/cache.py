@@ -393,6 +393,12 @@ def _nearest(p: Path) -> Path:
     return p
 
 
+def environment_root(env: Mapping[str, str] | None = None) -> Path:
+    """The cache folder ``$RIGFEM_CACHE`` names (default ``~/.cache/rigfem``), absolute, untouched."""
+    env = os.environ if env is None else env
+    return Path(env.get(CACHE_ENV) or Path.home() / ".cache" / "rigfem").expanduser().absolute()
+
+
 def from_environment(env: Mapping[str, str] | None = None) -> Cache:
     """The cache ``$RIGFEM_CACHE`` (default ``~/.cache/rigfem``) names, limited to
     ``$RIGFEM_CACHE_MAX_GB`` (default: :data:`DEFAULT_GB`): InputError naming the variable when the
@@ -401,8 +407,7 @@ def from_environment(env: Mapping[str, str] | None = None) -> Cache:
     env = os.environ if env is None else env
     raw = env.get(MAX_GB_ENV, "")
     limit_gb = check_range(MAX_GB_ENV, raw, 0.0, 1e6, "GB", lo_open=True) if raw.strip() else None
-    root = Path(env.get(CACHE_ENV) or Path.home() / ".cache" / "rigfem").expanduser()
-    return _environment(str(root.absolute()), limit_gb)
+    return _environment(str(environment_root(env)), limit_gb)
 
 
 @functools.lru_cache(maxsize=8)

@@ -3,6 +3,7 @@
 The CLI maps them to exit codes 2 and 3; nothing below the CLI knows about exit codes.
 """
 
+import os
 import re
 
 _CONTROL = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)?|[\x00-\x08\x0b-\x1f\x7f-\x9f]")
@@ -32,6 +33,12 @@ class ComputeError(RuntimeError):
     """Valid input that rigfem could not compute (mesher, solver, external program)."""
 
 
+class NoSpaceError(ComputeError, OSError):
+    """A file could not be written: its disk, quota or the file-size limit is full (the message
+    names the file and its folder).  Also an OSError, so code that goes on without a cache entry
+    it could not write still does."""
+
+
 def check_range(name: str, value: float, lo: float | None = None, hi: float | None = None,
                 unit: str = "", lo_open: bool = False) -> float:
     """Return ``value`` as float if finite and inside [lo, hi]; raise InputError naming ``name``."""
@@ -50,6 +57,15 @@ def check_range(name: str, value: float, lo: float | None = None, hi: float | No
             or (hi is not None and v > hi)):
         raise InputError(f"{name} = {value!r}{u} is outside the allowed range {bracket}{lo_s}, {hi_s}]{u}")
     return v
+
+
+def check_whole(name: str, value: object, lo: int, hi: int) -> int:
+    """``value`` as an int if it is a whole number inside [lo, hi]; InputError naming ``name``
+    (1.5 threads is refused, not read as 1)."""
+    v = check_range(name, value, lo, hi)
+    if v != int(v):
+        raise InputError(f"{name} = {value!r} must be a whole number in [{lo}, {hi}]")
+    return int(v)
 
 
 _BOMS = ((b"\xef\xbb\xbf", "utf-8"), (b"\xff\xfe", "utf-16-le"), (b"\xfe\xff", "utf-16-be"))
@@ -78,3 +94,18 @@ def decode_text(blob: bytes, what: str) -> str:
     if "\x00" in text:
         raise InputError(f"{what} is a binary file, not text")
     return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def read_at_most(path: "os.PathLike | str", limit: int, what: str, kind: str) -> bytes:
+    """The bytes of the file ``path`` if it holds at most ``limit``; InputError naming ``what`` if
+    it cannot be read or is larger (its size is checked before anything is read: a 4 GB file is
+    refused, not loaded; what grows while read is cut at ``limit`` + 1 bytes and refused)."""
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            blob = fh.read(limit + 1) if size <= limit else b""
+    except OSError as exc:
+        raise InputError(f"{what} cannot be read: {plain(exc.strerror or exc, 80)}") from None
+    if size > limit or len(blob) > limit:
+        raise InputError(f"{what} is {max(size, len(blob))} bytes; {kind} is at most {limit} bytes")
+    return blob

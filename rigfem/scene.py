@@ -38,7 +38,7 @@ from importlib import resources
 from importlib.metadata import version
 from pathlib import Path
 
-from rigfem.errors import InputError, decode_text, plain
+from rigfem.errors import InputError, decode_text, plain, read_at_most
 from rigfem.cache import Cache, resolve as resolve_cache
 
 #: deepest nesting of tables/arrays a scene may have (the schema itself needs 4)
@@ -135,12 +135,7 @@ def read_toml(path: Path) -> tuple[dict, str]:
     """Raw TOML of a scene file and the SHA-256 of the bytes it was read from; InputError (one
     line) if unreadable, binary, not UTF-8, not TOML or nested deeper than :data:`MAX_DEPTH`."""
     name = plain(str(path), 120)
-    try:
-        blob = path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"scene {name!r} cannot be read: {plain(exc.strerror or exc, 80)}") from None
-    if len(blob) > MAX_BYTES:
-        raise InputError(f"scene {name!r} is {len(blob)} bytes; a scene file is at most {MAX_BYTES} bytes")
+    blob = read_at_most(path, MAX_BYTES, f"scene {name!r}", "a scene file")
     text = decode_text(blob, f"scene {name!r}")
     try:
         data = tomllib.loads(text)

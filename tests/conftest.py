@@ -8,14 +8,44 @@ makes must not vanish because a machine lacks a package.  Under ``CI`` (any valu
 it is collected (``pytest.importorskip`` or ``pytest.skip(allow_module_level=True)`` at module
 level: the collection error names the reason) and a test marked or made ``xfail`` (expected to
 fail, or passing unexpectedly): a check CI runs either holds or is fixed, never expected to fail.
+
+The tests are harmless to the machine they run on: for the whole run ``HOME``, the rigfem cache
+(``RIGFEM_CACHE``) and the per-user folders programs write (XDG cache, config and data,
+matplotlib's) point into one temporary folder, removed at the end; a README command such as
+``rigfem cache --clear`` clears that, never the user's cache (tests/test_harmless.py).
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import tempfile
+from pathlib import Path
 
 import pytest
+
+#: the variables :func:`private_home` points into the run's temporary folder, and where
+PRIVATE = {"HOME": "home", "RIGFEM_CACHE": "cache", "XDG_CACHE_HOME": "home/.cache",
+           "XDG_CONFIG_HOME": "home/.config", "XDG_DATA_HOME": "home/.local/share",
+           "MPLCONFIGDIR": "home/.config/matplotlib"}
+#: the user's own values, for tests/test_harmless.py to compare with
+USER_ENV = {k: os.environ.get(k) for k in PRIVATE}
+#: the run's temporary folder
+ROOT = Path(tempfile.mkdtemp(prefix="rigfem-tests-"))
+
+
+def private_home(root: Path) -> None:
+    """Point HOME, the cache and the per-user folders into ``root``."""
+    for var, sub in PRIVATE.items():
+        (root / sub).mkdir(parents=True, exist_ok=True)
+        os.environ[var] = str(root / sub)
+
+
+private_home(ROOT)  # at import: before pytest imports any test module (and rigfem with it)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    shutil.rmtree(ROOT, ignore_errors=True)
 
 #: the Debian package that provides each program the tests run (tests/run.sh installs them)
 TOOLS = {"ccx": "calculix-ccx", "chromium": "chromium"}

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from rigfem.cli import main
 from rigfem.errors import InputError
 from rigfem.linkage import parse_function
+from said import said
 
 FUNC = ["synthesize", "function", "x*log(x)", "--x", "1", "3", "--input", "20", "90", "--output", "80", "90",
         "--ground", "2"]
@@ -50,7 +51,7 @@ def _bad(capsys, argv: list[str], *needles: str) -> str:
     """Exit 2 with one error line naming ``needles``, no traceback."""
     code = main(argv)
     cap = capsys.readouterr()
-    errors = [line for line in cap.err.splitlines() if "running," not in line]   # progress lines aside
+    errors = said(cap.err)   # progress lines aside
     assert code == 2, cap.err
     assert len(errors) == 1 and errors[0].startswith("rigfem: error: "), cap.err
     assert "Traceback" not in cap.err + cap.out
@@ -241,7 +242,7 @@ def test_any_ground_length_text_is_accepted_or_refused_in_one_line(capsys, text)
     assert "Traceback" not in cap.err and "internal error" not in cap.err
     assert code in (0, 1, 2, 3)
     if code == 2:
-        assert len([x for x in cap.err.splitlines() if "running," not in x]) == 1
+        assert len(said(cap.err)) == 1
 
 
 # ----------------------------------------------------------------------------- §5 geometry
@@ -413,7 +414,7 @@ def test_progress_lines_name_each_stage_once_the_command_is_long():
 def test_every_command_says_where_its_outputs_are(tmp_path, capsys):
     png = tmp_path / "k.png"
     assert main(["kinematics", "--samples", "8", "--plot", str(png)]) == 0
-    assert capsys.readouterr().err.strip() == f"rigfem: wrote {png}"
+    assert said(capsys.readouterr().err) == [f"rigfem: wrote {png}"]
 
 
 def test_interrupted_write_leaves_nothing(tmp_path, capsys, monkeypatch):

@@ -16,6 +16,7 @@ import pytest
 from rigfem.cache import NO_CACHE, Cache
 from rigfem.context import Context
 from rigfem.errors import InputError
+from said import one_line
 
 RIGFEM = [sys.executable, "-m", "rigfem"]
 
@@ -106,7 +107,7 @@ def test_100_m_rail_cli_exit_2_in_seconds(tmp_path):
     took = time.perf_counter() - t0
     print(f"100 m rail refused in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == 2 and took < 15.0
-    assert len(r.stderr.strip().splitlines()) == 1 and "GiB" in r.stderr and "--allow-large" in r.stderr
+    assert "GiB" in one_line(r.stderr) and "--allow-large" in r.stderr
 
 
 def test_allow_large_lifts_the_limit(tmp_path, monkeypatch):
@@ -165,7 +166,7 @@ def test_sweep_cli_scheduler_exit_codes(tmp_path, address, code, words):
     took = time.perf_counter() - t0
     print(f"sweep --scheduler {address}: exit {r.returncode} in {took:.2f} s: {r.stderr.strip()}")
     assert r.returncode == code and took < 30.0
-    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert words in one_line(r.stderr)
 
 
 # ----------------------------------------------------------------------------- §2 whole files

@@ -6,22 +6,31 @@ the meaning of its exit code 0 (its ``--help`` then lists no verdict codes).  Ba
 (one line on stderr, exit 2); what rigfem could not compute raises
 :class:`rigfem.errors.ComputeError` (exit 3).  Any other exception is an internal error: one
 line and exit 3, the traceback only with ``--debug``.  Ctrl-C and SIGTERM end quietly.
+
+The environment is never an internal error: an output encoding that cannot show σ or … (ASCII,
+``PYTHONIOENCODING=ascii``) gets ASCII words (``sigma_u/2``); a closed stdout or stderr reads as
+/dev/null (the result stands); a full disk or file-size limit is "could not write PATH: no space
+left" (exit 3); a name the file system refuses as too long is bad input (exit 2); any other
+operating-system error is one line, exit 3.
 """
 
 from __future__ import annotations
 
 import argparse
+import codecs
 import contextlib
+import errno
 import importlib
 import os
 import re
 import signal
 import sys
 import traceback
+import unicodedata
 
 from rigfem.cli.exitcodes import BAD_INPUT, INTERRUPTED, NO_COMPUTE, PIPE_CLOSED, TABLE, TERMINATED, table
 from rigfem.cli.progress import heartbeat
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError, InputError, NoSpaceError, plain
 from rigfem.settings import ALLOW_LARGE_ENV
 
 #: subcommand name -> module under rigfem.cli (added as the capabilities land)
@@ -113,6 +122,51 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: what a character an output encoding cannot show is written as (σu/2 -> sigma_u/2)
+ASCII = {"σ": "sigma", "τ": "tau", "μ": "mu", "ω": "omega", "α": "alpha", "β": "beta", "γ": "gamma",
+         "θ": "theta", "π": "pi", "Δ": "delta", "ε": "eps", "ν": "nu", "ρ": "rho", "…": "...", "–": "-", "—": "-",
+         "−": "-", "×": "x", "·": "*", "≤": "<=", "≥": ">=", "≈": "~", "±": "+/-", "→": "->", "°": " deg",
+         "²": "^2", "³": "^3", "√": "sqrt", "Ø": "dia ", "‰": " per mille", "’": "'", "‘": "'", "“": '"', "”": '"'}
+
+
+def _ascii(exc: UnicodeError) -> tuple[str, int]:
+    """Codec error handler: the characters ``exc`` could not encode as ASCII words (a Greek
+    letter before a name part gets an underscore: σu -> sigma_u), else their unaccented letters,
+    else '?' (a file name's undecodable bytes, kept as surrogates, become '?' too)."""
+    if not isinstance(exc, UnicodeEncodeError):
+        raise exc
+    text, end = exc.object, exc.end
+    out = []
+    for i in range(exc.start, end):
+        c = text[i]
+        word = ASCII.get(c) or unicodedata.normalize("NFKD", c).encode("ascii", "ignore").decode() or "?"
+        if word.isalpha() and len(word) > 1 and i + 1 < len(text) and text[i + 1].isalnum():
+            word += "_"
+        out.append(word)
+    return "".join(out), end
+
+
+codecs.register_error("rigfem-ascii", _ascii)
+
+
+def _streams() -> None:
+    """Standard streams a command can always write: a closed fd 0, 1 or 2 opened on /dev/null
+    (so no file rigfem opens lands on it), a missing sys.stdout/stderr set to it, and every
+    character the terminal's encoding lacks written in ASCII."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            os.open(os.devnull, os.O_RDWR)   # the lowest free fd: this one
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))
+        elif hasattr(stream, "reconfigure"):
+            with contextlib.suppress(ValueError, OSError):
+                stream.reconfigure(errors="rigfem-ascii")
+
+
 class _Terminated(BaseException):
     """SIGTERM, raised in the main thread so ``finally`` blocks clean up as for Ctrl-C."""
 
@@ -122,6 +176,7 @@ def _on_sigterm(signum, frame) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    _streams()
     parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
@@ -145,9 +200,16 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         print(f"rigfem: error: {exc}", file=sys.stderr)
         return BAD_INPUT
+    except NoSpaceError as exc:
+        print(f"rigfem: {exc}", file=sys.stderr)
+        return NO_COMPUTE
     except ComputeError as exc:
         print(f"rigfem: could not compute: {exc}", file=sys.stderr)
         return NO_COMPUTE
+    except OSError as exc:  # the environment (disk, names, permissions), not a bug of rigfem
+        if args.debug:
+            traceback.print_exc()
+        return _os_error(exc, args)
     except KeyboardInterrupt:
         print("rigfem: interrupted", file=sys.stderr)
         return INTERRUPTED
@@ -162,6 +224,24 @@ def main(argv: list[str] | None = None) -> int:
         return NO_COMPUTE
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _os_error(exc: OSError, args: argparse.Namespace) -> int:
+    """One line for an operating-system error no layer below turned into a message: a name too
+    long is bad input (exit 2); a full disk and anything else could not be done (exit 3).  Without
+    the file's name, the command's outputs are named."""
+    flags = [f"--{k.replace('_', '-')} {getattr(args, k)}" for k in ("out", "csv", "plot", "animate", "scene_out")
+             if getattr(args, k, None)]
+    where = (plain(exc.filename, 160) if exc.filename is not None else
+             f"the outputs of rigfem {_what(args)}" + (f" ({plain(', '.join(flags), 160)})" if flags else ""))
+    if exc.errno == errno.ENAMETOOLONG:
+        print(f"rigfem: error: {where}: the name is longer than the file system allows", file=sys.stderr)
+        return BAD_INPUT
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+        print(f"rigfem: could not write {where}: no space left ({exc.strerror})", file=sys.stderr)
+        return NO_COMPUTE
+    print(f"rigfem: could not compute: {where}: {exc.strerror or exc}", file=sys.stderr)
+    return NO_COMPUTE
 
 
 def _what(args: argparse.Namespace) -> str:

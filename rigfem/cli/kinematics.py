@@ -13,13 +13,14 @@ import argparse
 import csv
 import json
 import math
+import sys
 from pathlib import Path
 
 import lazy_loader
 
 from rigfem import linkage, rig  # lazy (lazy_loader): numpy and the solvers load when a linkage moves
 from rigfem.cli.exitcodes import RULES_SHOWN
-from rigfem.cli.linkage_args import add_linkage_arguments
+from rigfem.cli.linkage_args import add_linkage_arguments, lengths
 from rigfem.cli.outputs import new_output, write_file, wrote
 from rigfem.errors import InputError, check_range
 from rigfem.settings import REFERENCE_SCENE
@@ -58,7 +59,7 @@ def _build(args):
         raise InputError("--branch and --coupler-point apply only with --four-bar (a scene gives its own)")
     omega, alpha, instant, textbook = 2 * math.pi, 0.0, None, False
     if args.four_bar:
-        L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3", "B4", "D"), args.four_bar)]
+        L = lengths(("B2", "B3", "B4", "D"), args.four_bar)
         cp = None
         if args.coupler_point:
             cp = (check_range("--coupler-point DIST", args.coupler_point[0], 0.0, 1e5, "mm"),
@@ -66,7 +67,7 @@ def _build(args):
         lk = linkage.four_bar(*L, masses=None, branch=args.branch or "open", coupler_point=cp, whole_turn=False)
         name = "four-bar " + " ".join(args.four_bar)
     elif args.slider_crank:
-        L = [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(("B2", "B3"), args.slider_crank)]
+        L = lengths(("B2", "B3"), args.slider_crank)
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
         lk = linkage.slider_crank(*L, off, masses=None, whole_turn=False)
         name = "slider-crank " + " ".join(args.slider_crank)
@@ -116,52 +117,99 @@ def _assembles(name: str, turn: dict, deg: float) -> float:
                      f"the dead points {dead} deg)")
 
 
-def _num(x) -> float | None:
-    """A plain float, or None for an unbounded value (exactly at a toggle)."""
-    x = float(x)
-    return x if math.isfinite(x) else None
+#: crank angles moved and written at a time: a turn of a million angles streams through memory
+#: that of one chunk (no Python object per angle)
+CHUNK = 16_384
+
+
+class _Null:
+    """Written as JSON's null by ``%r`` (a value that is unbounded exactly at a toggle)."""
+
+    def __repr__(self) -> str:
+        return "null"
+
+
+_NULL = _Null()
+
+
+def _columns(m: linkage.Motion) -> tuple[list[np.ndarray], str]:
+    """Every per-angle value of ``m`` as a column, and the JSON text of one angle's record with a
+    ``%r`` where each column's value goes (same keys and nesting as the whole result's)."""
+    cols: list[np.ndarray] = [m.crank_deg]
+    parts = ['"crank_deg": %r']
+
+    def obj(items) -> str:
+        return "{" + ", ".join(f"{json.dumps(k)}: {v}" for k, v in items) + "}"
+
+    def num(a) -> str:
+        cols.append(np.asarray(a, float))
+        return "%r"
+
+    parts.append('"links": ' + obj((n, obj((k, num(v[k])) for k in v)) for n, v in m.links.items()))
+    parts.append('"points": ' + obj((n, obj((k, f"[{num(v[k][:, 0])}, {num(v[k][:, 1])}]") for k in v))
+                                    for n, v in m.points.items()))
+    if m.slider is not None:
+        parts.append('"slider": ' + obj((k, num(v)) for k, v in m.slider.items()))
+    if m.transmission_deg is not None:
+        parts.append(f'"transmission_angle_deg": {num(m.transmission_deg)}')
+        parts.append(f'"mechanical_advantage": {num(m.mechanical_advantage)}')
+    return cols, "{" + ", ".join(parts) + "}"
+
+
+def records_text(m: linkage.Motion, sep: str = ",\n  ") -> str:
+    """The JSON records of every angle of ``m``, one a line, joined by ``sep`` (floats as JSON
+    writes them, a non-finite value as null)."""
+    cols, row = _columns(m)
+    table = np.column_stack(cols) if m.crank_deg.size else np.zeros((0, len(cols)))
+    values = table.ravel().tolist()
+    for i in np.flatnonzero(~np.isfinite(table.ravel())):
+        values[i] = _NULL
+    return sep.join([row] * m.crank_deg.size) % tuple(values)
 
 
 def _records(m: linkage.Motion) -> list[dict]:
-    out = []
-    for i, deg in enumerate(m.crank_deg):
-        r = {"crank_deg": float(deg),
-             "links": {n: {k: _num(v[k][i]) for k in v} for n, v in m.links.items()},
-             "points": {n: {k: [_num(c) for c in v[k][i]] for k in v} for n, v in m.points.items()}}
-        if m.slider is not None:
-            r["slider"] = {k: _num(v[i]) for k, v in m.slider.items()}
-        if m.transmission_deg is not None:
-            r["transmission_angle_deg"] = _num(m.transmission_deg[i])
-            r["mechanical_advantage"] = _num(m.mechanical_advantage[i])
-        out.append(r)
-    return out
+    return json.loads("[" + records_text(m, ",") + "]")
 
 
-def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None, mu_turn: linkage.Motion | None) -> dict:
-    """The JSON object: the linkage, its turn analysis and the motion at every requested angle."""
+def result(lk, name: str, textbook: bool, m: linkage.Motion, turn: dict | None,
+           mu: tuple[float, float] | None) -> dict:
+    """The JSON object but its angles: the linkage, its turn analysis and the transmission
+    angle's range over the turn ``mu`` (min, max deg; None if it has none); ``m`` is (a chunk
+    of) the motion, for its driver and definitions."""
     res = {"scene": name, "linkage": lk.meta.get("type"), "lengths_mm": lk.meta.get("lengths_mm"),
            "textbook": textbook, "branch": lk.meta.get("branch", m.meta.get("branch")),
            "method": "closed form" if m.meta.get("type") in ("four-bar", "slider-crank") else "general solver",
            "omega_rad_s": m.omega_rad_s, "alpha_rad_s2": m.alpha_rad_s2, "turn": turn}
-    if mu_turn is not None and mu_turn.transmission_deg is not None:
-        mu = mu_turn.transmission_deg
-        res["transmission_angle_deg"] = {"min": float(mu.min()), "max": float(mu.max()),
-                                         "rig_band": list(rig.MU_LIMITS_DEG),
-                                         "within_band": bool(mu.min() > rig.MU_LIMITS_DEG[0] and mu.max() < rig.MU_LIMITS_DEG[1])}
+    if mu is not None:
+        res["transmission_angle_deg"] = {"min": mu[0], "max": mu[1], "rig_band": list(rig.MU_LIMITS_DEG),
+                                         "within_band": bool(mu[0] > rig.MU_LIMITS_DEG[0] and mu[1] < rig.MU_LIMITS_DEG[1])}
     for k in ("mechanical_advantage", "transmission_angle"):
         if k in m.meta:
             res[f"{k}_definition"] = m.meta[k]
     res["rule_violations"] = [] if textbook else rig.broken_rules(lk.meta)
-    res["angles"] = _records(m)
     return res
+
+
+def write_json(res: dict, motions, out) -> None:
+    """Write ``res`` with ``"angles"``: the records of every motion chunk of ``motions``, each
+    written as it comes (the result is never held whole)."""
+    head = json.dumps(res, indent=1)
+    out.write(head[: head.rindex("}")].rstrip() + ',\n "angles": [')
+    sep = "\n  "
+    for m in motions:
+        if m.crank_deg.size:
+            out.write(sep + records_text(m))
+            sep = ",\n  "
+    out.write("\n ]\n}\n")
 
 
 def _fmt(x, w=11, p=4) -> str:
     return f"{'unbounded':>{w}s}" if x is None else f"{x:{w}.{p}f}"
 
 
-def format_table(res: dict, max_rows: int = 24) -> str:
-    """Readable summary and a table of the motion (at most ``max_rows`` evenly chosen angles)."""
+def format_table(res: dict, max_rows: int = 24, of: int | None = None) -> str:
+    """Readable summary and a table of the motion (at most ``max_rows`` evenly chosen angles;
+    ``of``: how many angles ``res["angles"]`` was chosen from, if not all)."""
     L = res["lengths_mm"] or {}
     out = [f"WARNING: breaks rig rule {v}" for v in res["rule_violations"]]   # first, whatever follows
     out += [f"{res['scene']}: {res['linkage']}  " + "  ".join(f"{k}={v:g}" for k, v in L.items()) + " mm"
@@ -187,8 +235,14 @@ def format_table(res: dict, max_rows: int = 24) -> str:
                 out.append(f"{lim['kind']}: crank {lim['crank_deg']:.4f} deg, slider at {lim['slider_mm']:.4f} mm")
             if t["stroke_mm"] is not None:
                 out.append(f"slider stroke {t['stroke_mm']:.4f} mm")
-        if t["dead_points_deg"]:
-            out.append("dead points (the crank cannot drive past): " + ", ".join(f"{a:.4f}" for a in t["dead_points_deg"])
+        change = t.get("change_points_deg") or []
+        dead = [a for a in t["dead_points_deg"] if not any(abs((a - c + 180) % 360 - 180) < 1e-6 for c in change)]
+        if change:
+            out.append("change points (every link in line; the crank passes, the linkage may leave on either branch, "
+                       "this follows the smooth one): " + ", ".join(f"{a:.4f}" for a in change) + " deg"
+                       + ("; it comes back to its start after two turns" if t.get("turns_to_repeat") == 2 else ""))
+        if dead:
+            out.append("dead points (the crank cannot drive past): " + ", ".join(f"{a:.4f}" for a in dead)
                        + " deg" + (f"; crank range {t['crank_range_deg'][0]:.4f} to {t['crank_range_deg'][1]:.4f} deg"
                                    if t.get("crank_range_deg") else ""))
         if t["time_ratio"] is not None:
@@ -201,8 +255,9 @@ def format_table(res: dict, max_rows: int = 24) -> str:
     if "mechanical_advantage_definition" in res:
         out.append(f"mechanical advantage = {res['mechanical_advantage_definition']}")
     rows = res["angles"]
-    if len(rows) > max_rows:
-        out.append(f"\n(every {math.ceil(len(rows) / max_rows)}th of {len(rows)} angles; --json or --csv for all)")
+    total = of or len(rows)
+    if total > max_rows:
+        out.append(f"\n(every {math.ceil(total / max_rows)}th of {total} angles; --json or --csv for all)")
         rows = rows[::math.ceil(len(rows) / max_rows)]
     links = [n for n in rows[0]["links"] if n != "crank"]
     head = f"{'crank deg':>9s}"
@@ -228,8 +283,7 @@ def format_table(res: dict, max_rows: int = 24) -> str:
     return "\n".join(out)
 
 
-def write_csv(m: linkage.Motion, path: str | Path) -> None:
-    """One row per crank angle: link angles and rates, point positions, velocities, accelerations."""
+def _csv_columns(m: linkage.Motion) -> dict[str, np.ndarray]:
     cols = {"crank_deg": m.crank_deg}
     for n, v in m.links.items():
         for k, a in v.items():
@@ -244,11 +298,51 @@ def write_csv(m: linkage.Motion, path: str | Path) -> None:
     if m.transmission_deg is not None:
         cols["transmission_angle_deg"] = m.transmission_deg
         cols["mechanical_advantage"] = m.mechanical_advantage
-    with open(path, "w", newline="") as fh:
+    return cols
+
+
+def write_csv(motions, path: str | Path) -> None:
+    """One row per crank angle: link angles and rates, point positions, velocities, accelerations
+    (10 significant digits; an unbounded value empty).  ``motions``: a Motion or its chunks,
+    each written as it comes."""
+    chunks = [motions] if isinstance(motions, linkage.Motion) else motions
+    with open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(cols)
-        for i in range(m.crank_deg.size):
-            w.writerow(["" if not np.isfinite(c[i]) else f"{c[i]:.10g}" for c in cols.values()])
+        for i, m in enumerate(chunks):
+            cols = _csv_columns(m)
+            if i == 0:
+                w.writerow(cols)
+            table = np.column_stack(list(cols.values()))
+            finite = np.isfinite(table).all(1)
+            row = ",".join(["%.10g"] * table.shape[1]) + "\r\n"
+            for a, b in _runs(finite):
+                if finite[a]:
+                    fh.write((row * (b - a)) % tuple(table[a:b].ravel().tolist()))
+                else:
+                    w.writerows(["" if not np.isfinite(x) else f"{x:.10g}" for x in r] for r in table[a:b])
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) of each run of equal values of ``mask``."""
+    cut = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
+    edges = np.concatenate([[0], cut, [mask.size]])
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def _chunks(lk, deg: np.ndarray, omega: float, alpha: float):
+    """The motion at ``deg``, :data:`CHUNK` angles at a time."""
+    for i in range(0, max(deg.size, 1), CHUNK):
+        yield linkage.linkage_motion(lk, deg[i:i + CHUNK], omega, alpha)
+
+
+def _mu_range(lk, deg: np.ndarray, omega: float, alpha: float) -> tuple[float, float] | None:
+    """The transmission angle's least and greatest value at ``deg`` (None if it has none)."""
+    lo, hi = math.inf, -math.inf
+    for m in _chunks(lk, deg, omega, alpha):
+        if m.transmission_deg is None:
+            return None
+        lo, hi = min(lo, float(m.transmission_deg.min())), max(hi, float(m.transmission_deg.max()))
+    return lo, hi
 
 
 def run(args) -> int:
@@ -272,17 +366,16 @@ def run(args) -> int:
         deg = np.array([instant])
     else:
         deg = full
-    m = linkage.linkage_motion(lk, deg, omega, alpha)
-    mu_turn = m if deg is full else (linkage.linkage_motion(lk, full, omega, alpha) if turn is not None else None)
-    res = result(lk, name, textbook, m, turn, mu_turn)
+    first = linkage.linkage_motion(lk, deg[:1], omega, alpha)   # the driver and definitions
+    mu = _mu_range(lk, full, omega, alpha) if (turn is not None or deg is full) else None
+    res = result(lk, name, textbook, first, turn, mu)
     title = f"{name}: {lk.meta.get('type')} " + ", ".join(f"{k} {v:g}" for k, v in (lk.meta.get("lengths_mm") or {}).items()) + " mm"
     if csv_path:
-        write_file(csv_path, lambda tmp: write_csv(m, tmp))
+        write_file(csv_path, lambda tmp: write_csv(_chunks(lk, deg, omega, alpha), tmp))
     if png:
         from rigfem.report.motion import motion_plot
 
-        whole = m if deg is full else linkage.linkage_motion(lk, full, omega, alpha)
-        write_file(png, lambda tmp: motion_plot(whole, tmp, title))
+        write_file(png, lambda tmp: motion_plot(linkage.linkage_motion(lk, full, omega, alpha), tmp, title))
     if gif:
         from rigfem.report.motion import motion_gif
 
@@ -291,8 +384,10 @@ def run(args) -> int:
             marks = [t["crank_deg"] for t in turn.get("toggles", [])] + [t["crank_deg"] for t in turn.get("limits", [])]
         write_file(gif, lambda tmp: motion_gif(linkage.linkage_motion(lk, linkage.crank_angles(72), omega, alpha), tmp, title, marks))
     if args.json:
-        print(json.dumps(res, indent=1))
+        write_json(res, _chunks(lk, deg, omega, alpha), sys.stdout)
     else:
-        print(format_table(res))
+        shown = deg[::math.ceil(deg.size / 24)]
+        res["angles"] = _records(linkage.linkage_motion(lk, shown, omega, alpha))
+        print(format_table(res, of=deg.size))
     wrote(csv_path, png, gif)
     return 0

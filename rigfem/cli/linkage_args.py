@@ -6,7 +6,13 @@ from __future__ import annotations
 import argparse
 
 from rigfem.cli.exitcodes import RULES_REFUSED
+from rigfem.errors import check_range
 from rigfem.settings import REFERENCE_SCENE
+
+def lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
+    """--four-bar / --slider-crank lengths as positive floats (InputError naming the one that is
+    not); the builders then hold them to 10-10000 mm, saying when a length looks like metres."""
+    return [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(names, values)]
 
 
 def add_linkage_arguments(p: argparse.ArgumentParser) -> None:

@@ -8,13 +8,19 @@ from typing import TYPE_CHECKING
 
 from rigfem import rig  # lazy (lazy_loader)
 from rigfem.cli.outputs import new_output, write_file
-from rigfem.errors import InputError, check_range
+from rigfem.errors import InputError, check_range, plain
 from rigfem.settings import FIDELITY, MeshSettings, preset
 
 if TYPE_CHECKING:
     from rigfem.mesh.partmesh import PartMesh
 
 HELP = "mesh a part (known name or .geo/.step/.brep file) and write .vtu or .msh"
+#: allowed element sizes (mm): global, and the smallest local size; beyond them the cost estimate
+#: or the floats themselves fail (1e-300 divides by zero, 1e300 overflows)
+SIZE_MM = (0.01, 10_000.0)
+LOCAL_MIN_MM = 0.001
+#: allowed magnitude of a dimension (--length, --set), mm
+DIM_MM = 1e6
 #: the meaning of exit code 0 (the command has no verdict)
 SUCCESS = "mesh written"
 
@@ -49,9 +55,9 @@ def _overrides(args: argparse.Namespace) -> dict[str, float]:
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise InputError(f"--set {item!r} must look like DIM=VALUE, e.g. thickness=12")
-        out[key.strip()] = check_range(key.strip(), value, unit="mm")
+        out[key.strip()] = check_range(f"--set {plain(key.strip(), 40)}", value, -DIM_MM, DIM_MM, "mm")
     if args.length is not None:
-        out["length"] = check_range("--length", args.length, 0.0, None, "mm", lo_open=True)
+        out["length"] = check_range("--length", args.length, 0.0, DIM_MM, "mm", lo_open=True)
     return out
 
 
@@ -60,11 +66,10 @@ def _settings(args: argparse.Namespace, kind: str) -> MeshSettings:
     from rigfem.mesh.mesher import DEFAULT_SIZE
 
     base = preset(args.fidelity) if args.fidelity else MeshSettings(DEFAULT_SIZE[kind])
-    size = check_range("--size", args.size if args.size is not None else base.size_mm, 0.0, None, "mm",
-                       lo_open=True)
+    size = check_range("--size", args.size if args.size is not None else base.size_mm, *SIZE_MM, "mm")
     local = args.local_size if args.local_size is not None else (base.local_size_mm if args.fidelity else None)
     if local is not None:
-        check_range("--local-size", local, 0.0, size, "mm", lo_open=True)
+        check_range("--local-size", local, LOCAL_MIN_MM, size, "mm")
     refine = tuple(g.strip() for g in args.refine.split(",") if g.strip())
     return replace(base, size_mm=size, local_size_mm=local, refine=refine,
                    min_quality=check_range("--min-quality", args.min_quality, 0.0, 1.0))
@@ -90,6 +95,9 @@ def run(args: argparse.Namespace) -> int:
     from rigfem.mesh.partmesh import write_mesh
 
     out = new_output("--out", args.out, (".vtu", ".msh"), args.force)
+    for flag, value, lo in (("--size", args.size, SIZE_MM[0]), ("--local-size", args.local_size, LOCAL_MIN_MM)):
+        if value is not None:  # at the edge: before the part is read
+            check_range(flag, value, lo, SIZE_MM[1], "mm")
     part = rig.load_part(args.part, _overrides(args))
     settings = _settings(args, part.kind)
     from rigfem.cache import NO_CACHE, from_environment

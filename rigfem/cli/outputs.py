@@ -8,7 +8,10 @@ overwritten without ``--force``, ``--force`` replacing only what rigfem wrote, w
   and SHA-256); ``--force`` replaces a file only while its content is still what the ledger says
   (a file the user made or edited since is never replaced).  Result folders carry
   :data:`rigfem.report.folder.MARKER`.
-- Every file is written to a temporary name beside it and renamed into place when complete.
+- Every file is written to a temporary name beside it and renamed into place when complete; the
+  rename never replaces a file that appeared since the check (another program's, or another rigfem
+  run's on the same path): that is refused, the result not written.
+- A name longer than the file system takes is bad input naming the option, before any work.
 """
 
 from __future__ import annotations
@@ -20,9 +23,9 @@ import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from rigfem.errors import InputError, plain
+from rigfem.errors import InputError, NoSpaceError, plain
 from rigfem.files import file_sha256, whole_file
-from rigfem.report.folder import MARKER
+from rigfem.report.folder import MARKER, check_cache_apart, check_names
 
 __all__ = ["LEDGER", "MIN_FREE_BYTES", "check_place", "new_output", "new_folder", "written", "write_text",
            "write_file", "wrote", "mark_folder", "rigfem_wrote"]
@@ -32,6 +35,9 @@ LEDGER = ".rigfem-outputs.json"
 #: a destination with less free space than this is refused as full
 MIN_FREE_BYTES = 4 * 2**20
 _SYSTEM = ("/proc", "/sys", "/dev")
+#: output file -> what :func:`new_output` found there: None (nothing) or the SHA-256 of the rigfem
+#: file ``--force`` may replace; :func:`written` replaces nothing else
+_FOUND: dict[Path, str | None] = {}
 
 
 def _nearest_existing(p: Path) -> Path:
@@ -53,6 +59,7 @@ def check_place(flag: str, path: str | Path, folder: bool = False) -> Path:
         raise InputError(f"{flag} = {plain(text, 80)!r} is under {p.parts[0]}{p.parts[1]}, a system folder; "
                          f"give a path in a folder of yours")
     base = _nearest_existing(p.parent)
+    check_names(flag, text, p, base)
     if not base.is_dir():
         raise InputError(f"{flag} = {plain(text, 80)!r}: {plain(base, 80)} is not a folder (it is a file)")
     if not os.access(base, os.W_OK | os.X_OK):
@@ -101,6 +108,9 @@ def new_output(flag: str, path: str | None, suffix: str | tuple[str, ...], force
         if not rigfem_wrote(p):
             raise InputError(f"{flag} = {plain(path, 80)!r} exists and was not written by rigfem (or was changed "
                              f"since); --force replaces only files rigfem wrote: choose another name")
+        _FOUND[p] = file_sha256(p)
+    else:
+        _FOUND[p] = None
     return p
 
 
@@ -108,6 +118,7 @@ def new_folder(flag: str, path: str | Path, force: bool = False) -> Path:
     """The output folder ``path`` checked before any computation: it does not exist, or (with
     ``force``) it is a result folder rigfem wrote (it holds the marker)."""
     p = check_place(flag, path, folder=True)
+    check_cache_apart(flag, p)
     if p.exists() or p.is_symlink():
         if p.is_symlink() or not p.is_dir():
             raise InputError(f"{flag} = {plain(path, 80)!r} exists and is not a folder")
@@ -138,17 +149,36 @@ def _record(path: Path) -> None:
         tmp.write_text(json.dumps(ledger, indent=1, sort_keys=True) + "\n", encoding="utf-8")
 
 
+def _still(path: Path, found: str | None) -> bool:
+    """Whether ``path`` is as :func:`new_output` found it: absent, or the rigfem file of that SHA-256."""
+    if found is None:
+        return not (path.exists() or path.is_symlink())
+    return path.is_file() and not path.is_symlink() and file_sha256(path) == found
+
+
 @contextlib.contextmanager
 def written(path: str | Path, record: bool = True) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same suffix, so writers pick the format); rename it
-    into place when the block completes, remove it if not.  An OSError becomes one line."""
+    into place when the block completes, remove it if not.  An output :func:`new_output` checked
+    replaces only what it found there: a file that appeared (or changed) since is kept and the
+    write refused.  An OSError becomes one line; a full disk stays :class:`NoSpaceError`."""
     path = Path(path)
+    checked = Path(os.path.abspath(path))
+    found = _FOUND.pop(checked, False)
+    appeared = InputError(f"{plain(path, 120)} appeared (or changed) while rigfem ran: it was not replaced "
+                          f"and this result was not written; run again with another name")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with whole_file(path) as tmp:
+        if found is not False and not _still(path, found):
+            raise appeared
+        with whole_file(path, replace=True if found is False else found or False) as tmp:
             yield tmp
         if record:
             _record(path)
+    except FileExistsError:
+        raise appeared from None
+    except NoSpaceError:
+        raise
     except OSError as exc:
         raise InputError(f"cannot write {plain(path, 120)}: {exc.strerror or exc}") from None
 

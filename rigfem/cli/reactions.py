@@ -11,7 +11,7 @@ import math
 
 from rigfem.settings import MODELS, REFERENCE_SCENE
 from rigfem.cli.exitcodes import RULES_SHOWN
-from rigfem.cli.linkage_args import add_linkage_arguments
+from rigfem.cli.linkage_args import add_linkage_arguments, lengths
 from rigfem.errors import InputError, check_range
 from rigfem.cli.outputs import new_output, write_file, wrote
 
@@ -32,10 +32,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace existing --csv/--plot files (only files rigfem wrote)")
 
 
-def _lengths(names: tuple[str, ...], values: list[str]) -> list[float]:
-    return [check_range(n, v, 0.0, None, "mm", lo_open=True) for n, v in zip(names, values)]
-
-
 def _build(args) -> tuple[object, float, str]:
     from rigfem.dynamics.forces import loaded_linkage
     from rigfem.linkage.mechanisms import four_bar, slider_crank
@@ -48,10 +44,10 @@ def _build(args) -> tuple[object, float, str]:
     if args.scene and (args.four_bar or args.slider_crank):
         raise InputError("give either a scene or --four-bar/--slider-crank, not both")
     if args.four_bar:
-        lk = four_bar(*_lengths(("B2", "B3", "B4", "D"), args.four_bar))
+        lk = four_bar(*lengths(("B2", "B3", "B4", "D"), args.four_bar))
     elif args.slider_crank:
         off = 0.0 if args.offset is None else check_range("--offset", args.offset, -10000, 10000, "mm")
-        lk = slider_crank(*_lengths(("B2", "B3"), args.slider_crank), off)
+        lk = slider_crank(*lengths(("B2", "B3"), args.slider_crank), off)
     else:
         from rigfem.scene import load_scene
 

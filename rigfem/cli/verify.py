@@ -17,7 +17,7 @@ from pathlib import Path
 from rigfem.cli.linkage_args import add_rule_argument
 from rigfem.cli.outputs import mark_folder, new_folder, write_text, wrote
 from rigfem.cli.progress import OBSERVER
-from rigfem.errors import InputError, check_range, plain
+from rigfem.errors import InputError, check_range, check_whole, plain
 from rigfem.settings import REFERENCE_SCENE
 
 HELP = "independent verification: re-solve every part case of a scene in CalculiX and compare"
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     # every option and the scene are checked before ccx is looked for and before any computation
     if args.against != "calculix":
         raise InputError(f"--against = {args.against!r}: the only other solver is 'calculix'")
-    threads = int(check_range("--threads", args.threads, 1, 64))
+    threads = check_whole("--threads", args.threads, 1, 64)
     peak_tol = check_range("--peak-tol", args.peak_tol, 0.0, 100.0, "%")
     disp_tol = check_range("--disp-tol", args.disp_tol, 0.0, 100.0, "%")
     out = new_folder("--out", args.out, args.force) if args.out else None

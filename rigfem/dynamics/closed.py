@@ -20,14 +20,18 @@ import numpy as np
 
 from rigfem.dynamics.forces import cross
 from rigfem.dynamics.history import JointHistory, ReactionHistory
+from rigfem.linkage.closed import change_point_turn
+from rigfem.linkage.loops import change_points_deg, singular_ranges
 from rigfem.linkage.model import Linkage, LinkageState, Prismatic
 
 __all__ = ["closed_reactions"]
 
 
 def _two_moments(r1: np.ndarray, m1: np.ndarray, r2: np.ndarray, m2: np.ndarray) -> np.ndarray:
-    """F (n, 2) with r1 × F = m1 and r2 × F = m2 (lever arms (n, 2)): F = (m1 r2 - m2 r1) / (r1 × r2)."""
-    return (m1[:, None] * r2 - m2[:, None] * r1) / cross(r1, r2)[:, None]
+    """F (n, 2) with r1 × F = m1 and r2 × F = m2 (lever arms (n, 2)): F = (m1 r2 - m2 r1) / (r1 × r2);
+    not finite where the arms align (a change point: flagged as a toggle)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (m1[:, None] * r2 - m2[:, None] * r1) / cross(r1, r2)[:, None]
 
 
 def closed_reactions(lk: Linkage, motion: LinkageState, loads: dict, deg: np.ndarray,
@@ -56,7 +60,30 @@ def closed_reactions(lk: Linkage, motion: LinkageState, loads: dict, deg: np.nda
         prism = isinstance(j, Prismatic)
         joints[j.name] = JointHistory(j.name, j.body_a, j.body_b, forces[j.name], pos[j.name] * 1000,
                                       -M["slider"] if prism else None, "prismatic" if prism else "revolute")
+    bad = _toggles(lk, motion, deg, joints, torque)
     meta = {k: v for k, v in lk.meta.items() if k != "singular_fn"}
-    meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=None)
-    return ReactionHistory(deg, joints, torque, motion.histories, meta, singular_mask=None,
-                           full_turn=motion.full_turn)
+    meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=singular_ranges(deg, bad))
+    if bad is not None:  # non-finite values (exactly at a change point) become 0; peaks() refuses them
+        for jh in joints.values():
+            jh.force_N = np.where(np.isfinite(jh.force_N), jh.force_N, 0.0)
+        torque = np.where(np.isfinite(torque), torque, 0.0)
+    return ReactionHistory(deg, joints, torque, motion.histories, meta,
+                           singular_mask=bad if bad is not None and bad.any() else None, full_turn=motion.full_turn)
+
+
+def _toggles(lk: Linkage, motion: LinkageState, deg: np.ndarray, joints: dict, torque: np.ndarray) -> np.ndarray | None:
+    """The samples at a toggle of a change-point four-bar (the one closed-form linkage that has
+    toggles): the builder's transmission-angle criterion, a non-finite reaction, and the sample
+    nearest each change point the samples pass; None for any other linkage."""
+    L = lk.meta.get("lengths_mm") or {}
+    if not change_point_turn(L, motion.kind):
+        return None
+    bad = ~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0)
+    if lk.meta.get("singular_fn") is not None:
+        bad |= lk.meta["singular_fn"](deg, motion.histories)
+    for c in change_points_deg(L["b2"], L["b3"], L["b4"], L["d"]):
+        off = np.abs((deg - c + 180.0) % 360.0 - 180.0)
+        step = np.max(np.diff(np.sort(deg))) if deg.size > 1 else 0.0
+        if off.min() <= step:
+            bad[np.argmin(off)] = True
+    return bad

@@ -40,7 +40,7 @@ def react(lk: Linkage, motion: LinkageState, ext: ReactionHistory, options: Dyna
     sign = {n: -1.0 if (ext.joints[n].body_a, ext.joints[n].body_b) == (j.body_b, j.body_a) else 1.0
             for n, j in kin.joints.items()}
     forces = spline_evaluator(ext)
-    meta = dict(kin.meta, model=f"imported from {options.reactions_csv.name}", singular=None,
+    meta = dict(kin.meta, model=f"imported from {options.reactions_csv.name}", singular=ext.meta["singular"],
                 assumed=ext.meta["assumed"])
 
     def combine(f: ReactionHistory, k: ReactionHistory) -> ReactionHistory:

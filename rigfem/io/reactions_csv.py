@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.dynamics.history import JointHistory, ReactionHistory
-from rigfem.errors import InputError, decode_text
+from rigfem.errors import InputError, decode_text, plain, read_at_most
 from rigfem.files import whole_file
 from rigfem.linkage.loops import is_full_turn, singular_ranges
 
@@ -49,6 +49,11 @@ def write_csv(h: ReactionHistory, path: str | Path) -> None:
             w.writerow(row)
 
 
+#: largest reaction CSV read (bytes): rigfem's own CSV of 100 000 crank angles (the most a check
+#: samples) is about 25 MB
+MAX_BYTES = 64 * 2**20
+
+
 #: largest crank-angle step (deg) an imported history may have: 36 samples per turn, the least
 #: rigfem's own dynamics accepts ([check].samples)
 MAX_STEP_DEG = 10.0
@@ -57,6 +62,11 @@ MAX_STEP_DEG = 10.0
 #: largest gap (% of the peak force) between the cubic and the linear estimate of a force
 #: half-way between two samples: above it the sampling does not resolve the curve
 MAX_MIDPOINT_PCT = 5.0
+
+
+#: largest share of rows marked singular (or blank): beyond it the history is mostly unknown and the
+#: peak search would rest on the few rows left (a CSV of 359 blank singular rows of 360 read PASS)
+MAX_SINGULAR_SHARE = 0.05
 
 
 #: the largest joint force of a real rig linkage (N): below MIN it is not in N (kN?): the
@@ -107,11 +117,11 @@ def _check_forces(where: str, deg: np.ndarray, forces: dict[str, np.ndarray], si
     if peak > hi:
         raise InputError(f"reaction CSV {where!r}: largest joint force {peak:.4g} N is above {hi:g} N: "
                          f"forces must be in N and the history bounded")
-    if sing.any():
-        return  # around a toggle the curve is not meant to be smooth
-    for n, m in mags.items():
+    s = np.concatenate([sing[-1:], sing, sing[:2]])
+    usable = ~(s[:-3] | s[1:-2] | s[2:-1] | s[3:])  # windows of four rows, none singular (around a toggle
+    for n, m in mags.items():                      # the curve is not meant to be smooth)
         f = np.concatenate([m[-1:], m, m[:2]])  # one turn, closed
-        gap = np.abs(-f[:-3] + f[1:-2] + f[2:-1] - f[3:]) / 16.0
+        gap = np.where(usable, np.abs(-f[:-3] + f[1:-2] + f[2:-1] - f[3:]) / 16.0, 0.0)
         k = int(np.argmax(gap))
         if gap[k] > MAX_MIDPOINT_PCT / 100 * peak:
             raise InputError(f"reaction CSV {where!r}: joint {n} is sampled too coarsely to bracket its peaks "
@@ -132,17 +142,17 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     ``meta["assumed"]`` then says so.  Lines starting with ``#`` are comments.  Refused
     (InputError naming the problem): angles that do not cover one full turn in steps of at most
     :data:`MAX_STEP_DEG`, angles or forces that do not fit their declared unit (radians in a
-    degree column, kN), and sampling too coarse to bracket the peaks (see :func:`_check_forces`).
+    degree column, kN), sampling too coarse to bracket the peaks (see :func:`_check_forces`; rows
+    marked singular are left out of that test, not the test itself), more than
+    :data:`MAX_SINGULAR_SHARE` of the rows marked singular, and a column (or a joint's pair, the
+    driver, the crank angle) given twice.
     """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"reaction CSV {str(p)!r} does not exist")
     pairs: dict[str, tuple[str, str]] = {}
     lines = []
-    try:
-        blob = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"reaction CSV {str(p)!r} cannot be read: {exc.strerror or exc}") from None
+    blob = read_at_most(p, MAX_BYTES, f"reaction CSV {str(p)!r}", "a reaction CSV")
     for line in decode_text(blob, f"reaction CSV {str(p)!r}").splitlines():
         s = line.strip()
         if s.startswith("#"):
@@ -156,6 +166,14 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     rows = list(csv.reader(lines))
     head = [c.strip() for c in rows[0]]
     lower = [c.lower() for c in head]
+    twice = sorted({c for c in lower if lower.count(c) > 1})
+    if twice:
+        raise InputError(f"reaction CSV {str(p)!r}: column {head[lower.index(twice[0])]} appears "
+                         f"{lower.count(twice[0])} times; which one holds the data is ambiguous: keep one")
+    angles = [head[i] for i, c in enumerate(lower) if c in _ANGLE_COLS]
+    if len(angles) > 1:
+        raise InputError(f"reaction CSV {str(p)!r}: {len(angles)} crank-angle columns ({', '.join(angles)}); "
+                         f"which one is the crank's is ambiguous: keep one")
     ang = next((lower.index(c) for c in _ANGLE_COLS if c in lower), None)
     if ang is None:
         raise InputError(f"reaction CSV {str(p)!r}: no crank-angle column ({', '.join(_ANGLE_COLS)})")
@@ -176,12 +194,19 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
             if c.endswith(sx) and len(c) > len(sx):
                 jn = head[i][: -len(sx)]
                 cy = c[: -len(sx)] + sy
-                if cy in lower and jn not in joints:
+                if cy in lower and jn in joints:
+                    raise InputError(f"reaction CSV {str(p)!r}: joint {jn} has two pairs of force columns; "
+                                     f"which one holds its force is ambiguous: keep one")
+                if cy in lower:
                     ba, bb = pairs.get(jn, ("?", "?"))
                     joints[jn] = JointHistory(jn, ba, bb, np.stack([arr[:, i], arr[:, lower.index(cy)]], -1))
                 break
     if not joints:
         raise InputError(f"reaction CSV {str(p)!r}: no joint force columns (<joint>_fx_N, <joint>_fy_N)")
+    torques = [head[i] for i, c in enumerate(lower) if c in {t.lower() for t in _TORQUE_COLS + ("driver_force_N",)}]
+    if len(torques) > 1:
+        raise InputError(f"reaction CSV {str(p)!r}: {len(torques)} driver columns ({', '.join(torques)}); "
+                         f"which one loads the crank is ambiguous: keep one")
     tcol = next((lower.index(c.lower()) for c in _TORQUE_COLS + ("driver_force_N",) if c.lower() in lower), None)
     stated = (missing or {}).get("torque_Nm")
     torque = arr[:, tcol] if tcol is not None else np.full(arr.shape[0], float(stated or 0.0))
@@ -196,6 +221,11 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     if np.any(np.diff(deg) <= 0):
         raise InputError(f"reaction CSV {str(p)!r}: crank angles must increase strictly")
     _check_turn(str(p), head[ang], arr[:, ang], deg)
+    if sing.mean() > MAX_SINGULAR_SHARE:
+        where = ", ".join(f"{a:g}-{b:g}" for a, b in singular_ranges(deg, sing))
+        raise InputError(f"reaction CSV {str(p)!r}: {int(sing.sum())} of {sing.size} rows are marked singular "
+                         f"({100 * sing.mean():.3g} %, at most {100 * MAX_SINGULAR_SHARE:g} %): the reactions are "
+                         f"unknown over crank {plain(where, 80)} deg, too few rows left to find their peaks")
     _check_forces(str(p), deg, {n: j.force_N for n, j in joints.items()}, sing)
     assumed = []
     if tcol is None and stated is None:

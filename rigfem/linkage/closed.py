@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, fourbar_angles, slider_crank_angles
+from rigfem.linkage.loops import BRANCHES, MU_TOGGLE_DEG, change_points_deg, fourbar_angles, fourbar_closes, slider_crank_angles
 from rigfem.linkage.model import GROUND, CrankDriver, Linkage, LinkageState, Prismatic, Revolute, state_of
 
-__all__ = ["closed_motion"]
+__all__ = ["closed_motion", "change_point_turn"]
 
 #: joints (name, body_a, body_b) the builders make
 _FOURBAR = (("O2", GROUND, "crank"), ("A", "crank", "coupler"), ("B", "coupler", "rocker"), ("O4", GROUND, "rocker"))
@@ -59,14 +59,24 @@ def _toggle_free(L: dict, kind: str) -> bool:
     return bool(s3 < 1.0 and np.sqrt(1.0 - s3**2) >= lim)
 
 
+def change_point_turn(L: dict, kind: str | None) -> bool:
+    """A change-point four-bar whose crank turns fully: its closed form follows the smooth branch
+    through the change points (:func:`rigfem.linkage.loops.fourbar_angles`), where the general
+    solver, keeping its Jacobian's sign, may bounce back onto the other branch."""
+    if kind != "four-bar" or not change_points_deg(L["b2"], L["b3"], L["b4"], L["d"]):
+        return False
+    return bool(fourbar_closes(L["b2"], L["b3"], L["b4"], L["d"], np.linspace(0.0, 360.0, 3601)).all())
+
+
 def closed_motion(lk: Linkage, theta: np.ndarray, w2: float) -> LinkageState | None:
     """The motion of ``lk`` at crank angles ``theta`` (rad) and crank speed ``w2`` (rad/s), or
-    None where no closed form applies (another topology, or a toggle anywhere in the turn)."""
+    None where no closed form applies (another topology, or a toggle anywhere in the turn other
+    than a change-point four-bar's)."""
     def at(deg: np.ndarray) -> LinkageState | None:
         return closed_motion(lk, np.radians(np.atleast_1d(np.asarray(deg, float))), w2)
 
     kind = _kind(lk)
-    if kind is None or not _toggle_free(lk.meta["lengths_mm"], kind):
+    if kind is None or not (_toggle_free(lk.meta["lengths_mm"], kind) or change_point_turn(lk.meta["lengths_mm"], kind)):
         return None
     L = {k: v / 1000 for k, v in lk.meta["lengths_mm"].items()}
     n = theta.size

@@ -22,6 +22,7 @@ import numpy as np
 
 from rigfem.linkage.loops import (
     BRANCHES,
+    change_points_deg,
     fourbar_angles,
     fourbar_closes,
     slider_crank_angles,
@@ -159,7 +160,11 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
     """What the four-bar does over a crank turn (angles in deg, exact, from closed forms).
 
     ``dead_points_deg``: crank angles where coupler and rocker are collinear (mu = 0 or 180;
-    the crank cannot drive past them; they bound ``crank_range_deg``).  ``toggles``: crank
+    the crank cannot drive past them; they bound ``crank_range_deg``), except the
+    ``change_points_deg`` of a change-point four-bar (Grashof's equality): there every link lies
+    in line, the crank passes and the linkage may leave on either branch; rigfem follows the
+    smooth one (:func:`rigfem.linkage.loops.fourbar_angles`), on which a linkage with one change
+    point a turn comes back to its start after two turns (``turns_to_repeat``).  ``toggles``: crank
     and coupler collinear (``extended``/``folded``) — the rocker's limit positions (its
     angular velocity is zero; a rocker-driven linkage locks there).  ``rocker_swing_deg`` and
     ``time_ratio`` (the slower over the faster stroke at constant crank speed) follow when
@@ -186,11 +191,14 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
                 continue
             k = fourbar_angles(b2, b3, b4, d, np.array([th2]), 1.0, 0.0, sgn)
             rel = k["theta3"][0] - th2
-            if abs(np.sin(rel)) < 1e-6 and (np.cos(rel) > 0) == (kind == "extended"):
-                toggles.append(dict(kind=kind, crank_deg=deg, rocker_deg=float(np.degrees(k["theta4"][0]) % 360.0)))
+            tg = dict(kind=kind, crank_deg=deg, rocker_deg=float(np.degrees(k["theta4"][0]) % 360.0))
+            if abs(np.sin(rel)) < 1e-6 and (np.cos(rel) > 0) == (kind == "extended") and tg not in toggles:
+                toggles.append(tg)
+    change = change_points_deg(b2, b3, b4, d)
     out = dict(grashof=grashof_class(b2, b3, b4, d), branch=branch, crank_turns_fully=full,
                dead_points_deg=dead, crank_range_deg=None if full else _crank_range(b2, b3, b4, d, dead),
-               toggles=toggles, rocker_limits_deg=None, rocker_swing_deg=None, time_ratio=None)
+               toggles=toggles, rocker_limits_deg=None, rocker_swing_deg=None, time_ratio=None,
+               change_points_deg=change, turns_to_repeat=2 if full and len(change) == 1 else 1)
     ext = [t for t in toggles if t["kind"] == "extended"]
     fol = [t for t in toggles if t["kind"] == "folded"]
     if full and len(ext) == 1 and len(fol) == 1:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["BRANCHES", "MU_TOGGLE_DEG", "transmission_angle_deg", "fourbar_closes", "fourbar_angles",
-           "slider_crank_angles", "singular_ranges", "is_full_turn"]
+           "change_points_deg", "change_points_passed", "slider_crank_angles", "singular_ranges", "is_full_turn"]
 
 #: branch name -> sign of the coupler's turn from the line A->O4 (as rigfem.linkage.original)
 BRANCHES = {"open": 1, "crossed": -1}
@@ -40,11 +40,98 @@ def fourbar_closes(b2: float, b3: float, b4: float, d: float, deg: np.ndarray) -
     return (f <= b3 + b4 + 1e-12 * f) & (f >= abs(b3 - b4) - 1e-12 * f)
 
 
+def _change_masks(b2, b3, b4, d) -> tuple:
+    """Whether the four-bar (lengths may be arrays) has a change point at crank 0 deg, at 180 deg."""
+    tol = 1e-9 * np.maximum(np.maximum(b2, b3), np.maximum(b4, d))
+    return np.abs(np.abs(d - b2) - np.abs(b3 - b4)) <= tol, np.abs(d + b2 - b3 - b4) <= tol
+
+
+def change_points_deg(b2: float, b3: float, b4: float, d: float) -> list[float]:
+    """Crank angles (0 and/or 180 deg) where a change-point four-bar (two lengths summing to the
+    other two, Grashof's equality) lies flat, every link in line: its two assembly branches meet
+    there and the linkage may leave on either.  [] for any other four-bar.
+
+    >>> change_points_deg(500, 500, 500, 500), change_points_deg(300, 700, 700, 300)
+    ([0.0, 180.0], [0.0])
+    """
+    at0, at180 = _change_masks(b2, b3, b4, d)
+    return [0.0] * bool(at0) + [180.0] * bool(at180)
+
+
+def change_points_passed(b2: float, b3: float, b4: float, d: float, start_deg: float, span_deg: float) -> list[float]:
+    """The change points (:func:`change_points_deg`) the crank meets turning ``span_deg`` from
+    ``start_deg`` (negative: clockwise), both ends included: where the linkage may leave on
+    either branch.
+
+    >>> change_points_passed(500, 500, 500, 500, 90.0, 180.0), change_points_passed(500, 500, 500, 500, 90.0, -80.0)
+    ([180.0], [])
+    """
+    out = []
+    for c in change_points_deg(b2, b3, b4, d):
+        off = (c - start_deg) % 360.0 if span_deg >= 0 else (start_deg - c) % 360.0
+        if off <= abs(span_deg) + 1e-9:
+            out.append(c)
+    return out
+
+
+def _branch_signs(at180, th2, branch):
+    """The closed form's branch sign at each crank angle of a four-bar followed by continuity: the
+    named ``branch`` from crank 0 deg on, the sign flipping where the crank passes a change point
+    (there the two branches meet, and keeping the formula's sign would jump to the other one).
+    Over one turn [0, 360) the flip at 180 deg is the only one that shows (``at180``: the
+    four-bar has a change point there)."""
+    return np.where(at180 & (np.mod(th2, 2 * np.pi) > np.pi), -float(branch), float(branch))
+
+
+#: crank step (rad) of the rates at a change point: the smooth branch's rates on both sides,
+#: Richardson-combined (truncation ~h⁴, round-off ~eps/h²: ~1e-10 relative)
+_CHANGE_STEP = 1e-3
+
+
 def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w2, a2=0.0,
                    branch: int = 1) -> dict[str, np.ndarray]:
     """Coupler and rocker angles, rates and accelerations (rad, rad/s, rad/s²) of a four-bar
-    (any length unit); ``branch`` +1 open, -1 crossed.  NaN where the loop cannot close."""
+    (any length unit; lengths may be arrays, broadcast with the angles); ``branch`` +1 open,
+    -1 crossed.  NaN where the loop cannot close.
+
+    A change-point four-bar (:func:`change_points_deg`) is followed through its change points by
+    continuity (the smooth motion: angles and rates continuous), its rates at a change point
+    being those of the smooth branch on both sides (where the formulas read 0/0)."""
     th2 = np.asarray(th2, float)
+    at0, at180 = _change_masks(b2, b3, b4, d)
+    if np.any(at0) or np.any(at180):  # one turn [0, 360): 360 deg is crank 0 again, not the end of a turn
+        th2 = np.where(at0 | at180, np.mod(th2, 2 * np.pi), th2)
+    out = _fourbar_angles(b2, b3, b4, d, th2, w2, a2, _branch_signs(at180, th2, branch))
+    if np.any(at0) or np.any(at180):
+        _rates_at_change_points(out, at0, at180, (b2, b3, b4, d, th2, w2, a2), branch)
+    return out
+
+
+def _rates_at_change_points(out: dict, at0, at180, args: tuple, branch: int) -> None:
+    """Replace the rates at crank angles on a change point (within 1e-9 rad) by the smooth branch's."""
+    shape = np.broadcast(*args).shape
+    turn = np.mod(args[4], 2 * np.pi)
+    on = np.broadcast_to((at0 & (np.minimum(turn, 2 * np.pi - turn) < 1e-9)) | (at180 & (np.abs(turn - np.pi) < 1e-9)),
+                         shape)
+    if not on.any():
+        return
+    b2, b3, b4, d, t, w2, a2 = (np.broadcast_to(x, shape)[on] for x in args)
+    after = _branch_signs(np.broadcast_to(at180, shape)[on], t + _CHANGE_STEP / 2, branch)  # just past it
+
+    def mean(h: float) -> dict:
+        hi = _fourbar_angles(b2, b3, b4, d, t + h, w2, a2, after)
+        lo = _fourbar_angles(b2, b3, b4, d, t - h, w2, a2, -after)  # just before it: the other sign
+        return {k: (hi[k] + lo[k]) / 2 for k in ("omega3", "omega4", "alpha3", "alpha4")}
+
+    near, far = mean(_CHANGE_STEP), mean(2 * _CHANGE_STEP)
+    for k in near:
+        v = np.array(np.broadcast_to(out[k], shape), float)
+        v[on] = (4 * near[k] - far[k]) / 3
+        out[k] = v
+
+
+def _fourbar_angles(b2, b3, b4, d, th2: np.ndarray, w2, a2, branch) -> dict[str, np.ndarray]:
+    """:func:`fourbar_angles` with the branch sign given per angle (``branch``: ±1 or an array)."""
     ax, ay = b2 * np.cos(th2), b2 * np.sin(th2)
     dx, dy = d - ax, -ay
     f2 = dx * dx + dy * dy
@@ -52,7 +139,12 @@ def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w
     with np.errstate(invalid="ignore", divide="ignore"):
         cpsi = (b3 * b3 + f2 - b4 * b4) / (2 * b3 * f)
         psi = np.arccos(np.where(np.abs(cpsi) <= 1.0 + 1e-12, np.clip(cpsi, -1.0, 1.0), np.nan))
-        th3 = np.arctan2(dy, dx) + branch * psi
+        line = np.arctan2(dy, dx)
+        over = (f2 == 0.0) & (b3 == b4)  # A on O4 (b2 = d, crank 0): the line A->O4 and psi as the crank nears it
+        if np.any(over):
+            line = np.where(over, np.mod(th2, 2 * np.pi) / 2 - np.pi / 2, line)
+            psi = np.where(over, np.pi / 2, psi)
+        th3 = line + branch * psi
         th4 = np.arctan2(ay + b3 * np.sin(th3), ax + b3 * np.cos(th3) - d)
         s34 = np.sin(th3 - th4)
         w3 = b2 * w2 * np.sin(th4 - th2) / (b3 * s34)

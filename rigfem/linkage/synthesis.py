@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigfem.linkage.kinematics import fourbar_motion, fourbar_turn
+from rigfem.linkage.loops import change_points_passed
 from rigfem.errors import ComputeError, InputError
 from rigfem.linkage.expression import check_interval, parse_function
 
@@ -113,6 +114,10 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
         got = m.links["rocker"]["angle_deg"] - off_out
         on[br] = np.abs(((got - th4(yp)) + 180.0) % 360.0 - 180.0) < 1e-6
     branch = next((br for br, ok in on.items() if ok.all()), None)
+    passed = change_points_passed(a, b, c, d, sweep[0], sweep[-1] - sweep[0])
+    if passed:
+        defects.append(f"branch defect: the crank passes the change point at {passed[0]:g} deg in the input "
+                       f"range (every link in line): there the linkage may leave on either branch")
     if branch is None:
         defects.append("branch defect: the precision points lie on different assembly branches")
         res.update(branch=None, defects=defects)
@@ -229,6 +234,12 @@ def check_three_position(r: dict) -> dict:
         defects.append("branch defect: not all three positions lie on the assembly branch of the first")
     if not crank_in_order(r["crank_deg"]):
         defects.append("order defect: the crank does not reach the positions in the order 1, 2, 3")
+    c = r["crank_deg"]
+    ccw = (c[1] - c[0]) % 360 < (c[2] - c[0]) % 360
+    passed = change_points_passed(b2, b3, b4, d, c[0], (c[2] - c[0]) % 360 if ccw else -((c[0] - c[2]) % 360))
+    if passed:
+        defects.append(f"branch defect: the crank passes the change point at {passed[0]:g} deg on the way "
+                       f"(every link in line): there the linkage may leave on either branch")
     t = fourbar_turn(b2, b3, b4, d, br)
     if t["crank_range_deg"] is not None:
         defects.append(f"the crank cannot turn fully ({t['grashof']})")

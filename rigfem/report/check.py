@@ -189,7 +189,7 @@ def write_check(checked: Checked, report: dict, output: Output, ctx: Context) ->
         report["files"] = ["report.json", "report.md", *pics, "report.html"]
         report["field_files"] = fields
         write_json(report, d / "report.json")
-        (d / "report.md").write_text(render_markdown(report))
+        (d / "report.md").write_text(render_markdown(report), encoding="utf-8")
         write_html(report, d, ctx.cache)
         if output.export_inp:
             _export(d, checked.results)
