@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # numpy is imported where arrays are handled: `rigfem parts` 
 T = TypeVar("T")
 
 __all__ = ["Cache", "NO_CACHE", "from_environment", "package_hash", "array_digest", "Entry", "save_arrays",
-           "CACHE_ENV", "MAX_GB_ENV", "resolve"]
+           "CACHE_ENV", "MAX_GB_ENV", "resolve", "environment_root"]
 
 #: the channel a discarded entry or an unusable cache folder is reported on
 log = logging.getLogger("rigfem.cache")

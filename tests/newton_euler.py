@@ -1,7 +1,7 @@
 """Newton–Euler solutions of the rig's linkages written from geometry/RIG.md's data alone, the
 independent truth tests/test_physics_truths.py and tests/test_limits.py hold rigfem's dynamics to.
 
-Rigid-body model (RIG.md §3, rigfem's default): each bar is its guide rail, a uniform bar of
+Rigid-body model (geometry/RIG.md §3, rigfem's default): each bar is its guide rail, a uniform bar of
 3.1 kg/m reaching 80 mm behind its pivot joint, plus point masses at its joints (plate +
 carriage, coupling); the crank turns at constant speed; optional gravity.  Loop closure in
 complex numbers, velocities and accelerations from the closure's derivatives, then one small
@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-RAIL_KG_M = 3.1          # catalogue linear mass of the size-25 rail (RIG.md §3, §7)
+RAIL_KG_M = 3.1          # catalogue linear mass of the size-25 rail (geometry/RIG.md §3, §7)
 BEHIND_MM = 80.0         # each rail reaches 80 mm behind its pivot joint (first hole 20 mm + half of 120 mm)
-CARRIAGE, PLATE, COUPLING = 0.68, 1.155, 0.577  # RIG.md §3 mass catalogue, kg
-RAILS_MM = (700.0, 1000.0, 1000.0)  # crank, coupler (rod), rocker guide rails (RIG.md §3)
+CARRIAGE, PLATE, COUPLING = 0.68, 1.155, 0.577  # geometry/RIG.md §3 mass catalogue, kg
+RAILS_MM = (700.0, 1000.0, 1000.0)  # crank, coupler (rod), rocker guide rails (geometry/RIG.md §3)
 
 
 def _cross(a: complex, b: complex) -> float:
@@ -86,7 +86,7 @@ def fourbar_newton_euler(b2, b3, b4, d, theta2_deg, speed_hz=1.0, gravity=(0.0, 
 
 
 def slider_crank_newton_euler(b2, b3, theta2_deg, speed_hz=1.0, gravity=(0.0, 0.0), rails_mm=RAILS_MM[:2]):
-    """The rig slider-crank (no offset; RIG.md §1, masses of rigfem's builder docstring: plate +
+    """The rig slider-crank (no offset; geometry/RIG.md §1, masses of rigfem's builder docstring: plate +
     carriage at A on the crank, coupling at A and a plate at B on the rod, a carriage + coupling
     sliding at B): forces ``O2`` (ground on crank), ``A`` (crank on rod), ``B`` (rod on slider),
     ``slide`` (ground on slider, normal to the line), torque, positions."""
@@ -124,11 +124,11 @@ def newton_euler_peak(solution, lengths, joint, speed_hz=1.0):
     return -r.fun, float(r.x % 360.0)
 
 
-STUDY_RAIL_KG_M = 2.7  # the 2013 study's rail linear mass (RIG.md §3)
+STUDY_RAIL_KG_M = 2.7  # the 2013 study's rail linear mass (geometry/RIG.md §3)
 
 
 def study_program(b2, b3, b4, d, theta2_deg, speed_hz=1.0, rails_mm=RAILS_MM, branch=+1):
-    """The 2013 study's dynamics program at one crank angle, written from RIG.md §3's description,
+    """The 2013 study's dynamics program at one crank angle, written from geometry/RIG.md §3's description,
     quirks included: each guide mass m_i = 2.7 kg/m · L_i is given the acceleration of the bar's
     combined centre of mass xG_i = (L_i/2 m_i + b_i mp_i)/(m_i + mp_i) (mp_i the point mass at its
     far end), the point masses are added again with their joints' accelerations; bar 3's moment

@@ -87,7 +87,7 @@ def test_p1_reports_say_linear_tetrahedra_under_predict_bending(tmp_path):
     r2 = run_check(Request("final-cm", fast), Output(tmp_path / "p2"))
     assert all(any("under-predict bending" in n for n in p["notes"]) for p in r1["parts"])
     assert not any("under-predict bending" in n for p in r2["parts"] for n in p["notes"])
-    assert "under-predict bending" in (tmp_path / "p1" / "report.md").read_text()
+    assert "under-predict bending" in (tmp_path / "p1" / "report.md").read_text().replace("\\", "")  # Markdown escapes "-"
 
 
 @pytest.mark.heavy

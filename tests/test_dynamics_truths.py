@@ -1,11 +1,11 @@
 """The dynamics against truths written without rigfem (issue 39: the dynamics package's mutants).
 
 * The ``original`` model is the 2013 study's program: tests/newton_euler.py ``study_program``
-  writes it from RIG.md §3's description (quirks included) and reproduces the study's printed
+  writes it from geometry/RIG.md §3's description (quirks included) and reproduces the study's printed
   calibration figures; rigfem's original history equals it at every crank angle, and its bodies
   move as the closed-form four-bar of tests/newton_euler.py.
 * The reactions summary (``rigfem reactions --json``) states the Newton–Euler peaks, the
-  transmission angle of RIG.md §2's law of cosines and the rig rules' values.
+  transmission angle of geometry/RIG.md §2's law of cosines and the rig rules' values.
 * A history known only by its samples (an imported CSV: a cubic spline between them) finds the
   Newton–Euler peaks.
 * The compressor's gas force (geometry/MECHANISMS.md §5) on a massless slider-crank is balanced
@@ -37,7 +37,7 @@ from rigfem.dynamics import (
 )
 from rigfem.linkage import four_bar, slider_crank
 
-CALIBRATION = {"O2": 641.9099, "A": 578.8140, "B": 379.4016, "O4": 366.4701, "torque": 199.7707}  # RIG.md §3
+CALIBRATION = {"O2": 641.9099, "A": 578.8140, "B": 379.4016, "O4": 366.4701, "torque": 199.7707}  # geometry/RIG.md §3
 STUDY = (540.0, 840.0, 780.0, 1020.0)
 FINAL_CM = (480.0, 840.0, 780.0, 1020.0)
 
@@ -145,7 +145,7 @@ def test_the_rigid_body_history_moves_as_the_closed_form_four_bar():
 
 
 def law_of_cosines_mu(b2, b3, b4, d, deg):
-    """Transmission angle (deg) of a four-bar at crank angles ``deg`` (RIG.md §2's triangle)."""
+    """Transmission angle (deg) of a four-bar at crank angles ``deg`` (geometry/RIG.md §2's triangle)."""
     diag = np.abs(d - b2 * np.exp(1j * np.radians(deg)))
     return np.degrees(np.arccos((b3**2 + b4**2 - diag**2) / (2 * b3 * b4)))
 
@@ -169,7 +169,7 @@ def test_the_reactions_summary_states_independent_figures():
     assert s["transmission_angle_deg"] == pytest.approx({"min": mu[0], "max": mu[1]}, rel=1e-9)
     b2, b3, b4, d = FINAL_CM
     rules = {r["name"].split(" (")[0]: (r["value"], r["limit"], r["ok"], r["relation"], r["unit"]) for r in s["rules"]}
-    assert rules == {  # RIG.md §2
+    assert rules == {  # geometry/RIG.md §2
         "loop can close": (d, b2 + b3 + b4, True, "<", "mm"),
         "crank turns fully": (b2 + d, b3 + b4, True, "<", "mm"),
         "crank guide clears the rocker pivot": (d, 660.0, True, ">=", "mm"),
@@ -196,7 +196,7 @@ def test_a_history_known_by_its_samples_finds_the_newton_euler_peaks():
 
 @pytest.mark.parametrize("offset", [0.0, -20.0])
 def test_the_gas_force_is_balanced_by_the_torque_of_virtual_work(offset):
-    """Massless compressor (MECHANISMS.md §5's force law, crank 150, rod 350 mm): T·ω + F·v_B = 0,
+    """Massless compressor (geometry/MECHANISMS.md §5's force law, crank 150, rod 350 mm): T·ω + F·v_B = 0,
     so T = −F_x dx_B/dθ with x_B(θ) = b2 cos θ + √(b3² − (b2 sin θ − e)²) and
     F_x = −2000 N · ((L − c − b3 + b2)/(L − c − x_B) − 1), L = 1000, c = 100 mm."""
     b2, b3 = 150.0, 350.0

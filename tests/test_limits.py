@@ -5,14 +5,14 @@ samples) and every part case is held to independent truths:
 
 * **its load** (the free body's applied force in report.json's ``balance``): in the original mode
   1.4 × the peak reaction of the joint that loads it (geometry/RIG.md §4, the study's load case),
-  the peak from the Newton–Euler solution of tests/newton_euler.py (RIG.md's masses, nothing of
+  the peak from the Newton–Euler solution of tests/newton_euler.py (geometry/RIG.md's masses, nothing of
   rigfem), to 1e-6; the post 250 N along + 250 N across at each of its four screws (the study's);
   in the cycle mode a rail's free body balances (Newton) and a plate or post carries the pin
   force of the Newton–Euler solution at the reported crank angle;
 * **its peak stress**, original mode, between bounds of beam theory and bearing stress: a rail's
   peak is at least the extreme-fibre bending stress σb at the first section clear of its pivot
   coupling (x = 170 mm, midway between the mounting holes at 140 and 200 mm) on the grooved
-  profile (23 × 24 mm less four r = 4.6 mm half-disc grooves, RIG.md §7; its section computed
+  profile (23 × 24 mm less four r = 4.6 mm half-disc grooves, geometry/RIG.md §7; its section computed
   here and checked against the catalogue's 3.1 kg/m), and at most 1.4 σb (the concentration
   the counterbored screw holes beside that section may add) plus 3 σbr, σbr the average bearing
   stress (F/2)/(d·l) of a far screw in its Ø7 hole (a loaded hole peaks at no more than 3 times its
@@ -33,9 +33,9 @@ from newton_euler import fourbar_newton_euler, newton_euler_peak, slider_crank_n
 from rigfem.pipeline import Output, Request, run_check
 
 FAST = {"fidelity": "draft", "samples": 72, "frames": 0}
-LOAD_FACTOR = 1.4                 # RIG.md §4
-POST_SCREW_N = (250.0, 250.0)     # RIG.md §4: along + across, at each of 4 screws
-LIMIT_MPA = 375.0                 # RIG.md §5: σu/2 of the rig steel
+LOAD_FACTOR = 1.4                 # geometry/RIG.md §4
+POST_SCREW_N = (250.0, 250.0)     # geometry/RIG.md §4: along + across, at each of 4 screws
+LIMIT_MPA = 375.0                 # geometry/RIG.md §5: σu/2 of the rig steel
 
 #: scene -> (Newton–Euler solution, lengths (mm), guide rails (mm), rule violations expected); the
 #: lengths and rails as the scene files rigfem/scenes/*.toml state them
@@ -50,7 +50,7 @@ RAIL_OF = {"crank_rail": 0, "coupler_rail": 1, "rod_rail": 1, "rocker_rail": 2}
 RAILS = {"crank_rail": ("O2", "A"), "coupler_rail": ("A", "B"), "rocker_rail": ("O4", "B"), "rod_rail": ("A", "B")}
 FITTINGS = {"plate_A": "A", "plate_B": "B", "post_B": "B"}
 
-# the rail (geometry/rail_size25.toml, RIG.md §7) and the plate (geometry/plate_pf4b.toml)
+# the rail (geometry/rail_size25.toml, geometry/RIG.md §7) and the plate (geometry/plate_pf4b.toml)
 RAIL_W, RAIL_H, GROOVE_R, PITCH, FIRST_HOLE = 23.0, 24.0, 4.6, 60.0, 20.0
 HOLE_D, CBORE_D, CBORE_DEPTH = 7.0, 11.0, 9.0   # M6 through hole, counterbore (catalogue)
 SECTION_X = 170.0                 # midway between the holes at 140 (the pivot coupling's inner screw) and 200 mm
@@ -89,7 +89,7 @@ def checked(request, tmp_path_factory):
 
 
 def test_section_properties_of_the_grooved_rail():
-    """The grooved profile weighs the catalogue's 3.1 kg/m (RIG.md §7) at 7850 kg/m³ (RIG.md §5)."""
+    """The grooved profile weighs the catalogue's 3.1 kg/m (geometry/RIG.md §7) at 7850 kg/m³ (geometry/RIG.md §5)."""
     area, inertia = grooved_section()
     holes = math.pi / 4 * (CBORE_D**2 * CBORE_DEPTH + HOLE_D**2 * (RAIL_H - CBORE_DEPTH)) / PITCH  # mm³ per mm
     assert (area - holes) * 7850e-6 == pytest.approx(3.1, rel=0.01)

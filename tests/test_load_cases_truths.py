@@ -2,7 +2,7 @@
 and the Newton–Euler solution of tests/newton_euler.py (issue 39: the loads package's mutants).
 
 Cycle mode: each rail is a free body loaded through the screws of its two couplings by the pin
-force less the inertia of the point masses its coupling carries (RIG.md §3: plate + carriage at A
+force less the inertia of the point masses its coupling carries (geometry/RIG.md §3: plate + carriage at A
 on the crank and at B on the coupler, a coupling at A on the coupler and at B on the rocker), the
 motor torque as a couple on the crank's pivot screws (±T/120 mm across the rail), and its own
 inertia (the pivot's acceleration, α and ω² of the bar, about the pivot at x = 80 mm); the plate

@@ -79,7 +79,8 @@ RANGES = [
 ]
 #: options that take a value that is not a number (or a list of numbers checked above)
 NOT_NUMBERS = {"--out", "--fidelity", "--modes", "--parts", "--model", "--reactions-csv", "--solver", "--csv",
-               "--plot", "--animate", "--branch", "--refine", "--mode", "--against", "--scheduler", "--scene-out"}
+               "--plot", "--animate", "--branch", "--refine", "--mode", "--against", "--scheduler", "--scene-out",
+               "--author", "--pdf"}
 NUMBERS = {"--order", "--size", "--local-size", "--samples", "--frames", "--four-bar", "--slider-crank", "--offset",
            "--coupler-point", "--omega", "--alpha", "--at", "--speed-hz", "--length", "--set", "--min-quality",
            "--levels", "--ratio", "--max-gib", "--extra-levels", "--threads", "--peak-tol", "--disp-tol", "--workers",

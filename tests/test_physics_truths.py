@@ -3,14 +3,14 @@ written to fail on a planted bug (tools/physics_mutations.py plants them) and re
 geometry/RIG.md or from a hand calculation in this file, never from rigfem's own earlier output.
 
 * The rig four-bar's and slider-crank's pin reactions and motor torque (rigid-body model) equal
-  a Newton–Euler solution written from RIG.md's data alone (tests/newton_euler.py: loop closure
+  a Newton–Euler solution written from geometry/RIG.md's data alone (tests/newton_euler.py: loop closure
   in complex numbers, the bars' rails 3.1 kg/m reaching 80 mm behind the pivot, point masses at
   the joints, one linear system per crank angle); its peaks are maximised there independently.
-* At rest the frame carries the linkage's weight (RIG.md's mass catalogue).
-* The original-mode load case is the study's (RIG.md §4): 1.4 × the peak far-joint reaction
+* At rest the frame carries the linkage's weight (geometry/RIG.md's mass catalogue).
+* The original-mode load case is the study's (geometry/RIG.md §4): 1.4 × the peak far-joint reaction
   split over the two far screws, the plate's pin force on its bore, 250 N + 250 N at each of the
   post's four screws; the cycle-mode bearing weights rebuild the pin force at every angle.
-* The rig steel is the study's (RIG.md §5 table) and a steel cantilever bends by beam theory with
+* The rig steel is the study's (geometry/RIG.md §5 table) and a steel cantilever bends by beam theory with
   E = 210 GPa; a beam under its own weight sags downwards.
 * The error estimate is not too small: on coarse meshes the band covers closed-form peaks and
   the estimate is at least half the true error (an estimate four times too small fails).
@@ -44,8 +44,8 @@ from rigfem.verification.closed_form import plate_hole_peak_mpa
 ROOT = Path(__file__).resolve().parents[1]
 
 FINAL_CM = (480.0, 840.0, 780.0, 1020.0)
-LOAD_FACTOR = 1.4        # RIG.md §4: the study's factor on peak reactions
-POST_SCREW_N = (250.0, 250.0)  # RIG.md §4: longitudinal + transverse at each of the post's 4 screws
+LOAD_FACTOR = 1.4        # geometry/RIG.md §4: the study's factor on peak reactions
+POST_SCREW_N = (250.0, 250.0)  # geometry/RIG.md §4: longitudinal + transverse at each of the post's 4 screws
 
 
 @pytest.mark.parametrize("lengths, branch, gravity, speed_hz", [
@@ -90,7 +90,7 @@ def test_peak_reactions_are_the_largest_newton_euler_forces():
 
 def test_the_frame_carries_the_linkage_weight_at_rest():
     """Turning very slowly under gravity the ground pins hold up the whole weight (statics):
-    rails 3.1 kg/m × (0.7 + 1 + 1) m, two plates with carriages and two couplings (RIG.md §3)."""
+    rails 3.1 kg/m × (0.7 + 1 + 1) m, two plates with carriages and two couplings (geometry/RIG.md §3)."""
     g = 9810.0
     h = simulate(four_bar(*FINAL_CM, gravity_mm_s2=(0.0, -g)), samples=12, speed_hz=1e-4)
     weight = (RAIL_KG_M * sum(RAILS_MM) / 1000 + 2 * (PLATE + CARRIAGE) + 2 * COUPLING) * g / 1000
@@ -114,7 +114,7 @@ def _rail_frame(joint_from: complex, joint_to: complex, F: complex) -> complex:
 
 
 def test_original_load_case_is_the_studys():
-    """RIG.md §4: each rail is held by the two screws of its pivot coupling and loaded at its far
+    """geometry/RIG.md §4: each rail is held by the two screws of its pivot coupling and loaded at its far
     end by 1.4 × the peak far-joint reaction, half on each of the last two screws, in the reaction's
     direction in the rail frame; a plate by 1.4 × its pin's peak reaction on the bore, held by its
     two screws; the post by 250 N along + 250 N across at each of its four screws."""
@@ -131,7 +131,7 @@ def test_original_load_case_is_the_studys():
         assert c.supports == [("bolt", ("hole_00", "hole_02"))], name
         assert [ld.group for ld in c.loads] == [c.loads[0].group, c.loads[1].group] and len(c.loads) == 2, name
         screws = [int(ld.group.removeprefix("hole_")) for ld in c.loads]
-        last = int(c.params["length"] - 20) // 60  # holes at 20 + 60 k mm (RIG.md §4, the catalogue's pitch)
+        last = int(c.params["length"] - 20) // 60  # holes at 20 + 60 k mm (geometry/RIG.md §4, the catalogue's pitch)
         assert sorted(screws) == [last - 2, last], name
         assert np.allclose(c.coef, LOAD_FACTOR * force / 2, rtol=1e-9), name
         for ld in c.loads:
@@ -163,8 +163,8 @@ def test_cycle_bearing_weights_rebuild_the_pin_force_at_every_angle(n_dir):
 
 
 def test_rig_steel_is_the_studys_steel():
-    """RIG.md §5's table row of the rig steel: E 210 GPa, ν 0.3, σu 750 MPa, 7850 kg/m³."""
-    text = (ROOT / "geometry" / "RIG.md").read_text()
+    """geometry/RIG.md §5's table row of the rig steel: E 210 GPa, ν 0.3, σu 750 MPa, 7850 kg/m³."""
+    text = (ROOT / "geometry" / "geometry/RIG.md").read_text()
     row = next(ln for ln in text.splitlines() if ln.startswith("| steel"))
     E, nu, su, rho = (float(re.match(r"\s*([\d.]+)", c).group(1)) for c in row.split("|")[2:6])
     steel = get_material("rig_steel")

@@ -4,7 +4,7 @@ of its entry is held to beam theory and statics, not to rigfem's own output: its
 displacement to Timoshenko's tip deflection, its balance to the load and the clamp's reaction
 (force and moment), its utilisation to peak / 375 MPa; the mesh table to the mesh; the notes a
 P1 report and a near-incompressible P1 material must carry; a free body's imbalance to the 5 %
-rule; the rail-profile caveat to the catalogue's 3.1 kg/m (RIG.md §7); the size at the peak to
+rule; the rail-profile caveat to the catalogue's 3.1 kg/m (geometry/RIG.md §7); the size at the peak to
 the mesh's own edge lengths.
 """
 
@@ -21,7 +21,7 @@ from rigfem.settings import MODES
 from rigfem.verdict.part import Outcome, Target, judge
 
 L, B, H, F = 200.0, 10.0, 10.0, -100.0  # mm, N
-E, NU = 210e3, 0.3                      # RIG.md §5
+E, NU = 210e3, 0.3                      # geometry/RIG.md §5
 
 
 def beam(order: int = 2, material: Material | None = None):
@@ -137,7 +137,7 @@ def test_settled_means_decided_and_within_the_reporting_target():
 
 
 def test_rail_profile_caveat_at_the_catalogue_mass():
-    """RIG.md §7: the modelled rail should weigh the catalogue's 3.1 kg/m; 5 % heavier draws the caveat."""
+    """geometry/RIG.md §7: the modelled rail should weigh the catalogue's 3.1 kg/m; 5 % heavier draws the caveat."""
     def res(kg_m, part="rail_size25"):
         volume = kg_m / 7850 * 1e9 * 0.7  # mm³ of a 700 mm rail at 7850 kg/m³
         return SimpleNamespace(case=SimpleNamespace(part=part, params={"length": 700.0} if part == "rail_size25" else {}),

@@ -38,7 +38,7 @@ def _invariant(call, match: str) -> None:
 
 
 def test_the_allowable_is_half_the_ultimate_strength():
-    """RIG.md §5: σu/2 = 375 MPa for the rig steel; a limit factor in (0, 1], σu > 0."""
+    """geometry/RIG.md §5: σu/2 = 375 MPa for the rig steel; a limit factor in (0, 1], σu > 0."""
     assert allowable_stress(750.0) == 375.0
     assert allowable_stress(750.0, 0.4) == 300.0 and allowable_stress(750.0, 1.0) == 750.0
     assert allowable_stress(0.5, 0.5) == 0.25  # any positive strength
