@@ -94,6 +94,7 @@ def test_the_json_stream_holds_every_angles_record(capsys, argv):
     assert r["angles"] == [_record(m, i) for i in range(m.crank_deg.size)]
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_a_million_angles_stream_in_bounded_memory(tmp_path):
     """The allowed maximum: a full JSON of a million angles, read as it comes; the process's peak
     memory stays that of a chunk (it was 14.8 GB)."""

@@ -58,6 +58,7 @@ def test_explorer_responds(browser, tmp_path):
     assert page.errors() == []
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_committed_reports(browser, tmp_path):
     for name in ("final-cm", "slider-crank-300-840"):
         folder = tmp_path / name

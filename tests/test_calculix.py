@@ -227,6 +227,7 @@ def test_equations_match_elimination(tmp_path):
     assert np.abs(res.displacement[0] - u_sk).max() <= 1e-4 * np.abs(u_sk).max()
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 @pytest.mark.tool("ccx")
 def test_rail_rigfem_vs_calculix(tmp_path):
     """700 mm crank rail on two pins (ShaftInHole springs), screw bearing loads at the far end, 2 cases."""

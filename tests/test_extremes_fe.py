@@ -180,6 +180,7 @@ def test_si_material_in_a_mm_scene_is_a_clear_error():
 
 
 # ----------------------------------------------------------------------------- end to end
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_check_at_100_hz_scales_the_plate_peak_by_1e4_and_stays_finite(tmp_path):
     """Original mode: plate load = 1.4 × peak pin force ∝ ω² and the FE is linear, so the
     checked peak σvm at 100 Hz (the allowed maximum) is exactly 1e4 × the 1 Hz one; the

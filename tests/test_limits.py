@@ -81,7 +81,8 @@ def screw_bearing_stress(force: float, diameter: float, length: float) -> float:
     return force / 2 / (diameter * length)
 
 
-@pytest.fixture(scope="module", params=sorted(SCENES))
+@pytest.fixture(scope="module", params=[s if s == "final-cm" else pytest.param(s, marks=pytest.mark.heavy)
+                                        for s in sorted(SCENES)])  # final-cm by default, the rest heavy
 def checked(request, tmp_path_factory):
     scene = request.param
     r = run_check(Request(scene, FAST, True), Output(tmp_path_factory.mktemp("limits") / scene, pictures=False))

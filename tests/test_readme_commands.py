@@ -156,6 +156,11 @@ OTHERS = sorted({(p, c) for p in ORDER for c in _others(PAGES[p])})
 #: run in the default test run: the long commands without a cheap override run in the heavy test below
 RUN = [(p, c) for p, c in COMMANDS
        if _runnable(c) and LONG.get(" ".join(["rigfem", *_split(c)[0]]), (0, 0))[1] is not None]
+#: page commands that take over 10 s even in their cheap form: run by the heavy stage (``-m heavy``,
+#: in reading order among themselves: the synthesis writes trainer.toml, the check after it reads it)
+SLOW = ("rigfem convergence final-cm --force", "rigfem kinematics --samples 1000000 --json",
+        "rigfem synthesize ", "rigfem check trainer.toml",
+        "rigfem kinematics mech2-fourbar-coupler-point --plot")
 SYNOPSES = [(p, c) for p, c in COMMANDS if (p, c) not in RUN]
 _id = lambda pc: f"{pc[0]}: {pc[1]}"  # noqa: E731
 
@@ -218,7 +223,8 @@ def test_the_commands_run_in_a_sandbox(sandbox):
     assert r.returncode == 0 and env["RIGFEM_CACHE"] in r.stdout
 
 
-@pytest.mark.parametrize("pc", RUN, ids=_id)
+@pytest.mark.parametrize("pc", [pytest.param(pc, marks=pytest.mark.heavy) if pc[1].startswith(SLOW) else pc
+                                for pc in RUN], ids=_id)
 def test_page_command_runs_as_written(sandbox, pc):
     page, cmd = pc
     work, env = sandbox

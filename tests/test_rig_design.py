@@ -50,6 +50,7 @@ def test_function_candidates_are_buildable_ranked_and_re_measured(function_desig
         assert c["output_start_deg"] == pytest.approx(np.degrees(rocker[0]) % 360, abs=1e-6)
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_function_best_beats_every_other_rig_fourbar_sampled(function_design):
     """Brute force on a random sample of rig four-bars (input start on a 0.25 deg grid)."""
     r, cands = function_design

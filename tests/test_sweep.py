@@ -127,6 +127,7 @@ def _spec_case(params, key):
     return dataclasses.replace(specs[key][0], refine=tuple(refine))
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_against_run_check(params, bases, tmp_path):
     """End to end against rigfem.check.run_check: plates and posts on the same mesh agree to
     1e-4; rails within 10 % (run_check refines only the loaded holes, the sweep every hole)."""

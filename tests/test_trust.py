@@ -70,6 +70,7 @@ def test_stated_column_is_validated(no_torque, capsys, table, field):
     assert field in one_line(err)
 
 
+@pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
 def test_lost_torque_leaves_the_crank_undecided_not_passed(no_torque, capsys):
     """The stated zero torque is read, said at the top of the report, and the crank's free body
     is out of moment balance: undecided (exit 1), with the imbalance in the message and report.
