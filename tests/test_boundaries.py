@@ -4,6 +4,11 @@ A value enters rigfem once, through a boundary module (the CLI, a scene file and
 part file, a CSV, the user's function text, an output path, the environment) or the constructor
 of a value type that holds its own invariants; every layer inside trusts what it is given, and a
 broken invariant there is a bug (ComputeError or an assertion), never "bad input".
+
+A library function a user's script calls directly with its own names (the FE's build_model/solve
+with surface and hole names, docs/guide/own-part.md) is such an edge too: its inputs are judged by
+a boundary module (rigfem.fe.inputs) that the public entry points call first, so a wrong name still
+reads as bad input while the FE inside treats it as a bug.
 """
 
 import ast
@@ -25,6 +30,10 @@ BOUNDARY = {
     "rigfem.linkage.expression",  # the user's function text (synthesis)
     "rigfem.report.folder",  # output paths
     "rigfem.cache",  # the environment (RIGFEM_CACHE, RIGFEM_CACHE_MAX_GB)
+    # the FE's public API takes a script's own supports, loads (surface and hole names) and solver
+    # name (docs/guide/own-part.md, examples/custom_part.py): build_model/solve/load_vector judge
+    # them once against the mesh here, and the FE inside trusts them
+    "rigfem.fe.inputs",
 }
 
 #: value types whose constructor (__init__/__post_init__) holds the invariants of their fields
@@ -37,9 +46,9 @@ VALUE_TYPES = {
 }
 
 #: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
-#: shrink.  The FE's supports and loads are resolved against the mesh (the user's surface names),
-#: the mesher and the LE10 benchmark take raw sizes, the synthesis its raw inputs, the sweep and the
-#: dynamics a few choices: each wants a value type or a check at its boundary.
+#: shrink.  The mesher and the LE10 benchmark take raw sizes, the synthesis its raw inputs, the
+#: sweep and the dynamics a few choices: each wants a value type or a check at its boundary.  (The
+#: FE's supports, loads and solver name are judged once by rigfem.fe.inputs.)
 PENDING = {
     "rigfem.design.rig_design:snap_function": 1,
     "rigfem.design.rig_design:snap_motion": 2,
@@ -47,19 +56,6 @@ PENDING = {
     "rigfem.dynamics.cycle:simulate": 4,
     "rigfem.dynamics.imported:react": 1,
     "rigfem.fe.assembly:fe_mesh": 4,
-    "rigfem.fe.forces:_hole": 1,
-    "rigfem.fe.forces:_vec": 1,
-    "rigfem.fe.forces:bearing_vector": 1,
-    "rigfem.fe.forces:load_vector": 3,
-    "rigfem.fe.model:load_matrix": 1,
-    "rigfem.fe.solver:LinearSolver.__init__": 2,
-    "rigfem.fe.supports:_check_rigid": 1,
-    "rigfem.fe.supports:_plane_axis": 2,
-    "rigfem.fe.supports:_surface_quadrature": 2,
-    "rigfem.fe.supports:component_dofs": 2,
-    "rigfem.fe.supports:constraints": 4,
-    "rigfem.fe.supports:shaft_terms": 2,
-    "rigfem.fe.supports:surface_nodes": 1,
     "rigfem.linkage.synthesis:_dyad": 1,
     "rigfem.linkage.synthesis:_reachable": 1,
     "rigfem.linkage.synthesis:check_three_position": 1,
