@@ -55,7 +55,6 @@ PENDING = {
     "rigfem.dynamics.cycle:cycle_history": 1,
     "rigfem.dynamics.cycle:simulate": 4,
     "rigfem.dynamics.imported:react": 1,
-    "rigfem.fe.assembly:fe_mesh": 4,
     "rigfem.linkage.synthesis:_dyad": 1,
     "rigfem.linkage.synthesis:_reachable": 1,
     "rigfem.linkage.synthesis:check_three_position": 1,

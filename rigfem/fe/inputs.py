@@ -8,10 +8,11 @@ boundary (tests/test_boundaries.py).  The public entry points call it once, befo
 assembled: :func:`check_supports` and :func:`check_rigid` from
 :func:`rigfem.fe.supports.constraints`, :func:`check_cases` and :func:`check_load` from
 :func:`rigfem.fe.model.load_matrix` and :func:`rigfem.fe.forces.load_vector`, :func:`check_solver`
-from ``LinearSolver``.  Each raises InputError naming the support or load, its field, the value
-and what is allowed (the surfaces or holes the mesh has).  The FE's inner functions
-(quadrature, nodal vectors, springs) trust what passed here: a name they cannot find there is a
-bug, a ComputeError.
+from ``LinearSolver``, :func:`check_mesh` (a script's own PartMesh and order) from
+:func:`rigfem.fe.assembly.fe_mesh`.  Each raises InputError naming the support or load, its
+field, the value and what is allowed (the surfaces or holes the mesh has).  The FE's inner
+functions (quadrature, nodal vectors, springs) trust what passed here: a name they cannot find
+there is a bug, a ComputeError.
 """
 
 from __future__ import annotations
@@ -294,6 +295,25 @@ def _bearing(fm, holes: dict, name: str, F: np.ndarray) -> None:
     if mag and abs(F @ a) > 1e-9 * mag:
         raise InputError(f"BearingLoad({name!r}).force must be perpendicular to the hole axis {tuple(a)}; "
                          f"axial component {F @ a:g}")
+
+
+def check_mesh(mesh, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A PartMesh's points (N, 3) and tets (M, 4) as arrays, with each tet's signed volume, and
+    the element order (1 or 2) a script asks :func:`rigfem.fe.build_model` for; InputError for an
+    order other than 1 or 2, a malformed, non-finite or out-of-range mesh, or degenerate tets."""
+    if order not in (1, 2):
+        raise InputError(f"order = {order!r} must be 1 or 2")
+    p = np.asarray(mesh.points, dtype=float)
+    t = np.asarray(mesh.tets, dtype=np.int64)
+    if p.ndim != 2 or p.shape[1] != 3 or t.ndim != 2 or t.shape[1] != 4 or len(t) == 0:
+        raise InputError("mesh must have points (N, 3) and tets (M, 4) with M >= 1")
+    if t.min() < 0 or t.max() >= len(p) or not np.isfinite(p).all():
+        raise InputError(f"mesh tets must index points 0..{len(p) - 1} and points must be finite")
+    vol = np.linalg.det(p[t[:, 1:]] - p[t[:, :1]]) / 6
+    flat = np.abs(vol) <= 1e-12 * np.abs(vol).max()
+    if flat.any():
+        raise InputError(f"mesh has {flat.sum()} degenerate (zero-volume) tets")
+    return p, t, vol
 
 
 def check_solver(method: str) -> None:
