@@ -43,6 +43,8 @@ VALUE_TYPES = {
     "rigfem.linkage.dims.Lengths", "rigfem.linkage.dims.Rails",  # a builder's or a kinematics run's lengths
     "rigfem.linkage.dims.Options", "rigfem.linkage.dims.Drive",  # its branch and masses; the crank's speed
     "rigfem.sweep.configs.SweepParams", "rigfem.sweep.run.SweepOptions",  # a sweep's inputs and options
+    "rigfem.linkage.synthesis.FunctionTask",  # a function synthesis's ranges, ground, points and function
+    "rigfem.linkage.synthesis.Positions",  # a motion synthesis's three positions
 }
 
 #: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
@@ -59,8 +61,8 @@ PENDING = {
     "rigfem.linkage.synthesis:_reachable": 1,
     "rigfem.linkage.synthesis:check_three_position": 1,
     "rigfem.linkage.synthesis:optimise_three_position.cost": 1,
-    "rigfem.linkage.synthesis:synthesize_function": 10,
-    "rigfem.linkage.synthesis:three_position": 3,
+    "rigfem.linkage.synthesis:synthesize_function": 4,
+    "rigfem.linkage.synthesis:three_position": 1,
     "rigfem.loads.cases:_at_peak": 1,
     "rigfem.loads.cases:cycle_rail": 1,
     "rigfem.loads.cases:rail_angle": 1,
