@@ -45,6 +45,8 @@ VALUE_TYPES = {
     "rigfem.sweep.configs.SweepParams", "rigfem.sweep.run.SweepOptions",  # a sweep's inputs and options
     "rigfem.linkage.synthesis.FunctionTask",  # a function synthesis's ranges, ground, points and function
     "rigfem.linkage.synthesis.Positions",  # a motion synthesis's three positions
+    "rigfem.sweep.run.Scheduler",  # a Dask scheduler's tcp://HOST:PORT
+    "rigfem.context.Context",  # a job's worker processes
 }
 
 #: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
@@ -79,8 +81,6 @@ PENDING = {
     "rigfem.sweep.bases:_reference_cases": 1,
     "rigfem.sweep.configs:rail_lengths": 1,
     "rigfem.sweep.cost:check_cost": 1,
-    "rigfem.sweep.run:check_scheduler": 2,
-    "rigfem.sweep.run:run_sweep": 1,
     "rigfem.verification.closed_form:kt_plate_hole": 1,
     "rigfem.verification.convergence:study": 1,
     "rigfem.verification.le10:le10_mesh": 2,
