@@ -47,6 +47,7 @@ VALUE_TYPES = {
     "rigfem.linkage.synthesis.Positions",  # a motion synthesis's three positions
     "rigfem.sweep.run.Scheduler",  # a Dask scheduler's tcp://HOST:PORT
     "rigfem.context.Context",  # a job's worker processes
+    "rigfem.dynamics.history.DynamicsOptions",  # a turn's samples, mass model and crank speed
 }
 
 #: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
@@ -57,7 +58,7 @@ PENDING = {
     "rigfem.design.rig_design:snap_function": 1,
     "rigfem.design.rig_design:snap_motion": 2,
     "rigfem.dynamics.cycle:cycle_history": 1,
-    "rigfem.dynamics.cycle:simulate": 4,
+    "rigfem.dynamics.cycle:simulate": 1,
     "rigfem.dynamics.imported:react": 1,
     "rigfem.linkage.synthesis:_dyad": 1,
     "rigfem.linkage.synthesis:_reachable": 1,

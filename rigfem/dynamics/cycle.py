@@ -32,12 +32,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
     lists the toggle crank-angle ranges (None if none); ``meta["mu_deg"]`` the
     transmission-angle range of a four-bar.
     """
-    if model not in MODELS:
-        raise InputError(f"model = {model!r} must be one of {', '.join(MODELS)}")
-    if int(samples) != samples or not 8 <= samples <= 1_000_000:
-        raise InputError(f"samples = {samples!r} must be a whole number in [8, 1000000]")
-    if not np.isfinite(speed_hz) or speed_hz == 0 or abs(speed_hz) > 100:
-        raise InputError(f"speed_hz = {speed_hz!r} must be non-zero and within [-100, 100] Hz")
+    DynamicsOptions(samples, model, speed_hz)  # checks them (a value type): a script calls this
     if isinstance(linkage_or_config, dict):
         cfg = dict(linkage_or_config)
         typ = cfg.pop("type", None)
