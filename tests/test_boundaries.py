@@ -26,6 +26,7 @@ BOUNDARY = {
     "rigfem.settings",  # the [check] table's parts and presets
     "rigfem.material",  # material tables and names
     "rigfem.rig.parts",  # part files (geometry/*.toml) and their dimension overrides
+    "rigfem.mesh.custom",  # a user's own part file (.geo/.step/.brep) read by gmsh
     "rigfem.io.reactions_csv", "rigfem.io.calculix",  # files read: a reactions CSV, CalculiX's output
     "rigfem.linkage.expression",  # the user's function text (synthesis)
     "rigfem.report.folder",  # output paths
@@ -69,15 +70,10 @@ PENDING = {
     "rigfem.loads.cases:_at_peak": 1,
     "rigfem.loads.cases:cycle_rail": 1,
     "rigfem.loads.cases:rail_angle": 1,
-    "rigfem.mesh.geometry:_build_custom": 2,
-    "rigfem.mesh.geometry:_check_parses": 1,
-    "rigfem.mesh.geometry:occ_volume_mm3": 1,
     "rigfem.mesh.mesher:_mesh": 3,
     "rigfem.mesh.mesher:check_estimate": 1,
     "rigfem.mesh.partmesh:face_owners": 2,
     "rigfem.mesh.partmesh:quadratic.lookup": 1,
-    "rigfem.mesh.partmesh:to_meshio": 1,
-    "rigfem.mesh.partmesh:write_mesh": 1,
     "rigfem.rig.layout:RailLayout.coupling": 1,
     "rigfem.sweep.bases:_reference_cases": 1,
     "rigfem.sweep.configs:rail_lengths": 1,
