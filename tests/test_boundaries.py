@@ -63,7 +63,6 @@ PENDING = {
     "rigfem.design.rig_design:snap_motion": 2,
     "rigfem.dynamics.cycle:cycle_history": 1,
     "rigfem.dynamics.cycle:simulate": 1,
-    "rigfem.dynamics.imported:react": 1,
     "rigfem.linkage.synthesis:_dyad": 1,
     "rigfem.linkage.synthesis:_reachable": 1,
     "rigfem.linkage.synthesis:check_three_position": 1,
