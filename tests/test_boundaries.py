@@ -70,8 +70,6 @@ PENDING = {
     "rigfem.linkage.synthesis:synthesize_function": 4,
     "rigfem.linkage.synthesis:three_position": 1,
     "rigfem.loads.cases:_at_peak": 1,
-    "rigfem.loads.cases:cycle_rail": 1,
-    "rigfem.loads.cases:rail_angle": 1,
     "rigfem.mesh.mesher:_mesh": 3,
     "rigfem.mesh.mesher:check_estimate": 1,
     "rigfem.mesh.partmesh:face_owners": 2,
