@@ -62,7 +62,6 @@ VALUE_TYPES = {
 PENDING = {
     "rigfem.design.rig_design:snap_function": 1,
     "rigfem.design.rig_design:snap_motion": 2,
-    "rigfem.dynamics.cycle:cycle_history": 1,
     "rigfem.dynamics.cycle:simulate": 1,
     "rigfem.linkage.synthesis:_dyad": 1,
     "rigfem.linkage.synthesis:_reachable": 1,
