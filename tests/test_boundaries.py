@@ -56,9 +56,20 @@ VALUE_TYPES = {
 }
 
 #: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
-#: shrink.  The mesher and the LE10 benchmark take raw sizes, the synthesis its raw inputs, the
-#: sweep and the dynamics a few choices: each wants a value type or a check at its boundary.  (The
-#: FE's supports, loads and solver name are judged once by rigfem.fe.inputs.)
+#: shrink.  What is left, and why:
+#: * synthesis: the "linear map" refusals of synthesize_function and the dyad's singular or
+#:   zero-length solutions are known only after solving the equations for the given inputs; the
+#:   except-InputError catches (a trial design that does not close) are not refusals;
+#: * design: "the rails allow no four-bar" and "no one scale fits" come from enumerating the rig;
+#: * loads.cases._at_peak: a peak refinement can meet a toggle the samples did not flag;
+#: * mesh: unknown refine groups of a custom part are known once gmsh has read it, a mesh's quality
+#:   or empty groups once it is meshed; check_estimate/check_cost hold a job against the machine
+#:   (--allow-large); face_owners/quadratic refuse a hand-made PartMesh's surfaces and edges;
+#: * rig.layout coupling (and sweep.configs' probe of it), sweep.bases: a rail too short for a
+#:   joint, no runnable reference configuration; dynamics.cycle.simulate: a config dict's linkage
+#:   type (rigfem.scene could build it, but dynamics may not import scene);
+#: * verification.le10: solve_le10's unit_mm and a mesh without a node at D.
+#: (The FE's supports, loads, mesh and solver name are judged once by rigfem.fe.inputs.)
 PENDING = {
     "rigfem.design.rig_design:snap_function": 1,
     "rigfem.design.rig_design:snap_motion": 2,
