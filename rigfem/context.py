@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 
 from rigfem.cache import NO_CACHE, Cache, from_environment
+from rigfem.errors import check_range
 from rigfem.observer import SILENT, Observer
 
 __all__ = ["Context", "default_context"]
@@ -22,7 +23,10 @@ class Context:
     cache: Cache = NO_CACHE
     observer: Observer = SILENT
     solver: str = "auto"
-    workers: int = 1
+    workers: int = 1  #: 1-256 (checked as the context is made)
+
+    def __post_init__(self) -> None:
+        check_range("workers", self.workers, 1, 256)
 
 
 def default_context(ctx: Context | None = None) -> Context:

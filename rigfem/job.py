@@ -25,7 +25,7 @@ from rigfem.material import table_material
 from rigfem.rig.rules import broken_rules
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
-from rigfem.settings import REFERENCE_SCENE, CheckSettings, part_settings
+from rigfem.settings import REFERENCE_SCENE, CheckSettings, check_mass_model, part_settings
 from rigfem.verdict.part import Verdicts
 
 __all__ = ["Request", "Job", "Checked", "read_job"]
@@ -115,6 +115,8 @@ def read_job(request: Request, cache: Cache) -> Job:
                              f"next to the scene ({plain(str(csv_path), 120)})")
     options = DynamicsOptions(int(dyn["samples"]), dyn["mass_model"], sc.speed_hz, csv_path,
                               dyn["reactions_csv_missing"])
+    if csv_path is None:  # (an imported CSV's reactions use no mass model)
+        check_mass_model(options.mass_model, lk.meta)
     scene_sha = _sha256(path.read_bytes())
     inputs = {"scene": scene_sha, "allow_rule_violations": bool(broken),  # the CSV by its content, not its path
               "check": {**table, **dyn, "reactions_csv": _sha256(csv_path.read_bytes()) if csv_path else None}}

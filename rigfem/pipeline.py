@@ -48,7 +48,8 @@ def solve_job(job: Job, ctx: Context) -> Checked:
     motion, options = linkage_state(job.linkage, job.crank_deg, job.scene.speed_hz), job.dynamics
     if options.reactions_csv:
         ctx.observer.stage("reactions from the CSV")
-        external = read_csv(options.reactions_csv, options.csv_missing)
+        external = read_csv(options.reactions_csv, options.csv_missing,
+                            tuple(j.name for j in job.linkage.joints))
         reactions = imported.react(job.linkage, motion, external, options)
     else:
         ctx.observer.stage("dynamics")

@@ -184,6 +184,16 @@ MODES = ("original", "cycle")
 MODELS = ("rigid-body", "original")
 
 
+def check_mass_model(model: str, linkage_meta: dict) -> None:
+    """InputError when the mass model ``original`` (the 2013 program) is asked of a linkage other
+    than the four-bar with the rig masses (``linkage_meta``: a Linkage's ``meta``).  Called where
+    the model and the linkage meet: the scene (rigfem.job), rigfem reactions, and
+    :func:`rigfem.dynamics.cycle.simulate` (a script's call)."""
+    if model == "original" and (linkage_meta.get("type") != "four-bar" or linkage_meta.get("masses") != "rig"):
+        raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
+                         f"not {linkage_meta.get('type')!r} with masses {linkage_meta.get('masses')!r}")
+
+
 RAIL = "rail_size25"
 
 

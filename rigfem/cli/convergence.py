@@ -282,6 +282,9 @@ def run(args: argparse.Namespace) -> int:
         request = Request(scene, {"parts": list(parts)} if parts else {}, args.allow_rule_violations)
         job, by_part = verification.scene_cases(request, from_environment())
         settings, broken = job.settings, list(job.rule_violations)
+        if args.mode is not None and args.mode not in settings.modes:
+            raise InputError(f"--mode {[args.mode]}: no case of this part in that mode (the scene's "
+                             f"[check].modes = {list(settings.modes)})")
         for v in broken:
             print(f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)", flush=True)
         mark_folder(out)

@@ -13,11 +13,11 @@ import numpy as np
 from rigfem.dynamics.history import DynamicsOptions, ReactionHistory, Reactions, reactions_of
 from rigfem.dynamics.original import simulate_original
 from rigfem.dynamics.solver import reactions
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError, InputError
 from rigfem.linkage.mechanisms import BUILDERS, crank_angles
 from rigfem.linkage.model import Linkage, LinkageState
 from rigfem.linkage.state import linkage_state
-from rigfem.settings import MODELS
+from rigfem.settings import MODELS, check_mass_model
 
 __all__ = ["MODELS", "simulate", "cycle_history", "react"]
 
@@ -32,12 +32,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
     lists the toggle crank-angle ranges (None if none); ``meta["mu_deg"]`` the
     transmission-angle range of a four-bar.
     """
-    if model not in MODELS:
-        raise InputError(f"model = {model!r} must be one of {', '.join(MODELS)}")
-    if int(samples) != samples or not 8 <= samples <= 1_000_000:
-        raise InputError(f"samples = {samples!r} must be a whole number in [8, 1000000]")
-    if not np.isfinite(speed_hz) or speed_hz == 0 or abs(speed_hz) > 100:
-        raise InputError(f"speed_hz = {speed_hz!r} must be non-zero and within [-100, 100] Hz")
+    DynamicsOptions(samples, model, speed_hz)  # checks them (a value type): a script calls this
     if isinstance(linkage_or_config, dict):
         cfg = dict(linkage_or_config)
         typ = cfg.pop("type", None)
@@ -46,6 +41,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
         lk = BUILDERS[typ](**cfg)
     else:
         lk = linkage_or_config
+    check_mass_model(model, lk.meta)
     deg = crank_angles(int(samples))
     return cycle_history(lk, linkage_state(lk, deg, speed_hz), deg, speed_hz, model)
 
@@ -60,9 +56,9 @@ def cycle_history(lk: Linkage, motion: LinkageState, deg: np.ndarray, speed_hz: 
         if motion.mu_deg is not None:
             h.meta["mu_deg"] = dict(min=float(motion.mu_deg.min()), max=float(motion.mu_deg.max()))
         return h
-    if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":
-        raise InputError(f"model 'original' exists only for the four-bar with the rig masses, "
-                         f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
+    if lk.meta.get("type") != "four-bar" or lk.meta.get("masses") != "rig":  # check_mass_model refuses it
+        raise ComputeError(f"model 'original' exists only for the four-bar with the rig masses, "
+                           f"not {lk.meta.get('type')!r} with masses {lk.meta.get('masses')!r}")
     return simulate_original(lk, motion, deg, speed_hz)
 
 

@@ -21,6 +21,7 @@ from typing import Callable
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from rigfem.errors import InputError
 from rigfem.linkage.model import BodyHistory
 from rigfem.rig.rules import rules_for
 
@@ -68,6 +69,28 @@ class DynamicsOptions:
     speed_hz: float = 1.0
     reactions_csv: Path | None = None
     csv_missing: dict | None = None
+
+    def __post_init__(self) -> None:
+        """The samples (a whole number in [8, 1000000]), the mass model (one of MODELS) and the
+        speed (non-zero, within ±100 Hz), checked once as the options are made (the scene's
+        [check] and [linkage] tables are narrower; a script's :func:`rigfem.dynamics.cycle.simulate`
+        call makes one too)."""
+        from rigfem.settings import MODELS
+
+        if self.mass_model not in MODELS:
+            raise InputError(f"model = {self.mass_model!r} must be one of {', '.join(MODELS)}")
+        try:
+            whole = int(self.samples) == self.samples and 8 <= self.samples <= 1_000_000
+        except (TypeError, ValueError, OverflowError):
+            whole = False
+        if not whole:
+            raise InputError(f"samples = {self.samples!r} must be a whole number in [8, 1000000]")
+        try:
+            ok = bool(np.isfinite(self.speed_hz)) and self.speed_hz != 0 and abs(self.speed_hz) <= 100
+        except TypeError:
+            ok = False
+        if not ok:
+            raise InputError(f"speed_hz = {self.speed_hz!r} must be non-zero and within [-100, 100] Hz")
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from rigfem.dynamics.history import (
     spline_evaluator,
 )
 from rigfem.dynamics.solver import reactions
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.linkage.model import Linkage, LinkageState
 
 __all__ = ["react"]
@@ -34,9 +34,9 @@ def react(lk: Linkage, motion: LinkageState, ext: ReactionHistory, options: Dyna
     moving as ``motion`` says."""
     kin = reactions(lk, motion.at(ext.crank_deg), ext.crank_deg, options.speed_hz)
     missing = [n for n in kin.joints if n not in ext.joints]
-    if missing:
-        raise InputError(f"reactions CSV {options.reactions_csv.name} lacks joint(s) {', '.join(missing)}; "
-                         f"the linkage has {', '.join(kin.joints)}")
+    if missing:  # read_csv refuses such a CSV, given the linkage's joints (rigfem.pipeline does)
+        raise ComputeError(f"reactions CSV {options.reactions_csv.name} lacks joint(s) {', '.join(missing)}; "
+                           f"the linkage has {', '.join(kin.joints)}")
     sign = {n: -1.0 if (ext.joints[n].body_a, ext.joints[n].body_b) == (j.body_b, j.body_a) else 1.0
             for n, j in kin.joints.items()}
     forces = spline_evaluator(ext)

@@ -31,7 +31,7 @@ import scipy.sparse as sp
 from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTet, RefTri
 
-from rigfem.errors import InputError
+from rigfem.fe.inputs import check_mesh
 from rigfem.material import lame
 from rigfem.cache import NO_CACHE, Cache, array_digest, resolve
 from rigfem.mesh.partmesh import PartMesh, quadratic
@@ -72,18 +72,7 @@ class FEMesh:
 def fe_mesh(mesh: PartMesh, order: int = 2, cache: Cache = NO_CACHE) -> FEMesh:
     """P1 or P2 mesh of ``mesh``; P2 follows the curved boundary edges of the PartMesh (the
     elements straightened: through ``cache``)."""
-    if order not in (1, 2):
-        raise InputError(f"order = {order!r} must be 1 or 2")
-    p = np.asarray(mesh.points, dtype=float)
-    t = np.asarray(mesh.tets, dtype=np.int64)
-    if p.ndim != 2 or p.shape[1] != 3 or t.ndim != 2 or t.shape[1] != 4 or len(t) == 0:
-        raise InputError("mesh must have points (N, 3) and tets (M, 4) with M >= 1")
-    if t.min() < 0 or t.max() >= len(p) or not np.isfinite(p).all():
-        raise InputError(f"mesh tets must index points 0..{len(p) - 1} and points must be finite")
-    d = p[t[:, 1:]] - p[t[:, :1]]
-    vol = np.linalg.det(d) / 6
-    if (np.abs(vol) <= 1e-12 * np.abs(vol).max()).any():
-        raise InputError(f"mesh has {(np.abs(vol) <= 1e-12 * np.abs(vol).max()).sum()} degenerate (zero-volume) tets")
+    p, t, vol = check_mesh(mesh, order)  # a script's own PartMesh and order (rigfem.fe.inputs)
     t = t.copy()
     t[vol < 0, 1:3] = t[vol < 0, 2:0:-1]  # orient positively (C3D10 needs it)
     surfaces = {k: np.asarray(v, dtype=np.int64) for k, v in mesh.surfaces.items()}

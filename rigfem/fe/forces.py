@@ -28,89 +28,25 @@ the part.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.fe.assembly import FEMesh, geometry, points_at, shape_values, tet_quadrature
+from rigfem.fe.inputs import (  # noqa: F401  the loads a user states (re-exported here)
+    BearingLoad, BoltCircleTorque, Gravity, Inertia, Load, Pressure, SurfaceForce, Torque, Traction, check_load,
+)
 from rigfem.fe.supports import surface_quadrature
 from rigfem.mesh.partmesh import TET_FACE_OPPOSITE, Hole, face_owners
 
 
 def _vec(name: str, v) -> np.ndarray:
+    """A load's vector, 3 finite numbers (:func:`rigfem.fe.inputs.check_load` checked it)."""
     a = np.asarray(v, dtype=float)
     if a.shape != (3,) or not np.isfinite(a).all():
-        raise InputError(f"{name} = {v!r} must be 3 finite numbers")
+        raise ComputeError(f"{name} = {v!r} is not 3 finite numbers (a load check_load did not see)")
     return a
 
 
-@dataclass(frozen=True)
-class SurfaceForce:
-    """Total force (3,) on a named surface, as uniform traction."""
-
-    surface: str
-    force: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Traction:
-    """Uniform traction (3,) in MPa (N/mm²) on a named surface; its resultant is traction × area."""
-
-    surface: str
-    traction_mpa: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Pressure:
-    """Uniform pressure p in MPa (positive into the material) on a named surface."""
-
-    surface: str
-    p: float
-
-
-@dataclass(frozen=True)
-class BearingLoad:
-    """Pin/bolt force (3,) on a hole, cosine-distributed over the loaded half."""
-
-    hole: str
-    force: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Torque:
-    """Torque (scalar, right-handed about the hole axis) carried by a bore."""
-
-    hole: str
-    torque: float
-
-
-@dataclass(frozen=True)
-class BoltCircleTorque:
-    """Torque (scalar, right-handed about the holes' common axis) carried by bolts in holes."""
-
-    holes: tuple[str, ...]
-    torque: float
-
-
-@dataclass(frozen=True)
-class Gravity:
-    """Gravitational acceleration (3,), e.g. (0, 0, -9810) mm/s²."""
-
-    g: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Inertia:
-    """Rigid-body motion: a0 at ``origin`` (3,), angular acceleration α (3,), angular velocity ω (3,)."""
-
-    a0: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    alpha: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    omega: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-
-Load = SurfaceForce | Traction | Pressure | BearingLoad | Torque | BoltCircleTorque | Gravity | Inertia
 
 
 def _assemble_surface(fm: FEMesh, name: str, traction, degree: int) -> np.ndarray:
@@ -140,22 +76,23 @@ def _resultant(fm: FEMesh, f: np.ndarray, about: np.ndarray, nodes=slice(None)) 
 
 
 def _hole(holes: dict[str, Hole], name: str) -> tuple[Hole, np.ndarray]:
+    """The hole and its unit axis (a name :func:`rigfem.fe.inputs.check_load` checked)."""
     if name not in holes:
-        raise InputError(f"hole {name!r} is not in the part; available: {', '.join(holes) or 'none'}")
+        raise ComputeError(f"hole {name!r} is not in the part (a name check_load did not see)")
     h = holes[name]
     return h, np.asarray(h.axis, float) / np.linalg.norm(h.axis)
 
 
 def bearing_vector(fm: FEMesh, holes: dict[str, Hole], name: str, force) -> np.ndarray:
-    """Nodal vector of a cosine bearing pressure whose resultant is ``force``."""
+    """Nodal vector of a cosine bearing pressure whose resultant is ``force`` (perpendicular to
+    the hole's axis: :func:`rigfem.fe.inputs.check_load` holds a user's BearingLoad to it, a bolt
+    circle's bearings are so by construction)."""
     F = _vec(f"BearingLoad({name!r}).force", force)
     h, a = _hole(holes, name)
     mag = np.linalg.norm(F)
     if mag == 0:
         return np.zeros(fm.ndof)
-    if abs(F @ a) > 1e-9 * mag:
-        raise InputError(f"BearingLoad({name!r}).force must be perpendicular to the hole axis {tuple(a)}; "
-                         f"axial component {F @ a:g}")
+    assert abs(F @ a) <= 1e-9 * mag, f"BearingLoad({name!r}).force has an axial component {F @ a:g}"
     e = F / mag
     c = np.asarray(h.center, float)
     return _exact(fm, name, c, a, _cosine(fm, name, c, a, e, h.depth), e, np.concatenate([F, np.zeros(3)]))
@@ -257,7 +194,15 @@ def body_coefficients(load, centroid: np.ndarray) -> np.ndarray | None:
 
 
 def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.ndarray:
-    """Consistent nodal force vector (3N,) of one load."""
+    """Consistent nodal force vector (3N,) of one load (checked first against the mesh and the
+    part's holes by :func:`rigfem.fe.inputs.check_load`: a user's script calls this)."""
+    check_load(fm, holes, load)
+    return nodal_vector(fm, holes, density, load)
+
+
+def nodal_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.ndarray:
+    """:func:`load_vector` of a load already checked (:func:`rigfem.fe.model.load_matrix` checks
+    its cases once)."""
     if isinstance(load, SurfaceForce):
         F = _vec(f"SurfaceForce({load.surface!r}).force", load.force)
         pts, w, _, _ = surface_quadrature(fm, load.surface, 2)
@@ -267,8 +212,6 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
         return _assemble_surface(fm, load.surface, lambda x: np.broadcast_to(t, x.shape), 2)
     if isinstance(load, Pressure):
         p = float(load.p)
-        if not np.isfinite(p):
-            raise InputError(f"Pressure({load.surface!r}).p = {load.p!r} must be finite")
         n = outward_normals(fm, load.surface, 2)
         return _assemble_surface(fm, load.surface, lambda x: -p * n, 2)
     if isinstance(load, BearingLoad):
@@ -276,8 +219,6 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
     if isinstance(load, Torque):
         return torque_vector(fm, holes, load.hole, load.torque)
     if isinstance(load, BoltCircleTorque):
-        if len(load.holes) < 2:
-            raise InputError("BoltCircleTorque.holes must name at least 2 holes")
         hs = [_hole(holes, n) for n in load.holes]
         a = hs[0][1]
         c = np.mean([np.asarray(h.center, float) for h, _ in hs], axis=0)
@@ -296,5 +237,4 @@ def load_vector(fm: FEMesh, holes: dict[str, Hole], density: float, load) -> np.
             r = x - o
             return -(a0 + np.cross(al, r) + np.cross(om, np.cross(om, r)))
         return body_vector(fm, density, minus_accel)
-    raise InputError(f"loads: {load!r} is not a load (SurfaceForce, Traction, Pressure, BearingLoad, Torque, BoltCircleTorque, "
-                     f"Gravity, Inertia)")
+    raise ComputeError(f"loads: {load!r} is not a load (check_load passed it)")

@@ -31,9 +31,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from rigfem.cache import NO_CACHE, Cache
-from rigfem.errors import InputError
 from rigfem.fe.assembly import FEMesh, fe_mesh, stiffness, volume
-from rigfem.fe.forces import body_basis, body_coefficients, load_vector
+from rigfem.fe.inputs import check_cases, check_load
+from rigfem.fe.forces import body_basis, body_coefficients, nodal_vector
 from rigfem.fe.solution import Solution
 from rigfem.fe.solver import LinearSolver, default_method
 from rigfem.fe.stress import nodal_stress
@@ -94,18 +94,19 @@ def load_matrix(model: Model, cases: list) -> np.ndarray:
     """Load matrix (ndof, ncases); each case is one load or a list of loads (summed).
 
     Body forces (gravity, inertia) are combinations of :func:`body_basis`'s 12 vectors,
-    assembled once per model; other loads are assembled one by one."""
-    if not cases:
-        raise InputError("loads: at least one load case is required")
+    assembled once per model; other loads are assembled one by one.  Every load is checked
+    first (:func:`rigfem.fe.inputs.check_load`: a user's script builds them)."""
+    check_cases(cases)
     fm, rho = model.mesh, model.material.density
     F = np.zeros((fm.ndof, len(cases)))
     C = np.zeros((12, len(cases)))
     centroid = fm.nodes.mean(0)
     for k, case in enumerate(cases):
         for load in case if isinstance(case, (list, tuple)) else [case]:
+            check_load(fm, model.part.holes, load)
             w = body_coefficients(load, centroid)
             if w is None:
-                F[:, k] += load_vector(fm, model.part.holes, rho, load)
+                F[:, k] += nodal_vector(fm, model.part.holes, rho, load)
             else:
                 C[:, k] += w
     if C.any():

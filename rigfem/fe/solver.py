@@ -36,7 +36,8 @@ import weakref
 import numpy as np
 import scipy.sparse as sp
 
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError
+from rigfem.fe.inputs import METHODS as _METHODS, check_solver, pardiso_missing
 
 
 def _mkl_rt() -> str | None:
@@ -83,7 +84,7 @@ DIRECT_MAX_DOF = 600_000
 PARDISO_IPARM = {1: 1, 2: 3, 8: 0, 11: 0, 37: -80}
 
 
-METHODS = ("auto", "pardiso", "superlu", "amg")
+METHODS = _METHODS  #: (rigfem.fe.inputs.METHODS)
 #: relative residual ‖Ax − b‖₂/‖b‖₂ at which CG stops (the backward error then checked is far smaller)
 AMG_RTOL = 1e-12
 #: unknowns below which pyamg solves the coarsest level directly
@@ -121,14 +122,13 @@ class LinearSolver:
 
     def __init__(self, A: sp.spmatrix, method: str = "auto", near_null: np.ndarray | None = None,
                  rtol: float = 1e-10, maxiter: int = 2000) -> None:
-        if method not in METHODS:
-            raise InputError(f"solver = {method!r} must be one of {METHODS}")
+        check_solver(method)  # a script names it (rigfem.fe.inputs)
         self.A = sp.csr_matrix(A)
         self.A.sort_indices()
         n = self.A.shape[0]
         self.method = default_method(n) if method == "auto" else method
         if self.method == "pardiso" and pardiso() is None:
-            raise InputError("solver = 'pardiso' is not available here (pypardiso does not import)")
+            pardiso_missing()
         self.rtol = rtol
         self.maxiter = maxiter
         self.iterations = 0  #: CG iterations of the last AMG solve (all right-hand sides and restarts)

@@ -24,12 +24,10 @@ motion is projected out of the displacement afterwards.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.sparse as sp
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.fe.assembly import (
     FEMesh,
     _scatter,
@@ -38,50 +36,12 @@ from rigfem.fe.assembly import (
     shape_values,
     tri_quadrature,
 )
+from rigfem.fe.inputs import (  # noqa: F401  the supports a user states (re-exported here)
+    Fixed, FixedComponents, FreeBody, ShaftInHole, Support, Symmetry, check_rigid, check_supports, plane_axis,
+)
 from rigfem.mesh.partmesh import Hole
 
 
-@dataclass(frozen=True)
-class Fixed:
-    """All displacement components zero on a named surface."""
-
-    surface: str
-
-
-@dataclass(frozen=True)
-class FixedComponents:
-    """Displacement ``components`` (a string of x, y, z) zero on a named surface's nodes, or,
-    with ``edge_with``, only on the nodes it shares with that second surface (a line)."""
-
-    surface: str
-    components: str
-    edge_with: str | None = None
-
-
-@dataclass(frozen=True)
-class Symmetry:
-    """Zero normal displacement on a plane surface whose normal is a coordinate axis."""
-
-    surface: str
-
-
-@dataclass(frozen=True)
-class ShaftInHole:
-    """Hole wall on an elastic foundation to a fixed rigid shaft; moduli in force/length³."""
-
-    hole: str
-    k_radial: float | None = None  #: default E / radius
-    k_tangential: float | None = None  #: default 1e-3 k_radial
-    k_axial: float | None = None  #: default 1e-3 k_radial
-    direction: tuple[float, float, float] | None = None  #: bearing side; None = whole wall
-
-
-@dataclass(frozen=True)
-class FreeBody:
-    """No support: only rigid-body motion is removed (self-equilibrated loads)."""
-
-
-Support = Fixed | FixedComponents | Symmetry | ShaftInHole | FreeBody
 
 
 def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False):
@@ -98,12 +58,18 @@ def surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool = False
     return fm.cache[key]
 
 
-def _surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool):
+def _triangles(fm: FEMesh, name: str) -> np.ndarray:
+    """A named surface's triangles: the name passed :mod:`rigfem.fe.inputs` (the supports' and
+    loads' check), so a missing one is a bug."""
     if name not in fm.surfaces:
-        raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
-    tri = fm.surfaces[name]
-    if len(tri) == 0:
-        raise InputError(f"surface {name!r} is empty")
+        raise ComputeError(f"surface {name!r} is not in the mesh (a name the supports' and loads' check "
+                           f"did not see); available: {', '.join(fm.surfaces) or 'none'}")
+    return fm.surfaces[name]
+
+
+def _surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool):
+    tri = _triangles(fm, name)
+    assert len(tri), f"surface {name!r} is empty (rigfem.fe.inputs refuses it)"
     L, W = tri_quadrature(degree)
     x = fm.nodes[tri]
     N = shape_values(L, fm.order)
@@ -116,24 +82,17 @@ def _surface_quadrature(fm: FEMesh, name: str, degree: int, normals: bool):
 
 
 def surface_nodes(fm: FEMesh, name: str) -> np.ndarray:
-    """Unique node ids of a named surface."""
-    if name not in fm.surfaces:
-        raise InputError(f"surface {name!r} is not in the mesh; available: {', '.join(fm.surfaces) or 'none'}")
-    return np.unique(fm.surfaces[name])
+    """Unique node ids of a named surface (a name checked by :mod:`rigfem.fe.inputs`)."""
+    return np.unique(_triangles(fm, name))
 
 
 def component_dofs(fm: FEMesh, s: FixedComponents) -> np.ndarray:
-    """The DOFs a :class:`FixedComponents` support holds at zero."""
+    """The DOFs a :class:`FixedComponents` support holds at zero (its components and its line
+    checked by :func:`rigfem.fe.inputs.check_supports`)."""
     comps = str(s.components)
-    if not comps or any(c not in "xyz" for c in comps) or len(set(comps)) != len(comps):
-        raise InputError(f"FixedComponents({s.surface!r}).components = {s.components!r} must be distinct "
-                         f"letters of 'xyz', e.g. 'xy'")
     nodes = surface_nodes(fm, s.surface)
     if s.edge_with is not None:
         nodes = np.intersect1d(nodes, surface_nodes(fm, s.edge_with))
-        if len(nodes) < 2:
-            raise InputError(f"FixedComponents({s.surface!r}, edge_with={s.edge_with!r}): the surfaces share "
-                             f"{len(nodes)} node(s), not a line")
     return (3 * nodes[:, None] + np.array(["xyz".index(c) for c in comps])).ravel()
 
 
@@ -150,19 +109,6 @@ def rigid_modes(x: np.ndarray) -> np.ndarray:
     return R.reshape(-1, 6)
 
 
-def _plane_axis(fm: FEMesh, name: str) -> int:
-    tri = fm.surfaces[name] if name in fm.surfaces else None
-    if tri is None:
-        raise InputError(f"symmetry surface {name!r} is not in the mesh")
-    x = fm.nodes[tri[:, :3]]
-    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-    n = n / np.linalg.norm(n, axis=1, keepdims=True)
-    ax = int(np.argmax(np.abs(n[0])))
-    if not np.allclose(np.abs(n[:, ax]), 1.0, atol=1e-6):
-        raise InputError(f"symmetry surface {name!r} must be a plane normal to the x, y or z axis")
-    return ax
-
-
 def shaft_terms(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> tuple[np.ndarray, ...]:
     """The elastic foundation of a shaft in a hole at each quadrature point of the wall.
 
@@ -174,9 +120,7 @@ def shaft_terms(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> tuple[np.nd
     kr = E / hole.radius if s.k_radial is None else s.k_radial
     kt = 1e-3 * kr if s.k_tangential is None else s.k_tangential
     ka = 1e-3 * kr if s.k_axial is None else s.k_axial
-    for nm, v in (("k_radial", kr), ("k_tangential", kt), ("k_axial", ka)):
-        if not (np.isfinite(v) and v >= 0):
-            raise InputError(f"ShaftInHole({s.hole!r}).{nm} = {v!r} must be finite and >= 0")
+    assert all(np.isfinite(v) and v >= 0 for v in (kr, kt, ka)), f"ShaftInHole({s.hole!r}): moduli unchecked"
     pts, w, N, tri = surface_quadrature(fm, s.hole, 4)
     a = np.asarray(hole.axis, float) / np.linalg.norm(hole.axis)
     d = pts - np.asarray(hole.center, float)
@@ -188,7 +132,8 @@ def shaft_terms(fm: FEMesh, hole: Hole, s: ShaftInHole, E: float) -> tuple[np.nd
         dirn = np.asarray(s.direction, float)
         dirn = dirn - (dirn @ a) * a
         if np.linalg.norm(dirn) == 0:
-            raise InputError(f"ShaftInHole({s.hole!r}).direction must not be parallel to the hole axis")
+            raise ComputeError(f"ShaftInHole({s.hole!r}).direction is parallel to the hole axis "
+                               f"(rigfem.fe.inputs.check_supports refuses it)")
         krq = np.where(n @ dirn > 0, kr, 0.0)
     k = np.stack([krq, np.full(w.shape, kt), np.full(w.shape, ka)], -1)
     dirs = np.stack([n, t, np.broadcast_to(a, n.shape)], -2)
@@ -219,13 +164,10 @@ def three_two_one(x: np.ndarray) -> np.ndarray:
 
 
 def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
-    """Fixed DOFs, spring matrix (or None) and per-support DOF sets; checks rigid-body modes."""
-    if not supports:
-        raise InputError("supports: none given; add Fixed/Symmetry/ShaftInHole supports, or FreeBody() "
-                         "for a self-equilibrated load set")
-    free_body = any(isinstance(s, FreeBody) for s in supports)
-    if free_body and len(supports) > 1:
-        raise InputError("supports: FreeBody() cannot be combined with other supports")
+    """Fixed DOFs, spring matrix (or None) and per-support DOF sets of a user's ``supports``:
+    checked first by :func:`rigfem.fe.inputs.check_supports` (names against the mesh, values),
+    then for rigid-body modes left free (:func:`rigfem.fe.inputs.check_rigid`)."""
+    check_supports(fm, holes, supports, E)
     fixed, springs, groups = [], None, {}
     for s in supports:
         if isinstance(s, Fixed):
@@ -236,13 +178,10 @@ def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
             edge = f", edge_with={s.edge_with}" if s.edge_with else ""
             groups[f"FixedComponents({s.surface}, {s.components}{edge})"] = dofs
         elif isinstance(s, Symmetry):
-            ax = _plane_axis(fm, s.surface)
+            ax = plane_axis(fm, s.surface)
             dofs = 3 * surface_nodes(fm, s.surface) + ax
             groups[f"Symmetry({s.surface})"] = dofs
         elif isinstance(s, ShaftInHole):
-            if s.hole not in holes:
-                raise InputError(f"ShaftInHole: hole {s.hole!r} is not in the part; available: "
-                                 f"{', '.join(holes) or 'none'}")
             Ks = shaft_springs(fm, holes[s.hole], s, E)
             springs = Ks if springs is None else springs + Ks
             groups[f"ShaftInHole({s.hole})"] = (3 * surface_nodes(fm, s.hole)[:, None] + np.arange(3)).ravel()
@@ -251,25 +190,9 @@ def constraints(fm: FEMesh, holes: dict[str, Hole], supports: list, E: float):
             dofs = three_two_one(fm.nodes[:fm.n_vertices])
             groups["FreeBody(3-2-1)"] = dofs
         else:
-            raise InputError(f"supports: {s!r} is not a support (Fixed, FixedComponents, Symmetry, ShaftInHole, "
-                             "FreeBody)")
+            raise ComputeError(f"supports: {s!r} is not a support (check_supports passed it)")
         fixed.append(dofs)
     fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
-    _check_rigid(fm, fixed, springs)
+    check_rigid(rigid_modes(fm.nodes), fixed, springs)
     return fixed, springs, groups
 
-
-def _check_rigid(fm: FEMesh, fixed: np.ndarray, springs: sp.csr_matrix | None) -> None:
-    """Raise InputError when the supports leave a rigid-body mode free."""
-    R = rigid_modes(fm.nodes)
-    Q = R[fixed].T @ R[fixed] / max(len(fixed), 1)
-    if springs is not None:
-        Qs = R.T @ (springs @ R)
-        Q = Q + Qs / max(np.abs(np.diag(Qs)).max(), np.finfo(float).tiny)
-    ev, V = np.linalg.eigh(Q)
-    bad = ev < 1e-12 * max(ev.max(), np.finfo(float).tiny)
-    if bad.any():
-        names = ["translation x", "translation y", "translation z", "rotation x", "rotation y", "rotation z"]
-        modes = [names[int(np.argmax(np.abs(V[:, i])))] for i in np.where(bad)[0]]
-        raise InputError(f"supports: insufficient, {bad.sum()} rigid-body mode(s) free (e.g. {', '.join(modes)}); "
-                         f"add supports, or FreeBody() for a self-equilibrated load set")

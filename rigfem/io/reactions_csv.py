@@ -129,7 +129,8 @@ def _check_forces(where: str, deg: np.ndarray, forces: dict[str, np.ndarray], si
                              f"{100 * gap[k] / peak:.2g} % of the peak > {MAX_MIDPOINT_PCT:g} %); give more crank angles")
 
 
-def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> ReactionHistory:
+def read_csv(path: str | Path, missing: dict[str, float] | None = None,
+             linkage_joints: tuple[str, ...] | None = None) -> ReactionHistory:
     """Import a reaction history (rigfem's own CSV or an external one, e.g. from MATLAB).
 
     Needed columns (names case-insensitive): a crank-angle column in degrees (``crank_deg``,
@@ -145,7 +146,8 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     degree column, kN), sampling too coarse to bracket the peaks (see :func:`_check_forces`; rows
     marked singular are left out of that test, not the test itself), more than
     :data:`MAX_SINGULAR_SHARE` of the rows marked singular, and a column (or a joint's pair, the
-    driver, the crank angle) given twice.
+    driver, the crank angle) given twice.  With ``linkage_joints`` (the scene's linkage's joint
+    names), a CSV without one of those joints is refused too.
     """
     p = Path(path)
     if not p.is_file():
@@ -235,6 +237,10 @@ def read_csv(path: str | Path, missing: dict[str, float] | None = None) -> React
     if tcol is None:
         assumed.append(f"the reaction CSV {p.name} has no driver-torque column: the torque is taken as "
                        f"{float(stated):g} N·m at every crank angle ([check].reactions_csv_missing)")
+    absent = [n for n in linkage_joints or () if n not in joints]
+    if absent:  # the scene's linkage needs a force at every joint
+        raise InputError(f"reactions CSV {p.name} lacks joint(s) {', '.join(absent)}; "
+                         f"the linkage has {', '.join(linkage_joints)}")
     for j in joints.values():
         j.force_N = np.where(np.isfinite(j.force_N), j.force_N, 0.0)        # blank singular rows
     meta = {"source": str(p), "model": "imported", "assumed": assumed}

@@ -11,6 +11,8 @@ The generated function is then computed by the closed-form kinematics
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from rigfem.linkage.kinematics import fourbar_motion, fourbar_turn
@@ -30,6 +32,60 @@ def chebyshev_points(x0: float, x1: float, n: int) -> np.ndarray:
     return (x0 + x1) / 2 - (x1 - x0) / 2 * np.cos((2 * j - 1) * np.pi / (2 * n))
 
 
+@dataclass(frozen=True)
+class FunctionTask:
+    """The inputs of :func:`synthesize_function`, checked once as they are made (a script's or
+    the CLI's raw numbers and function text): each finite, X1 > X0, the ground positive, three
+    precision points, the angle ranges non-zero within ±360 deg, and the function finite and
+    continuous on [X0, X1] (:func:`rigfem.linkage.expression.check_interval`) with f(X0) ≠ f(X1).
+    Each refusal is one InputError line naming the option, the value and what is allowed."""
+
+    expr: str
+    x0: float
+    x1: float
+    in_start: float
+    in_range: float
+    out_start: float
+    out_range: float
+    d: float
+    points: int = 3
+    samples: int = 2001
+    f: object = field(init=False, repr=False, compare=False)  #: the parsed function
+    xs: np.ndarray = field(init=False, repr=False, compare=False)  #: samples of [x0, x1]
+    ys: np.ndarray = field(init=False, repr=False, compare=False)  #: f at xs
+
+    def __post_init__(self) -> None:
+        f = parse_function(self.expr)
+        for name, v in (("--x X0", self.x0), ("--x X1", self.x1), ("--input START", self.in_start),
+                        ("--input RANGE", self.in_range), ("--output START", self.out_start),
+                        ("--output RANGE", self.out_range), ("--ground", self.d)):
+            if not np.isfinite(v):
+                raise InputError(f"{name} = {v!r} must be a finite number")
+        if not self.x1 > self.x0:
+            raise InputError(f"--x X0 X1 = {self.x0:g} {self.x1:g}: X1 must be greater than X0")
+        if self.d <= 0:
+            raise InputError(f"--ground = {self.d:g} must be a positive length")
+        if int(self.points) != 3:
+            raise InputError(f"--points = {self.points!r}: Freudenstein's equation has three unknowns, allowed 3")
+        for name, v in (("--input RANGE", self.in_range), ("--output RANGE", self.out_range)):
+            if v == 0 or abs(v) >= 360:
+                raise InputError(f"{name} = {v:g} deg must be non-zero and within (-360, 360) deg")
+        xs, ys = check_interval(f, self.expr, self.x0, self.x1, self.samples)
+        if ys[-1] == ys[0]:
+            raise InputError(f"EXPR = {self.expr!r} has f(X0) = f(X1) = {float(ys[0]):g}: the output range "
+                             f"would be zero")
+        for k, v in (("f", f), ("xs", xs), ("ys", ys)):
+            object.__setattr__(self, k, v)
+
+    @property
+    def y0(self) -> float:
+        return float(self.ys[0])
+
+    @property
+    def y1(self) -> float:
+        return float(self.ys[-1])
+
+
 def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_range: float, out_start: float,
                         out_range: float, d: float, points: int = 3, samples: int = 2001) -> dict:
     """Four-bar generating y = f(x) on [x0, x1] (angles deg, lengths in the unit of ``d``).
@@ -42,24 +98,8 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
     A negative a or c means that link points the other way: its length is given positive and
     its angle offset by 180° (``input_offset_deg``/``output_offset_deg``).
     """
-    f = parse_function(expr)
-    for name, v in (("--x X0", x0), ("--x X1", x1), ("--input START", in_start), ("--input RANGE", in_range),
-                    ("--output START", out_start), ("--output RANGE", out_range), ("--ground", d)):
-        if not np.isfinite(v):
-            raise InputError(f"{name} = {v!r} must be a finite number")
-    if not x1 > x0:
-        raise InputError(f"--x X0 X1 = {x0:g} {x1:g}: X1 must be greater than X0")
-    if d <= 0:
-        raise InputError(f"--ground = {d:g} must be a positive length")
-    if int(points) != 3:
-        raise InputError(f"--points = {points!r}: Freudenstein's equation has three unknowns, allowed 3")
-    for name, v in (("--input RANGE", in_range), ("--output RANGE", out_range)):
-        if v == 0 or abs(v) >= 360:
-            raise InputError(f"{name} = {v:g} deg must be non-zero and within (-360, 360) deg")
-    xs, ys = check_interval(f, expr, x0, x1, samples)
-    y0, y1 = float(ys[0]), float(ys[-1])
-    if y1 == y0:
-        raise InputError(f"EXPR = {expr!r} has f(X0) = f(X1) = {y0:g}: the output range would be zero")
+    t = FunctionTask(expr, x0, x1, in_start, in_range, out_start, out_range, d, points, samples)
+    f, xs, ys, y0, y1 = t.f, t.xs, t.ys, t.y0, t.y1
 
     def th2(x):
         return in_start + (np.asarray(x) - x0) / (x1 - x0) * in_range
@@ -161,6 +201,29 @@ def _dyad(delta: np.ndarray, rot_link: np.ndarray, rot_coupler: np.ndarray) -> t
     return complex(W), complex(Z)
 
 
+@dataclass(frozen=True)
+class Positions:
+    """The three coupler positions (x, y) of a motion synthesis, checked once as they are made:
+    three finite points, no two coincident (the CLI's --points reads them so, a script's list is
+    checked here).  Each refusal is one InputError line."""
+
+    points: object  #: (3, 2) array-like
+    xy: np.ndarray = field(init=False, repr=False, compare=False)  #: the points as a (3, 2) float array
+
+    def __post_init__(self) -> None:
+        try:
+            P = np.asarray(self.points, float)
+        except (TypeError, ValueError):
+            P = np.full(1, np.nan)
+        if P.shape != (3, 2) or not np.all(np.isfinite(P)):
+            raise InputError("--points needs three finite positions X,Y")
+        z = P[:, 0] + 1j * P[:, 1]
+        delta = z[1:] - z[0]
+        if np.min(np.abs(np.r_[delta, z[2] - z[1]])) < 1e-9 * (np.abs(delta).max() + 1):
+            raise InputError("--points: the three positions must be distinct")
+        object.__setattr__(self, "xy", P)
+
+
 def three_position(points: np.ndarray, alpha_deg, beta_deg, gamma_deg) -> dict:
     """Four-bar whose coupler point passes through three positions (x, y) in order.
 
@@ -171,13 +234,9 @@ def three_position(points: np.ndarray, alpha_deg, beta_deg, gamma_deg) -> dict:
     the coupler point (distance from A, angle from A→B) and the crank angle of each position in
     the linkage's own frame (O2 at the origin, O4 on +x).
     """
-    P = np.asarray(points, float)
-    if P.shape != (3, 2) or not np.all(np.isfinite(P)):
-        raise InputError("--points needs three finite positions X,Y")
+    P = Positions(points).xy
     z = P[:, 0] + 1j * P[:, 1]
     delta = z[1:] - z[0]
-    if np.min(np.abs(np.r_[delta, z[2] - z[1]])) < 1e-9 * (np.abs(delta).max() + 1):
-        raise InputError("--points: the three positions must be distinct")
     a, b, g = (np.radians(np.asarray(v, float)) for v in (alpha_deg, beta_deg, gamma_deg))
     W, Z = _dyad(delta, b, a)
     U, S = _dyad(delta, g, a)

@@ -187,9 +187,9 @@ def force_on(h: ReactionHistory, joint: str, body: str) -> np.ndarray:
 def rail_angle(h: ReactionHistory, bar: Bar) -> np.ndarray:
     """Angle (n,) rad of the rail's x axis (pivot joint towards far joint) in the global frame."""
     p, q = h.joints[bar.pivot].position_mm, h.joints[bar.far].position_mm
-    if p is None or q is None:
-        raise InputError(f"{bar.name}: the reaction history has no joint positions; give the "
-                         f"linkage lengths in the scene so rigfem can place the rails")
+    if p is None or q is None:  # every history a check makes has them (the scene gives the lengths)
+        raise ComputeError(f"{bar.name}: the reaction history has no joint positions; give the "
+                           f"linkage lengths in the scene so rigfem can place the rails")
     d = q - p
     return np.arctan2(d[:, 1], d[:, 0])
 
@@ -300,9 +300,9 @@ def _coupling_force(h: ReactionHistory, joint: str, body: str) -> np.ndarray:
 
 def cycle_rail(h: ReactionHistory, bar: Bar, n_dir: int) -> PartCase:
     """A rail analysed free at every crank angle: coupling forces, driver torque, own inertia."""
-    if h.bodies is None:
-        raise InputError(f"{bar.name}: cycle mode needs the bodies' motion; an imported reaction "
-                         f"CSV has none — use original mode")
+    if h.bodies is None:  # every history a check makes has them (an imported CSV's: the linkage's)
+        raise ComputeError(f"{bar.name}: cycle mode needs the bodies' motion; an imported reaction "
+                           f"CSV has none — use original mode")
     body = bar_body(h, bar)
     phi = rail_angle(h, bar)
     hole_forces: dict[str, np.ndarray] = {}

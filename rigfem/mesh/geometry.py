@@ -10,7 +10,7 @@ from typing import Iterator
 import gmsh
 import numpy as np
 
-from rigfem.errors import InputError, plain
+from rigfem.mesh.custom import build_custom, check_occ
 from rigfem.mesh.partmesh import Hole
 from rigfem.rig.parts import PartDef, rail_hole_groups, rail_hole_x
 
@@ -215,66 +215,6 @@ def _build_iprofile(part: PartDef) -> dict[str, Hole]:
 
 #: read a part file with gmsh in a child process: a parse error there leaves this process's gmsh
 #: parser intact (after a syntax error gmsh misreads the next file once it is re-initialised)
-_PARSE = """
-import sys, gmsh
-gmsh.initialize(interruptible=False)
-gmsh.option.setNumber("General.Terminal", 1)
-try:
-    if sys.argv[1].lower().endswith(".geo"):
-        gmsh.open(sys.argv[1])
-    else:
-        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
-        gmsh.merge(sys.argv[1])
-except Exception as exc:
-    print("RIGFEM-PARSE-ERROR", exc, flush=True)
-    sys.exit(1)
-"""
-
-
-def _check_parses(path) -> None:
-    """InputError with gmsh's line and message if gmsh cannot read the part file ``path``."""
-    import subprocess
-    import sys
-
-    r = subprocess.run([sys.executable, "-c", _PARSE, str(path)], capture_output=True, text=True, timeout=600)
-    if r.returncode == 0:
-        return
-    said = (r.stdout + r.stderr).splitlines()
-    why = next((x.split("RIGFEM-PARSE-ERROR", 1)[1].strip() for x in said if "RIGFEM-PARSE-ERROR" in x), "")
-    detail = next((plain(x, 160).strip(" *") for x in said if ("ERR" in x or "rror" in x)
-                   and "RIGFEM-PARSE-ERROR" not in x), "")
-    raise InputError(f"part file {plain(path, 120)}: gmsh cannot read it: {plain(why or r.returncode, 160)}"
-                     + (f" ({detail})" if detail and why not in detail else ""))
-
-
-def _build_custom(part: PartDef) -> dict[str, Hole]:
-    assert part.path is not None
-    _check_parses(part.path)
-    if part.path.suffix.lower() == ".geo":
-        gmsh.open(str(part.path))
-    else:
-        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
-        gmsh.merge(str(part.path))
-        gmsh.model.occ.synchronize()
-    if part.path.suffix.lower() != ".geo":
-        by_name: dict[str, list[int]] = {}
-        for _, tag in gmsh.model.getEntities(2):  # named faces (CAD labels) become surface groups
-            label = gmsh.model.getEntityName(2, tag)
-            if label:
-                by_name.setdefault(label.split("/")[-1], []).append(tag)
-        for label, tags in by_name.items():
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags), label)
-    vols = gmsh.model.getEntities(3)
-    if not vols:
-        raise InputError(f"custom part {part.path}: no volume in the file")
-    if not gmsh.model.getPhysicalGroups(3):
-        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [t for _, t in vols]), part.name)
-    if not gmsh.model.getPhysicalGroups(2):
-        raise InputError(f"custom part {part.path}: no named surface to attach loads to; name faces in the "
-                         f"CAD file or wrap it in a .geo file (Merge \"{part.path.name}\"; Physical Surface(\"pin\") = {{..}};)")
-    return {}
-
-
 def build(part: PartDef) -> dict[str, Hole]:
     """Create the part's geometry and physical groups in the current gmsh model.
 
@@ -282,7 +222,7 @@ def build(part: PartDef) -> dict[str, Hole]:
     step fits cylinders to their surfaces instead).  Call inside :func:`gmsh_session`.
     """
     builders = {"rail": _build_rail, "plate": _build_plate, "iprofile": _build_iprofile,
-                "custom": _build_custom}
+                "custom": build_custom}
     return builders[part.kind](part)
 
 
@@ -291,6 +231,6 @@ def occ_volume_mm3(part: PartDef) -> float:
     with gmsh_session("volume"):
         build(part)
         vols = gmsh.model.getEntities(3)
-        if part.kind == "custom" and not gmsh.model.occ.getEntities(3):
-            raise InputError(f"custom part {part.path}: volume needs an OpenCASCADE geometry")
+        if part.kind == "custom":
+            check_occ(part)
         return float(sum(gmsh.model.occ.getMass(d, t) for d, t in vols))

@@ -214,10 +214,10 @@ def to_meshio(pm: PartMesh, order: int = 1):
     """
     import meshio
 
-    from rigfem.errors import InputError
+    from rigfem.errors import ComputeError
 
-    if order not in (1, 2):
-        raise InputError(f"order = {order!r} must be 1 or 2")
+    if order not in (1, 2):  # the CLI's --order offers 1 and 2 only
+        raise ComputeError(f"order = {order!r} must be 1 or 2")
     if order == 2:
         points, tets, surfaces = quadratic(pm)
     else:
@@ -235,12 +235,12 @@ def to_meshio(pm: PartMesh, order: int = 1):
 
 def write_mesh(pm: PartMesh, path: str | Path, order: int = 1) -> None:
     """Write .vtu or .msh (gmsh 2.2 format, physical names kept) through meshio."""
-    from rigfem.errors import InputError
+    from rigfem.errors import ComputeError
 
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in (".vtu", ".msh"):
-        raise InputError(f"--out {path}: file type must be .vtu or .msh")
+    if suffix not in (".vtu", ".msh"):  # the CLI's --out is checked so (rigfem.cli.outputs.new_output)
+        raise ComputeError(f"--out {path}: file type must be .vtu or .msh")
     mesh = to_meshio(pm, order)
     with whole_file(path) as tmp:
         if suffix == ".msh":

@@ -197,6 +197,8 @@ class SweepOptions:
 
     def __post_init__(self) -> None:
         check_range("chunk_size", self.chunk_size, 1, 100_000)
+        if self.scheduler is not None:
+            Scheduler(self.scheduler)
 
 
 def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions()):
@@ -213,8 +215,7 @@ def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions
     """
     import pandas as pd
 
-    cache, observer, workers = ctx.cache, ctx.observer, ctx.workers
-    check_range("workers", workers, 1, 256)
+    cache, observer, workers = ctx.cache, ctx.observer, ctx.workers  # (Context holds workers in 1-256)
     configs = enumerate_configs(p) if options.configs is None else list(options.configs)
     bases, scheduler = options.bases, options.scheduler
     cost = sweep_cost(p, configs, workers, bases=bases is None)
@@ -264,15 +265,31 @@ def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions
 CONNECT_TIMEOUT_S = 5.0
 
 
+@dataclasses.dataclass(frozen=True)
+class Scheduler:
+    """A Dask scheduler's ``tcp://HOST:PORT`` address, checked as it is made (port 1-65535)."""
+
+    address: str
+    host: str = dataclasses.field(init=False, compare=False)
+    port: int = dataclasses.field(init=False, compare=False)
+
+    def __post_init__(self) -> None:
+        m = re.fullmatch(r"tcp://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):([0-9]{1,10})", str(self.address))
+        if not m:
+            raise InputError(f"--scheduler = {str(self.address)[:120]!r} must be tcp://HOST:PORT "
+                             f"(e.g. tcp://127.0.0.1:8786)")
+        port = int(m.group(2))
+        if not 1 <= port <= 65535:
+            raise InputError(f"--scheduler port = {port} is outside the allowed range [1, 65535]")
+        object.__setattr__(self, "host", m.group(1).strip("[]"))
+        object.__setattr__(self, "port", port)
+
+
 def check_scheduler(address: str) -> tuple[str, int]:
-    """Host and port of a ``tcp://HOST:PORT`` scheduler address; InputError otherwise (port 1-65535)."""
-    m = re.fullmatch(r"tcp://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):([0-9]{1,10})", str(address))
-    if not m:
-        raise InputError(f"--scheduler = {str(address)[:120]!r} must be tcp://HOST:PORT (e.g. tcp://127.0.0.1:8786)")
-    port = int(m.group(2))
-    if not 1 <= port <= 65535:
-        raise InputError(f"--scheduler port = {port} is outside the allowed range [1, 65535]")
-    return m.group(1).strip("[]"), port
+    """Host and port of a ``tcp://HOST:PORT`` scheduler address (:class:`Scheduler`: InputError
+    otherwise, port 1-65535)."""
+    s = Scheduler(address)
+    return s.host, s.port
 
 
 def reach_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:

@@ -320,8 +320,8 @@ def study(cases_for: Callable[[int], list], settings, plan: StudySpec = StudySpe
     (:func:`needs_finer`)."""
     modes = plan.modes
     first = [(m, c) for m, c in cases_for(H_DIRECTIONS) if modes is None or m in modes]
-    if not first:
-        raise InputError(f"--mode {list(modes or [])}: no case of this part in that mode")
+    if not first:  # rigfem convergence refuses a --mode the scene's [check].modes lacks
+        raise ComputeError(f"modes {list(modes or [])}: no case of this part in that mode")
     name = first[0][1].name
     out = {"part": name, "part_def": first[0][1].part, "params": first[0][1].params, "ratio": plan.ratio,
            "h_directions": H_DIRECTIONS, "fine_is_finest": plan.finest is None and plan.order == 2, "steps": [],

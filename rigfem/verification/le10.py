@@ -22,6 +22,7 @@ nodes the two outer half-faces share (:class:`rigfem.fe.FixedComponents` with ``
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -58,6 +59,20 @@ def load(unit_mm: float = 1.0) -> list:
     return [Pressure("top", PRESSURE * unit_mm**2)]
 
 
+@dataclass(frozen=True)
+class Le10Mesh:
+    """The element size (10-2000 mm) and layers through the thickness (0-200, or None) of
+    :func:`le10_mesh`, checked as they are made."""
+
+    size: float
+    layers: int | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "size", check_range("LE10 element size", self.size, 10.0, 2000.0, "mm"))
+        if self.layers is not None:
+            object.__setattr__(self, "layers", int(check_range("LE10 layers", self.layers, 0, 200)))
+
+
 def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
     """Quadratic-tet mesh of the LE10 quarter plate (a :class:`rigfem.mesh.PartMesh`, curved P2 nodes).
 
@@ -72,7 +87,8 @@ def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
     from rigfem.mesh.mesher import second_order
     from rigfem.mesh.partmesh import PartMesh
 
-    size = check_range("LE10 element size", size, 10.0, 2000.0, "mm")
+    spec = Le10Mesh(size, layers)  # a script's numbers, checked once
+    size, layers = spec.size, spec.layers
     (a, b), (c, d), h = INNER, OUTER, HALF_THICKNESS
     with gmsh_session("le10"):
         occ = gmsh.model.occ
@@ -103,7 +119,7 @@ def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
         gmsh.option.setNumber("Mesh.Algorithm3D", 10)
         gmsh.option.setNumber("General.NumThreads", 1)
-        layers = max(2, round(2 * h / size)) if layers is None else int(check_range("LE10 layers", layers, 0, 200))
+        layers = max(2, round(2 * h / size)) if layers is None else layers
         if layers:  # at least ``layers`` elements through the thickness: the edges along z set it
             for _, t in gmsh.model.getEntities(1):
                 x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(1, t)
