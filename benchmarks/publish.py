@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
-from tables import LE10_TARGET, RENDER, grid_note, grid_rows, hms, le10_outliers, med, perf_note, perf_rows
+from tables import LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med, perf_note, perf_rows
 
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
@@ -59,6 +59,7 @@ COMMANDS = {
     "sweep": "python benchmarks/bench_sweep.py --workers 2 1", "malloc_trim": "python benchmarks/bench_malloc_trim.py",
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
     "bad_inputs": "python benchmarks/bad_inputs.py",
+    "cache_kinds": "python benchmarks/bench_cache.py --repeats 3",
     "pardiso": "python benchmarks/bench_pardiso.py --repeats 3",
     "mesh": "python benchmarks/bench_mesh.py --repeats 3",
     "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft",
@@ -187,7 +188,10 @@ ROWS = [
     (None, "speed/accuracy of the fidelity presets", "`rigfem convergence final-cm --force` (see "
      "`benchmarks/bench_convergence.py`)", "results/convergence/summary.md"),
     ("band_coverage", "coverage of the peaks' error band (an estimate) per preset, and its calibration",
-     lambda b: "raw ZZ estimate: " + ", ".join(f"{k} {v['coverage_raw_pct']:.0f} %" for k, v in b["coverage"].items())
+     lambda b: ("on 31 held-out closed-form geometries, per level: " + ", ".join(
+                    f"{k} {v['hits']}/{v['n']} (95 % lower bound {v['lower_bound_pct']:.1f} %)"
+                    for k, v in b["held_out"]["levels"].items()) + "; on the calibration's cases, "
+                if "held_out" in b else "") + "raw ZZ estimate: " + ", ".join(f"{k} {v['coverage_raw_pct']:.0f} %" for k, v in b["coverage"].items())
                + "; calibrated (factor per element order: " + ", ".join(f"P{o} × {f:g}" for o, f in
                                                                      b["calibration"].items())
                + "): " + ", ".join(f"{k} {v['coverage_pct']:.0f} %" for k, v in b["coverage"].items())
@@ -333,7 +337,10 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
     conv = recs.get("convergence")
     presets = ("Commands: `rigfem convergence PART` for each part (results/convergence/PART.json):\n\n"
                + "\n".join(preset_rows(conv)) + "\n") if conv else "not measured yet: run `rigfem convergence PART`.\n"
-    return {"perf-figures": "\n".join(figure_rows(recs, "performance")) + "\n",
+    c = recs.get("cache_kinds")
+    cache = (f"Command: `{c['command']}` (results/benchmarks/cache_kinds.md):\n\n" + "\n".join(cache_rows(c))
+             + "\n\n" + cache_note(c) + "\n") if c else _missing("cache_kinds") + ".\n"
+    return {"cache-kinds": cache, "perf-figures": "\n".join(figure_rows(recs, "performance")) + "\n",
             "verification-figures": "\n".join(figure_rows(recs, "verification")) + "\n",
             "grid-cost": grid, "performance": perf, "preset-errors": presets}
 

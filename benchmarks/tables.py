@@ -438,9 +438,45 @@ def mesh(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def cache_rows(rec: dict) -> list[str]:
+    """Per cache kind: its workload, the warm run with every kind and without this one (medians, s),
+    and its disk after the cold runs."""
+    d = rec["derived"]["kinds"]
+    out = ["| kind | workload | warm, every kind kept (s) | warm, this kind not kept (s) | saved (s) | disk |",
+           "|---|---|---|---|---|---|"]
+    for kind, k in d.items():
+        series = f"{k['workload']} warm without {kind}"
+        b = k["disk_bytes"]
+        size = f"{b / 1e9:.2f} GB" if b >= 1e9 else f"{b / 1e6:.1f} MB" if b >= 1e5 else f"{b / 1e3:.1f} kB"
+        out.append(f"| {kind} | {k['workload']} | {rng(rec, k['workload'] + ' warm')} | {rng(rec, series)} | "
+                   f"{k['saved_s']:.1f} | {size} |")
+    return out
+
+
+def cache_note(rec: dict) -> str:
+    def spread(workload: str) -> float:
+        w = rec["summary"][f"{workload} warm"]["wall_s"]
+        return w["max"] - w["min"]
+
+    lo, hi = (rec["summary"]["check warm"]["wall_s"][x] for x in ("min", "max"))
+    kinds = rec["derived"]["kinds"]
+    pay = [k for k, v in kinds.items() if v["saved_s"] > spread(v["workload"])]
+    rest = [k for k in kinds if k not in pay]
+    return (f"Measured at {rec['commit']['sha'][:10]}{' (dirty)' if rec['commit']['dirty'] else ''}, "
+            f"{rec['date'][:10]}, load average {rec['load'][0]:.1f}: the warm checks spread {lo:.1f}-{hi:.1f} s. "
+            f"Saving more than its workload's warm spread: {', '.join(pay)}; "
+            f"no saving measurable at this load: {', '.join(rest)} (to be measured on an idle machine "
+            "before any is dropped).")
+
+
+def cache_kinds(rec: dict) -> str:
+    return (f"# What each kind of cache entry saves\n\nCommand: `{rec['command']}`\n\n"
+            + "\n".join(cache_rows(rec)) + "\n\n" + cache_note(rec) + "\n")
+
+
 RENDER: dict[str, Callable[[dict], str]] = {
     "check": check, "sweep": sweep, "sweep_grid_cost": sweep_grid_cost, "cycle_vs_calculix": cycle_vs_calculix,
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
     "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
     "bad_inputs": bad_inputs, "adaptive": adaptive,
-    "levers": levers, "pardiso": pardiso, "mesh": mesh}
+    "levers": levers, "pardiso": pardiso, "mesh": mesh, "cache_kinds": cache_kinds}
