@@ -164,7 +164,7 @@ def test_cycle_bearing_weights_rebuild_the_pin_force_at_every_angle(n_dir):
 
 def test_rig_steel_is_the_studys_steel():
     """geometry/RIG.md §5's table row of the rig steel: E 210 GPa, ν 0.3, σu 750 MPa, 7850 kg/m³."""
-    text = (ROOT / "geometry" / "RIG.md").read_text()
+    text = (ROOT / "geometry/RIG.md").read_text()
     row = next(ln for ln in text.splitlines() if ln.startswith("| steel"))
     E, nu, su, rho = (float(re.match(r"\s*([\d.]+)", c).group(1)) for c in row.split("|")[2:6])
     steel = get_material("rig_steel")
