@@ -14,6 +14,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from rigfem.fe.partcase import CaseResult
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
+from rigfem.report.document import band, stopped_text
 
 matplotlib.use("Agg")
 
@@ -133,6 +134,16 @@ ABOVE_COLOUR, FOS_TOP = "#ff00ff", 5.0
 _VERDICT_COLOUR = {"pass": "#2e7d32", "fail": "#c62828", "undecided": "#ef6c00"}
 
 
+def band_lines(entry: dict, allowable: str) -> list[str]:
+    """The caption's peak and band: in MPa, in % of the allowable (what the verdict reads) beside % of
+    the peak, so a plate at 2 % of the allowable with ±43.7 % of its peak reads ±0.9 % of the allowable."""
+    b, u = band(entry), entry["utilisation_pct"]
+    return [f"peak {entry['peak_mpa']:.1f} ± {b['mpa']:.1f} MPa = utilisation {u:.1f} ± {b['pct_of_allowable']:.1f} % "
+            f"({u - b['pct_of_allowable']:.1f}–{u + b['pct_of_allowable']:.1f} %) of the {allowable}",
+            f"band: ±{b['mpa']:.1f} MPa = ±{b['pct_of_allowable']:.1f} % of the allowable = ±{b['pct_of_peak']:.1f} % "
+            f"of the peak (error estimate, not a bound)"]
+
+
 def _pin_loads(r: CaseResult, c: np.ndarray, fm, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
     """(tip, force N, label) of each loaded hole: the applied nodal forces summed over the hole."""
     F = r.solution.loads(c).reshape(-1, 3)
@@ -233,11 +244,10 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
     held, how = _supports(r, fm)
     inertia = any(ld.kind != "bearing" for ld in r.case.loads)
     deg = float(r.case.rows[r.row])
-    u_pct, e = entry["utilisation_pct"], entry["error_pct"]
     head = [f"{label}: {{what}}",
-            f"{r.mode} mode, crank angle {deg:.1f}°; deformation ×{scale:g}",
-            f"peak {vm[hi]:.1f} MPa ± {e:.1f} % = utilisation {u_pct:.1f} % ({u_pct * (1 - e / 100):.1f}–"
-            f"{u_pct * (1 + e / 100):.1f} %) of the {allowable}"]
+            f"{r.mode} mode, crank angle {deg:.1f}°; deformation ×{scale:g}; mesh "
+            f"{(entry.get('mesh') or {}).get('level') or '–'}, refining stopped: {stopped_text(entry)}",
+            *band_lines(entry, allowable)]
     legend = ("arrows: pin loads on the holes (N)" + (" + the part's own inertia" if inertia else "")
               + f"\ndark blocks: supports ({how})\n● markers: extreme values")
     box = (x[hi] - zoom_mm, x[hi] + zoom_mm)
