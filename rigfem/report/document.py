@@ -428,8 +428,10 @@ def render_markdown(r: dict) -> str:
     pics = [p for p in r["parts"] if p.get("pictures")]
     if pics:
         lines += ["", "## Pictures", "", "Stress pictures share one colour scale: utilisation 0–100 % of the "
-                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it; the factor "
-                  f"of safety pictures divide the same allowable by the von Mises stress.", ""]
+                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it (the one map of "
+                  f"utilisation in every picture and page); the factor of safety pictures divide the same allowable "
+                  f"by the von Mises stress and are coloured as its utilisation (100 % / factor). Each picture's "
+                  f"triad shows the part frame of the *where (mm)* column.", ""]
         for p in pics:
             label = part_label(p["name"], p["part"])
             lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]

@@ -20,13 +20,13 @@
     slider.max = String(d.angles.length - 1); slider.value = "0";
     draw();
   }
-  function colour(u) {  // utilisation (%) -> viridis-like ramp 0..100 %, magenta above the allowable
-    if (u > 100) return "rgb(230,0,200)";
-    const t = Math.max(0, Math.min(1, u / 100));
-    const stops = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-    const x = t * (stops.length - 1), i = Math.min(stops.length - 2, Math.floor(x)), f = x - i;
-    const m = stops[i].map((v, j) => Math.round(v + f * (stops[i + 1][j] - v)));
-    return m;
+  // utilisation (%) -> the report's one scale (rigfem/report/scale.py): its stops 0..100 %, its colour above
+  const SCALE = JSON.parse(document.getElementById("util-scale").textContent);
+  function colour(u) {
+    if (u > SCALE.range_pct[1]) return SCALE.above;
+    const s = SCALE.stops, t = Math.max(0, Math.min(1, u / SCALE.range_pct[1]));
+    const x = t * (s.length - 1), i = Math.min(s.length - 2, Math.floor(x)), f = x - i;
+    return s[i].map((v, j) => Math.round(v + f * (s[i + 1][j] - v)));
   }
   function draw() {
     const k = Number(slider.value), { pos, tri, util, c, r, n, d } = P;
@@ -65,7 +65,7 @@
   function legend() {
     const x = cv.width - 70, y0 = 40, h = 200;
     for (let i = 0; i < h; i++) { const m = colour(100 * (1 - i / h)); g.fillStyle = `rgb(${m.join(",")})`; g.fillRect(x, y0 + i, 18, 1); }
-    g.fillStyle = "rgb(230,0,200)"; g.fillRect(x, y0 - 22, 18, 18);
+    g.fillStyle = SCALE.above; g.fillRect(x, y0 - 22, 18, 18);
     g.fillStyle = "#111"; g.font = "14px system-ui, sans-serif";
     g.fillText("> 100 %", x - 4, y0 - 28); g.fillText("100 %", x + 22, y0 + 5); g.fillText("50 %", x + 22, y0 + h / 2 + 5);
     g.fillText("0 %", x + 22, y0 + h + 5); g.fillText("utilisation", x - 20, y0 + h + 28);
