@@ -122,3 +122,51 @@ def test_one_colour_map_for_utilisation_defined_once():
     assert offenders == [], offenders  # every picture and page takes its colours from rigfem.report.scale
     for page in ("report.html.j2", "explorer.html.j2"):
         assert 'id="util-scale">{{ utilisation_scale }}' in (PKG / "templates" / page).read_text()
+
+
+def test_the_animation_holds_the_governing_crank_angle_of_every_cycle_case():
+    from types import SimpleNamespace
+
+    from rigfem.fe.partcase import frame_rows
+
+    for row in (8, 0, 359, 123):
+        r = SimpleNamespace(mode="cycle", row=row, case=SimpleNamespace(rows=np.arange(360.0)))
+        rows = frame_rows(r, 12)
+        assert row in rows and len(rows) in (12, 13) and rows == sorted(rows)
+    assert frame_rows(SimpleNamespace(mode="original", row=8, case=SimpleNamespace(rows=np.arange(1.0))), 12) == []
+    assert frame_rows(SimpleNamespace(mode="cycle", row=8, case=SimpleNamespace(rows=np.arange(360.0))), 0) == []
+
+
+def test_the_quick_return_motion_plot_has_no_empty_panel_nor_curves_on_top_of_each_other(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rigfem import linkage
+    from rigfem.linkage.mechanisms import quick_return
+    from rigfem.report import motion
+
+    lk = quick_return(150.0, 350.0, 800.0)  # results/kinematics/mech4-quick-return.png's linkage
+    m = linkage.linkage_motion(lk, linkage.crank_angles(360), 10.0, 0.0)
+    groups = motion.same_rotation(m)
+    assert sum(len(g) for g in groups) == len(m.links) - 1 and len(groups) < len(m.links) - 1
+    drawn = []
+    real = plt.subplots
+
+    def spy(*a, **k):
+        fig, axs = real(*a, **k)
+        drawn.append((fig, axs))
+        return fig, axs
+
+    patch = pytest.MonkeyPatch()
+    patch.setattr(plt, "subplots", spy)
+    try:
+        motion.motion_plot(m, tmp_path / "qr.png", "quick-return")
+    finally:
+        patch.undo()
+    (fig, axs), = drawn
+    for ax in axs.flat:
+        assert ax.lines, ax  # no empty panel
+        ys = [tuple(np.round(np.asarray(line.get_ydata(), float), 9)) for line in ax.lines]
+        assert len(set(ys)) == len(ys)  # no two identical curves on top of each other

@@ -280,7 +280,7 @@ def verdict_table(r: dict) -> list[str]:
     c = r.get("conclusion") or {}
     out = ["", "## Verdict per part case (highest utilisation first)", "",
            f"Factor of safety = {allowable_label(r['settings']['limit_factor'], r['limit_mpa']).split(' =')[0]} "
-           f"/ peak von Mises (against the allowable; against σu it is twice that when the allowable is σu/2).", "",
+           f"/ peak von Mises (against the allowable; against σu it is twice that when the allowable is σu/2). "
            "The band is the peak's error estimate (an estimate, not a bound) three ways: ± MPa, ± % of the allowable "
            "(what the verdict reads) and ± % of the peak; *mesh stopped* says why the part's mesh was not refined "
            "further.", "",
