@@ -42,8 +42,8 @@ def _report():
 def test_markdown_and_json(tmp_path):
     r = _report()
     md = render_markdown(r)
-    assert ("| crank_rail (rail_size25) | original | 123.4 | 32.9 | ±2.0 | **PASS** | 3.04 | 16.6 | "
-            "hole_02 (80.0, 3.5, 12.0) | – |") in md
+    assert ("| crank_rail (rail_size25) | original | 123.4 | 32.9 | ±2.5 | ±0.7 | ±2.0 | **PASS** | 3.04 | 16.6 | "
+            "hole_02 (80.0, 3.5, 12.0) | – | – |") in md
     assert "Overall verdict: PASS" in md
     write_json(r, tmp_path / "r.json")
     assert json.loads((tmp_path / "r.json").read_text())["parts"][0]["peak_mpa"] == 123.4
@@ -62,7 +62,7 @@ def two_plates(tmp_path_factory):
 
 def test_report_json_has_material_mesh_and_balance_tables(two_plates):
     report, out = two_plates
-    assert report["schema"] == 4 and report["configuration"]["branch"] == "open"
+    assert report["schema"] == 5 and report["configuration"]["branch"] == "open"
     mat = {m["property"]: m for m in report["material"]}
     assert set(mat) == {"E", "nu", "sigma_u", "sigma_y", "density"}
     assert mat["E"]["value"] == 210000.0 and mat["density"]["value"] == pytest.approx(7850.0)
@@ -81,6 +81,41 @@ def test_report_json_has_material_mesh_and_balance_tables(two_plates):
     md = (out / "report.md").read_text()
     for head in ("## Material: rig\\_steel", "## Mesh per part", "## Free-body balance per part"):
         assert head in md
+
+
+def test_a_small_peak_reads_its_band_in_mpa_and_in_percent_of_the_allowable():
+    """A plate at 2.2 % of the allowable with ±43.7 % of its peak: the band is ±3.5 MPa = ±1.0 % of the
+    allowable, and the Markdown says so beside the % of the peak (issue 40 §2)."""
+    r = _report()
+    from rigfem.report.document import verdict_table
+
+    r["parts"][0].update(peak_mpa=8.1, utilisation_pct=2.16, error_pct=43.7, mesh={"stopped": "reached the cap"})
+    md = "\n".join(verdict_table(r))
+    assert "| 8.1 | 2.2 | ±3.5 | ±0.9 | ±43.7 | **PASS** |" in md and "| reached the cap |" in md
+    assert "band ± (MPa) | band ± (% of allowable) | band ± (% of peak)" in md
+
+
+def test_band_in_mpa_is_in_every_entry_the_tables_and_the_pictures(two_plates):
+    from rigfem.cli.check import _summary
+    from rigfem.report.pictures import band_lines
+
+    report, out = two_plates
+    md, html, summary = (out / "report.md").read_text(), (out / "report.html").read_text(), _summary(report)
+    for p in report["parts"]:
+        assert p["band_mpa"] == pytest.approx(p["peak_mpa"] * p["error_pct"] / 100, rel=1e-12)
+        assert p["band_pct_of_allowable"] == pytest.approx(p["utilisation_pct"] * p["error_pct"] / 100, rel=1e-12)
+        assert p["band_pct_of_allowable"] == pytest.approx(100 * p["band_mpa"] / report["limit_mpa"], rel=1e-9)
+        cells = f"| ±{p['band_mpa']:.1f} | ±{p['band_pct_of_allowable']:.1f} | ±{p['error_pct']:.1f} |"
+        assert cells in md, cells
+        assert f"±{p['band_mpa']:.1f}</td><td class=num>±{p['band_pct_of_allowable']:.1f}</td>" in html
+        assert p["mesh"]["stopped"] and p["mesh"]["stopped"] in md and p["mesh"]["stopped"] in html
+        row = next(x for x in summary.splitlines() if x.startswith(p["name"]))
+        assert f"{p['band_mpa']:.1f}" in row.split() and f"{p['band_pct_of_allowable']:.1f}" in row.split()
+        assert p["mesh"]["stopped"] in row
+        caption = " ".join(band_lines(p, "allowable"))
+        assert f"±{p['band_mpa']:.1f} MPa = ±{p['band_pct_of_allowable']:.1f} % of the allowable" in caption
+    assert report["conclusion"]["band_mpa"] == pytest.approx(
+        report["conclusion"]["peak_mpa"] * report["conclusion"]["error_pct"] / 100)
 
 
 def test_every_file_named_in_the_report_exists(two_plates):

@@ -99,7 +99,7 @@ def test_summary_names_the_governing_part_first_with_units_in_every_header(subse
 def test_title_block_carries_the_provenance(subset):
     _, out, r = subset
     pv = r["provenance"]
-    assert r["schema"] == REPORT_SCHEMA == 4
+    assert r["schema"] == REPORT_SCHEMA == 5
     assert pv["rigfem_version"] == r["rigfem_version"] and pv["author"] == "A. Student <lab 3>"
     assert re.fullmatch(r"[0-9a-f]{40}", pv["commit"]) and pv["dirty"] in (True, False)  # the tests run in a checkout
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", pv["date_utc"])

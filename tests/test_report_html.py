@@ -110,3 +110,22 @@ def test_markdown_escapes_raw_html_and_keeps_entities():
     assert "mu &lt; 145 &amp; &lt;b&gt;x&lt;/b&gt;" in html and "&amp;lt;" not in html
     assert "&lt;div&gt;y&lt;/div&gt;" in html and "<div>" not in html
     assert "<code>a | b</code>" in html and 'style="text-align:right"' in html
+
+
+def test_the_3d_view_opens_at_the_governing_crank_angle(checked):
+    """Even frames (2 here: 0° and 180°) miss the cycle's governing angle; the animation holds it and
+    the 3-D view opens there, its peak marked (issue 40 §2)."""
+    import re
+
+    from rigfem.report.viewer import viewer_data
+
+    report, out = checked
+    cyc = next(p for p in report["parts"] if p["mode"] == "cycle")
+    pvd = (out / f"{cyc['name']}_cycle.pvd").read_text()
+    angles = [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)]
+    assert any(abs(a - cyc["crank_deg"]) < 1e-6 for a in angles), (angles, cyc["crank_deg"])
+    (view,) = viewer_data(out, [f"{cyc['name']}_cycle.pvd"], report["limit_mpa"])
+    assert abs(view["angles"][view["governing"]] - cyc["crank_deg"]) < 1e-6
+    assert view["peak"][view["governing"]] == max(view["peak"])
+    page = (out / "report.html").read_text()
+    assert "slider.value = String(d.governing || 0)" in page and "peak ${" in page

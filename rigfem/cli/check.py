@@ -70,7 +70,7 @@ def _overrides(a: argparse.Namespace) -> dict:
 def _summary(r: dict) -> str:
     """The terminal's summary: the governing part case first, then every part case by utilisation
     (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
-    from rigfem.report.document import allowable_label, by_utilisation, sf_text, verdict_line
+    from rigfem.report.document import allowable_label, band, by_utilisation, sf_text, stopped_text, verdict_line
 
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
     lines = [f"{plain(r['scene'])}: {plain(r['description'])}"]
@@ -78,19 +78,26 @@ def _summary(r: dict) -> str:
     if c:
         lo, hi = c["utilisation_band_pct"]
         lines.append(f"governing: {c['name']} ({c['part']}), {c['mode']} mode: {c['utilisation_pct']:.1f} % of the "
-                     f"{allowable} (band {lo:.1f}-{hi:.1f} %), factor of safety {sf_text(c['min_safety_factor'])}, "
+                     f"{allowable} (band {lo:.1f}-{hi:.1f} %"
+                     + (f": ±{c['band_mpa']:.1f} MPa, ±{(hi - lo) / 2:.1f} % of the allowable, ±{c['error_pct']:.1f} % "
+                        f"of the peak" if "band_mpa" in c else "")
+                     + f"), factor of safety {sf_text(c['min_safety_factor'])}, "
                      f"reserve {c['reserve_pct']:.1f} %")
-    lines.append(f"{'part':14s} {'mode':9s} {'peak σvm (MPa)':>14s} {'band (±%)':>9s} {'util. (%)':>9s} "
-                 f"{'FoS (–)':>7s} {'crank (deg)':>11s}  verdict    where")
+    lines.append(f"{'part':14s} {'mode':9s} {'peak σvm (MPa)':>14s} {'band (±MPa)':>11s} {'(±% allow.)':>11s} "
+                 f"{'(±% peak)':>9s} {'util. (%)':>9s} {'FoS (–)':>7s} {'crank (deg)':>11s}  verdict    where  "
+                 f"mesh stopped (why)")
     for p in by_utilisation(r["parts"]):
         if p.get("peak_mpa") is None:
-            lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>14s} {'-':>9s} {'-':>9s} {'-':>7s} {'-':>11s}  "
+            lines.append(f"{p['name']:14s} {p['mode']:9s} {'-':>14s} {'-':>11s} {'-':>11s} {'-':>9s} {'-':>9s} "
+                         f"{'-':>7s} {'-':>11s}  "
                          f"{p['verdict'].upper():9s}  {p['notes'][0]}")
             continue
         why = f": {plain(p['reason'])}" if p.get("reason") else ""
-        lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:14.1f} {p['error_pct']:9.1f} "
-                     f"{p['utilisation_pct']:9.1f} {sf_text(p.get('safety_factor')):>7s} {p['crank_deg']:11.1f}  "
-                     f"{p['verdict'].upper():9s}  {p['surface']}{why}")
+        b = band(p)
+        lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:14.1f} {b['mpa']:11.1f} "
+                     f"{b['pct_of_allowable']:11.1f} {b['pct_of_peak']:9.1f} {p['utilisation_pct']:9.1f} "
+                     f"{sf_text(p.get('safety_factor')):>7s} {p['crank_deg']:11.1f}  "
+                     f"{p['verdict'].upper():9s}  {p['surface']}{why}  [{stopped_text(p)}]")
     lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
     if r.get("not_checked", {}).get("parts"):

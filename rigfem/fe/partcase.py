@@ -278,10 +278,13 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
 
 
 def frame_rows(result: CaseResult, frames: int) -> list[int]:
-    """The rows of a cycle case's animation: ``frames`` crank angles, evenly spaced (none otherwise)."""
+    """The rows of a cycle case's animation: ``frames`` crank angles, evenly spaced, and its critical
+    row (the governing crank angle, which even steps miss: crank_rail's 30.5 % at 8° read 22.9 % at
+    0°); none but in cycle mode or with no frames asked for."""
     if result.mode != "cycle" or not frames:
         return []
-    return [int(i) for i in np.unique(np.linspace(0, len(result.case.rows), frames, endpoint=False).astype(int))]
+    even = np.linspace(0, len(result.case.rows), frames, endpoint=False).astype(int)
+    return [int(i) for i in np.unique(np.append(even, result.row))]
 
 
 def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:

@@ -13,8 +13,9 @@ from pathlib import Path
 
 from rigfem.errors import plain
 
-#: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning or goes
-REPORT_SCHEMA = 4
+#: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning, goes or
+#: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa)
+REPORT_SCHEMA = 5
 
 #: the units of every number in a report
 UNITS = [("length, position, displacement", "mm"), ("stress, strength, modulus", "MPa"), ("force", "N"),
@@ -112,14 +113,39 @@ def conclusion(parts: list[dict], limit_mpa: float, sigma_u_mpa: float) -> dict 
     if not solved:
         return None
     g = max(solved, key=lambda p: p["utilisation_pct"])
-    band = g["utilisation_pct"] * g["error_pct"] / 100
+    half = g["utilisation_pct"] * g["error_pct"] / 100
     return {"name": g["name"], "part": g["part"], "mode": g["mode"], "verdict": g["verdict"],
             "peak_mpa": g["peak_mpa"], "crank_deg": g.get("crank_deg"), "utilisation_pct": g["utilisation_pct"],
-            "utilisation_band_pct": [g["utilisation_pct"] - band, g["utilisation_pct"] + band],
+            "utilisation_band_pct": [g["utilisation_pct"] - half, g["utilisation_pct"] + half],
+            "band_mpa": g["peak_mpa"] * g["error_pct"] / 100, "error_pct": g["error_pct"],
             "min_safety_factor": safety_factor(g["peak_mpa"], limit_mpa),
             "min_safety_factor_ultimate": safety_factor(g["peak_mpa"], sigma_u_mpa),
-            "reserve_pct": 100.0 - (g["utilisation_pct"] + band),
+            "reserve_pct": 100.0 - (g["utilisation_pct"] + half),
             "reserve_mpa": limit_mpa - g["peak_mpa"] * (1 + g["error_pct"] / 100)}
+
+
+def band(p: dict) -> dict | None:
+    """The error band of a part case's peak three ways: ± MPa, ± % of the allowable, ± % of the peak
+    (None without a peak).  A schema-4 report, which has only ``error_pct``, gives the same numbers."""
+    if p.get("peak_mpa") is None:
+        return None
+    e = p["error_pct"]
+    return {"mpa": p.get("band_mpa", p["peak_mpa"] * e / 100),
+            "pct_of_allowable": p.get("band_pct_of_allowable", p["utilisation_pct"] * e / 100), "pct_of_peak": e}
+
+
+def band_text(p: dict) -> str:
+    """The band as printed: ``±3.5 MPa = ±0.9 % of the allowable (±43.7 % of the peak)``."""
+    b = band(p)
+    if b is None:
+        return "–"
+    return f"±{b['mpa']:.1f} MPa = ±{b['pct_of_allowable']:.1f} % of the allowable (±{b['pct_of_peak']:.1f} % of the peak)"
+
+
+def stopped_text(p: dict) -> str:
+    """Why the part's mesh stopped refining (the adaptive ladder), ``–`` when not recorded."""
+    m = p.get("mesh") or {}
+    return m.get("stopped") or "–"
 
 
 def by_utilisation(parts: list[dict]) -> list[dict]:
@@ -206,7 +232,7 @@ def sf_text(x) -> str:
 
 
 def title_block(r: dict) -> list[str]:
-    """Markdown of the title block: what was checked, when, by whom, with what (schema 4 reports)."""
+    """Markdown of the title block: what was checked, when, by whom, with what (schema 4 and later)."""
     pv = r.get("provenance")
     if not pv:
         return ["", f"rigfem {md_text(r.get('rigfem_version', ''))} (report schema {r.get('schema', '–')}: "
@@ -234,7 +260,9 @@ def conclusion_lines(r: dict) -> list[str]:
         lo, hi = c["utilisation_band_pct"]
         out += ["", f"- governing: **{part_label(c['name'], c['part'])}, {c['mode']} mode** — "
                 f"{c['verdict'].upper()}, peak σvm {c['peak_mpa']:.1f} MPa at crank {_fmt(c['crank_deg'])}°",
-                f"- utilisation {c['utilisation_pct']:.1f} % (band {lo:.1f}–{hi:.1f} %)",
+                f"- utilisation {c['utilisation_pct']:.1f} % (band {lo:.1f}–{hi:.1f} %: "
+                + (f"±{c['band_mpa']:.1f} MPa, ±{(hi - lo) / 2:.1f} % of the allowable, ±{c['error_pct']:.1f} % of "
+                   f"the peak)" if "band_mpa" in c else f"±{(hi - lo) / 2:.1f} % of the allowable)"),
                 f"- minimum factor of safety {sf_text(c['min_safety_factor'])} against the {allowable} "
                 f"({sf_text(c['min_safety_factor_ultimate'])} against σu)",
                 f"- reserve to the limit {c['reserve_pct']:.1f} % ({c['reserve_mpa']:.1f} MPa) at the band's top"]
@@ -252,21 +280,28 @@ def verdict_table(r: dict) -> list[str]:
     c = r.get("conclusion") or {}
     out = ["", "## Verdict per part case (highest utilisation first)", "",
            f"Factor of safety = {allowable_label(r['settings']['limit_factor'], r['limit_mpa']).split(' =')[0]} "
-           f"/ peak von Mises (against the allowable; against σu it is twice that when the allowable is σu/2).", "",
-           "| | part | mode | peak σvm (MPa) | utilisation (%) | band (± % of peak) | verdict | factor of safety (–) | "
-           "at crank (deg) | where (mm) | Goodman n (–) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+           f"/ peak von Mises (against the allowable; against σu it is twice that when the allowable is σu/2). "
+           "The band is the peak's error estimate (an estimate, not a bound) three ways: ± MPa, ± % of the allowable "
+           "(what the verdict reads) and ± % of the peak; *mesh stopped* says why the part's mesh was not refined "
+           "further.", "",
+           "| | part | mode | peak σvm (MPa) | utilisation (%) | band ± (MPa) | band ± (% of allowable) | "
+           "band ± (% of peak) | verdict | factor of safety (–) | at crank (deg) | where (mm) | Goodman n (–) | "
+           "mesh stopped |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in by_utilisation(r["parts"]):
         mark = "**▶ governing**" if (p["name"], p["mode"]) == (c.get("name"), c.get("mode")) else ""
         if p.get("peak_mpa") is None:
-            out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | – | – | – | "
-                       f"**{p['verdict'].upper()}** | – | – | – | – |")
+            out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | – | – | – | – | – | "
+                       f"**{p['verdict'].upper()}** | – | – | – | – | – |")
             continue
         fat = p.get("fatigue")
         where = f"{p['surface']} ({', '.join(f'{x:.1f}' for x in p['location_mm'])})"
         sf = p.get("safety_factor", safety_factor(p["peak_mpa"], r["limit_mpa"]))
+        b = band(p)
         out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | {p['peak_mpa']:.1f} | "
-                   f"{p['utilisation_pct']:.1f} | ±{p['error_pct']:.1f} | **{p['verdict'].upper()}** | {sf_text(sf)} | "
-                   f"{_fmt(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} |")
+                   f"{p['utilisation_pct']:.1f} | ±{b['mpa']:.1f} | ±{b['pct_of_allowable']:.1f} | "
+                   f"±{b['pct_of_peak']:.1f} | **{p['verdict'].upper()}** | {sf_text(sf)} | "
+                   f"{_fmt(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} | "
+                   f"{md_text(stopped_text(p))} |")
     minima = r.get("part_minima")
     if minima:
         out += ["", "Minimum factor of safety per part (over the modes checked):", "",
@@ -393,8 +428,10 @@ def render_markdown(r: dict) -> str:
     pics = [p for p in r["parts"] if p.get("pictures")]
     if pics:
         lines += ["", "## Pictures", "", "Stress pictures share one colour scale: utilisation 0–100 % of the "
-                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it; the factor "
-                  f"of safety pictures divide the same allowable by the von Mises stress.", ""]
+                  f"{allowable_label(r['settings']['limit_factor'], r['limit_mpa'])}, magenta above it (the one map of "
+                  f"utilisation in every picture and page); the factor of safety pictures divide the same allowable "
+                  f"by the von Mises stress and are coloured as its utilisation (100 % / factor). Each picture's "
+                  f"triad shows the part frame of the *where (mm)* column.", ""]
         for p in pics:
             label = part_label(p["name"], p["part"])
             lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]

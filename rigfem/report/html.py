@@ -19,11 +19,13 @@ from rigfem.report.document import (
     MODE_TEXT,
     allowable_label,
     assumption_lines,
+    band,
     by_utilisation,
     configuration_lines,
     loads_lines,
     model_lines,
     safety_factor,
+    stopped_text,
     study_tables,
     title_block,
 )
@@ -74,7 +76,7 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
         viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
         allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
-        rows=by_utilisation(r["parts"]),
+        rows=by_utilisation(r["parts"]), band=band, stopped=stopped_text,
         safety=lambda p: p.get("safety_factor", safety_factor(p.get("peak_mpa"), r["limit_mpa"])),
         md={k: markdown_html("\n".join(f(r))) for k, f in
             (("title", title_block), ("configuration", configuration_lines), ("assumptions", assumption_lines),

@@ -24,14 +24,49 @@ def _unwrapped(deg: np.ndarray) -> np.ndarray:
     return np.degrees(np.unwrap(np.radians(deg)))
 
 
+def same_rotation(m: Motion) -> list[list[str]]:
+    """The moving links grouped by their rotation: links that turn together (a block sliding on a
+    rocker turns with it) form one group, drawn as one curve named after all of them, not as
+    identical curves on top of each other."""
+    groups: list[list[str]] = []
+    for n in (n for n in m.links if n != "crank"):
+        a = _unwrapped(m.links[n]["angle_deg"])
+        for g in groups:
+            b = _unwrapped(m.links[g[0]]["angle_deg"])
+            if np.allclose(a - a[0], b - b[0], atol=1e-6) and abs((a[0] - b[0] + 180) % 360 - 180) < 1e-6:
+                g.append(n)
+                break
+        else:
+            groups.append([n])
+    return groups
+
+
+def _strokes(ax, x: np.ndarray, s: dict) -> None:
+    """The slider's position over the turn, its two strokes shaded (moving +x, moving −x) with the
+    crank angle each takes: a quick-return's time ratio (slow stroke / quick stroke)."""
+    v = np.asarray(s["velocity_mm_s"], float)
+    plus = float(np.mean(v > 0)) * 360.0
+    ax.plot(x, s["position_mm"], color="tab:red")
+    ax.fill_between(x, 0, 1, where=v > 0, transform=ax.get_xaxis_transform(), color="tab:blue", alpha=0.12,
+                    label=f"slider moving +x ({plus:.0f}° of crank)")
+    ax.fill_between(x, 0, 1, where=v <= 0, transform=ax.get_xaxis_transform(), color="tab:orange", alpha=0.12,
+                    label=f"slider moving −x ({360 - plus:.0f}° of crank)")
+    slow, quick = max(plus, 360.0 - plus), min(plus, 360.0 - plus)
+    ax.set_title(f"slider strokes: {slow:.0f}° and {quick:.0f}° of crank, time ratio {slow / quick:.2f}"
+                 if quick > 0 else "slider strokes", fontsize=10)
+    ax.set_ylabel("slider position (mm)", color="tab:red")
+    ax.legend(loc="best", fontsize=8)
+
+
 def motion_plot(m: Motion, path: str | Path, title: str) -> Path:
     """PNG: link angles, angular velocities and accelerations, slider (if any) and the
-    transmission angle with the rig's 35–145° band shaded, against the crank angle."""
-    moving = [n for n in m.links if n != "crank"]
+    transmission angle with the rig's 35–145° band shaded, against the crank angle; a linkage with
+    no transmission angle shows its slider's strokes there instead (a quick-return's time ratio).
+    Links that turn together are one curve."""
     fig, axs = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     x = m.crank_deg
-    for n in moving:
-        L = m.links[n]
+    for group in same_rotation(m):
+        L, n = m.links[group[0]], " = ".join(group) + (" (turn together)" if len(group) > 1 else "")
         axs[0, 0].plot(x, _unwrapped(L["angle_deg"]), label=n)
         axs[0, 1].plot(x, L["omega_rad_s"], label=n)
         axs[1, 0].plot(x, L["alpha_rad_s2"], label=n)
@@ -45,6 +80,12 @@ def motion_plot(m: Motion, path: str | Path, title: str) -> Path:
         ax.set_ylim(0, 180)
         ax.set_ylabel("transmission angle (deg)")
         ax.legend(loc="best", fontsize=8)
+    elif m.slider is not None:
+        _strokes(ax, x, m.slider)
+    else:
+        ax.set_axis_off()
+        ax.text(0.5, 0.5, "no transmission angle or slider\nfor this linkage", ha="center", va="center",
+                transform=ax.transAxes, fontsize=11, color="0.4")
     if m.slider is not None:
         s = m.slider
         for a, key, unit in ((axs[0, 0], "position_mm", "mm"), (axs[0, 1], "velocity_mm_s", "mm/s"),

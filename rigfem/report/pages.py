@@ -27,6 +27,9 @@ def _env() -> jinja2.Environment:
                              autoescape=True, undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True)
     env.filters["num"] = lambda x, digits=1: "–" if x is None else f"{x:.{digits}f}"
+    from rigfem.report.scale import scale_json
+
+    env.globals["utilisation_scale"] = json_script(scale_json())  # the pages' colours: rigfem.report.scale
     return env
 
 

@@ -91,7 +91,9 @@ def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowa
             "n_vertices": fm.n_vertices, "case": r.case.name, "mode": r.mode,
             "crank_deg": float(r.case.rows[r.row]),
             "loads": [(ld.kind, ld.group) for ld in r.case.loads], "supports": r.case.supports,
-            "entry": {k: entry[k] for k in ("utilisation_pct", "error_pct", "verdict")},
+            "entry": {**{k: entry.get(k) for k in ("peak_mpa", "utilisation_pct", "error_pct", "verdict", "band_mpa",
+                                                   "band_pct_of_allowable")},
+                      "mesh": {k: (entry.get("mesh") or {}).get(k) for k in ("level", "stopped")}},
             "limit": limit, "label": label, "allowable": allowable, "zoom_mm": zoom_mm}
 
 

@@ -14,6 +14,14 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from rigfem.fe.partcase import CaseResult
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
+from rigfem.report.document import band, stopped_text
+from rigfem.report.scale import (
+    ABOVE_COLOUR,
+    DISPLACEMENT_CMAP,
+    UTILISATION_CMAP,
+    UTILISATION_SCALE_PCT,
+    colormap,
+)
 
 matplotlib.use("Agg")
 
@@ -39,7 +47,7 @@ def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path
     vals = values[faces].mean(axis=1)
     peak = int(np.argmax(values))
     norm = norm or plt.Normalize(0.0, float(values.max()) or 1.0)
-    cmap = plt.get_cmap("turbo")
+    cmap = colormap(UTILISATION_CMAP if label.startswith(("von Mises", "factor")) else DISPLACEMENT_CMAP)
     fig = plt.figure(figsize=(12, 5.5))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     _panel(ax, verts, vals, norm, cmap, points[peak])
@@ -126,11 +134,19 @@ def utilisation_plot(r: CaseResult, limit: float, path: str | Path, label: str, 
     return path
 
 
-#: the ONE colour scale of every part's stress picture in a report: utilisation, % of the allowable
-UTILISATION_SCALE_PCT = (0.0, 100.0)
-#: colour of a utilisation above 100 % (beyond the allowable) and of a factor of safety above FOS_TOP
-ABOVE_COLOUR, FOS_TOP = "#ff00ff", 5.0
+#: the factor of safety picture's bar: its ticks (–) where the one utilisation scale puts them (100 / FoS %)
+FOS_TICKS = (1.0, 1.25, 1.5, 2.0, 3.0, 5.0)
 _VERDICT_COLOUR = {"pass": "#2e7d32", "fail": "#c62828", "undecided": "#ef6c00"}
+
+
+def band_lines(entry: dict, allowable: str) -> list[str]:
+    """The caption's peak and band: in MPa, in % of the allowable (what the verdict reads) beside % of
+    the peak, so a plate at 2 % of the allowable with ±43.7 % of its peak reads ±0.9 % of the allowable."""
+    b, u = band(entry), entry["utilisation_pct"]
+    return [f"peak {entry['peak_mpa']:.1f} ± {b['mpa']:.1f} MPa = utilisation {u:.1f} ± {b['pct_of_allowable']:.1f} % "
+            f"({u - b['pct_of_allowable']:.1f}–{u + b['pct_of_allowable']:.1f} %) of the {allowable}",
+            f"band: ±{b['mpa']:.1f} MPa = ±{b['pct_of_allowable']:.1f} % of the allowable = ±{b['pct_of_peak']:.1f} % "
+            f"of the peak (error estimate, not a bound)"]
 
 
 def _pin_loads(r: CaseResult, c: np.ndarray, fm, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
@@ -162,7 +178,7 @@ def _supports(r: CaseResult, fm) -> tuple[list[tuple[np.ndarray, str]], str]:
 
 def _bar(fig, rect, norm, cmap: str, above: str | None, label: str, ticks, fmt, top_axis=None, marks=()) -> None:
     """Horizontal colour bar; ``top_axis`` = (label, function of the value, ticks) adds a second scale."""
-    cm = plt.get_cmap(cmap).with_extremes(over=above) if above else plt.get_cmap(cmap)
+    cm = colormap(cmap, above)
     ax = fig.add_axes(rect)
     cb = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cm), cax=ax, orientation="horizontal",
                       extend="max" if above else "neither", ticks=ticks)
@@ -178,27 +194,138 @@ def _bar(fig, rect, norm, cmap: str, above: str | None, label: str, ticks, fmt, 
         sec.set_xlabel(name, fontsize=14)
 
 
-def _page(images, elongated: bool, lines: list[str], verdict: str, legend: str, path: Path, bar) -> None:
-    """One 1600×1000 picture: the title lines, the whole part and its close-up, the colour bar."""
-    fig = plt.figure(figsize=(16, 10), dpi=100)
-    fig.text(0.015, 0.975, lines[0], fontsize=22, fontweight="bold", va="top")
-    fig.text(0.985, 0.975, verdict.upper(), fontsize=26, fontweight="bold", va="top", ha="right", color="white",
-             bbox=dict(facecolor=_VERDICT_COLOUR.get(verdict, "#555555"), edgecolor="none", pad=6))
-    fig.text(0.015, 0.925, "\n".join(lines[1:]), fontsize=16, va="top", linespacing=1.35)
-    for img, rect in zip(images, _RECTS[elongated]):
-        ax = fig.add_axes(rect)
-        ax.imshow(img)
+#: label boxes of each kind of annotation (views.Shot.labels): extremes, supports, pin loads
+_LABEL_STYLE = {"mark": ("#f4f4f4", "black", "black"), "support": ("#202020", "none", "white"),
+                "load": ("#d81b60", "none", "white")}
+#: where a label may go from its point (offset points), nearest first
+_OFFSETS = [(r * dx, r * dy) for r in (26, 50, 85, 130, 190)
+            for dx, dy in ((1, 0.8), (-1, 0.8), (1, -0.8), (-1, -0.8), (0, 1.1), (0, -1.1), (1.2, 0), (-1.2, 0))]
+
+
+def _text_box(ann, renderer):
+    """Display box of an annotation's text and its rounded frame (not its leader line)."""
+    from matplotlib.text import Text
+
+    ann.update_positions(renderer)  # the text's place follows its offset only once this is done
+    return Text.get_window_extent(ann, renderer).padded(6)
+
+
+def _overlap(a, b) -> float:
+    w = min(a.x1, b.x1) - max(a.x0, b.x0)
+    h = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return max(w, 0.0) * max(h, 0.0)
+
+
+def _outside(a, fig_box) -> float:
+    inner = _overlap(a, fig_box)
+    return a.width * a.height - inner
+
+
+def place_labels(fig, items, obstacles) -> list:
+    """Annotations of ``items`` (axes, x, y in the axes' data, text, kind) each moved, nearest first,
+    to an offset where its box overlaps no label placed before it nor an ``obstacle`` (display
+    boxes: the title, the legend, the colour bar) and lies inside the figure; where none is free,
+    the least bad.  Returns the annotations."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    fig_box = fig.bbox.padded(-2)
+    taken, out = list(obstacles), []
+    for ax, x, y, text, kind in items:
+        fc, ec, colour = _LABEL_STYLE[kind]
+        ann = ax.annotate(text, (x, y), xytext=(0, 0), textcoords="offset points", fontsize=13, color=colour,
+                          bbox=dict(boxstyle="round,pad=0.25", fc=fc, ec=ec, alpha=0.92), annotation_clip=False,
+                          arrowprops=dict(arrowstyle="-", color="black", lw=1.0, shrinkA=0, shrinkB=2), zorder=5)
+        best = None
+        for dx, dy in _OFFSETS:
+            ann.xyann = (dx, dy)
+            ann.set_ha("left" if dx > 0 else "right" if dx < 0 else "center")
+            ann.set_va("bottom" if dy > 0 else "top" if dy < 0 else "center")
+            box = _text_box(ann, renderer)
+            cost = sum(_overlap(box, t) for t in taken) + 10.0 * _outside(box, fig_box)
+            if best is None or cost < best[0]:
+                best = (cost, dx, dy)
+            if cost == 0:
+                break
+        _, dx, dy = best
+        ann.xyann = (dx, dy)
+        ann.set_ha("left" if dx > 0 else "right" if dx < 0 else "center")
+        ann.set_va("bottom" if dy > 0 else "top" if dy < 0 else "center")
+        taken.append(_text_box(ann, renderer))
+        out.append(ann)
+    return out
+
+
+def triad(fig, rect, right: np.ndarray, up: np.ndarray, toward: np.ndarray) -> None:
+    """The part frame's x, y, z axes as the views show them (parallel projection: screen right,
+    screen up; an axis pointing at the viewer is ⊙, away ⊗), in the figure rectangle ``rect``."""
+    ax = fig.add_axes(rect)
+    ax.set_xlim(-1.45, 1.45), ax.set_ylim(-1.45, 1.45), ax.set_aspect("equal"), ax.set_axis_off()
+    for k, (name, colour) in enumerate((("x", "#d32f2f"), ("y", "#2e7d32"), ("z", "#1565c0"))):
+        e = np.eye(3)[k]
+        a, b = float(e @ right), float(e @ up)
+        if np.hypot(a, b) < 0.35:  # nearly along the line of sight
+            ax.plot(0, 0, marker="o", ms=16, mfc="white", mec=colour, mew=2.5)
+            ax.plot(0, 0, marker="." if e @ toward > 0 else "x", ms=10, color=colour, mew=2.5)
+            ax.text(0.0, -0.45, name + (" (towards you)" if e @ toward > 0 else " (away)"), color=colour,
+                    fontsize=12, fontweight="bold", ha="center", va="top")
+            continue
+        ax.annotate("", (a, b), (0, 0), arrowprops=dict(arrowstyle="-|>", color=colour, lw=2.5, mutation_scale=18))
+        ax.text(1.22 * a, 1.22 * b, name, color=colour, fontsize=15, fontweight="bold", ha="center", va="center")
+    ax.set_title("part frame (mm)", fontsize=11)
+
+
+def _page(shots, elongated: bool, lines: list[str], verdict: str, legend: str, path: Path, bar,
+          frame: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> list:
+    """One 1600×1000 picture: the title lines, the whole part and its close-up (each image shown
+    at its own pixel size, so a strip-shaped rail gets a strip), their labels placed so they do not
+    overlap, the axis triad of the part frame, the colour bar.  Returns the labels' display boxes
+    and texts (what the tests check)."""
+    W, H = 1600, 1000
+    fig = plt.figure(figsize=(W / 100, H / 100), dpi=100)
+    texts = [fig.text(0.015, 0.975, lines[0], fontsize=22, fontweight="bold", va="top"),
+             fig.text(0.985, 0.975, verdict.upper(), fontsize=26, fontweight="bold", va="top", ha="right",
+                      color="white", bbox=dict(facecolor=_VERDICT_COLOUR.get(verdict, "#555555"), edgecolor="none",
+                                               pad=6)),
+             fig.text(0.015, 0.925, "\n".join(lines[1:]), fontsize=15, va="top", linespacing=1.3)]
+    rects = _layout(shots, elongated)
+    axes = []
+    for shot, (x0, y0) in zip(shots, rects):
+        h, w = shot.image.shape[:2]
+        ax = fig.add_axes([x0 / W, y0 / H, w / W, h / H])
+        ax.imshow(shot.image, interpolation="nearest")
         ax.set_axis_off()
-    fig.axes[-1].set_title("close-up of the peak, mesh edges shown", fontsize=14)
-    fig.text(*(_RECTS[elongated][2][:2] if elongated else (0.015, 0.155)), legend, fontsize=14, va="bottom")
+        axes.append(ax)
+    axes[-1].set_title("close-up of the peak, mesh edges shown", fontsize=14)
+    lx, ly = (rects[1][0] + shots[1].image.shape[1] + 30, 185) if elongated else (975, 185)
+    texts.append(fig.text(lx / W, ly / H, legend, fontsize=13, va="bottom"))
+    if frame is not None:
+        x0, y0 = (W - 260, 265) if elongated else (rects[1][0] + shots[1].image.shape[1] + 10, 420)
+        triad(fig, [x0 / W, y0 / H, 170 / W, 170 / H], *frame)
     bar(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    obstacles = [t.get_window_extent(renderer) for t in texts] + [axes[-1].title.get_window_extent(renderer)]
+    obstacles += [a.get_tightbbox(renderer) for a in fig.axes if a not in axes]
+    anns = place_labels(fig, [(ax, x, y, text, kind) for ax, shot in zip(axes, shots)
+                              for x, y, text, kind in shot.labels], obstacles)
+    boxes = [(a.get_text(), _text_box(a, renderer)) for a in anns]
     fig.savefig(path, dpi=100)
     plt.close(fig)
+    return boxes
 
 
-#: axes rectangles (figure fractions): whole part, close-up, legend corner; long parts vs compact ones
-_RECTS = {True: ([0.01, 0.50, 0.98, 0.31], [0.01, 0.17, 0.48, 0.30], [0.52, 0.20]),
-          False: ([0.01, 0.19, 0.58, 0.62], [0.60, 0.19, 0.39, 0.58], None)}
+#: the page's panels (figure pixels, y up): the whole part's top edge, the close-up's, the space they share
+_TOP, _BOTTOM, _GAP = 790, 175, 60
+
+
+def _layout(shots, elongated: bool) -> list[tuple[int, int]]:
+    """Lower-left corners (figure pixels) of the whole part's view and of the close-up: a long part
+    as a full-width strip under the title with its close-up below; a compact one beside its close-up."""
+    (h0, w0), (h1, w1) = shots[0].image.shape[:2], shots[1].image.shape[:2]
+    if elongated:
+        y0 = _TOP - _GAP // 2 - h0
+        return [(int((1600 - w0) / 2), y0), (20, _BOTTOM + max(0, (y0 - _GAP - _BOTTOM - h1) // 2))]
+    return [(10, _BOTTOM + 5 + max(0, (_TOP - 20 - _BOTTOM - 5 - h0) // 2)), (970, _TOP - 40 - h1)]
 
 
 def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
@@ -233,59 +360,65 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
     held, how = _supports(r, fm)
     inertia = any(ld.kind != "bearing" for ld in r.case.loads)
     deg = float(r.case.rows[r.row])
-    u_pct, e = entry["utilisation_pct"], entry["error_pct"]
     head = [f"{label}: {{what}}",
-            f"{r.mode} mode, crank angle {deg:.1f}°; deformation ×{scale:g}",
-            f"peak {vm[hi]:.1f} MPa ± {e:.1f} % = utilisation {u_pct:.1f} % ({u_pct * (1 - e / 100):.1f}–"
-            f"{u_pct * (1 + e / 100):.1f} %) of the {allowable}"]
+            f"{r.mode} mode, crank angle {deg:.1f}°; deformation ×{scale:g}; mesh "
+            f"{(entry.get('mesh') or {}).get('level') or '–'}, refining stopped: {stopped_text(entry)}",
+            *band_lines(entry, allowable)]
     legend = ("arrows: pin loads on the holes (N)" + (" + the part's own inertia" if inertia else "")
               + f"\ndark blocks: supports ({how})\n● markers: extreme values")
     box = (x[hi] - zoom_mm, x[hi] + zoom_mm)
-    w_h = {True: [(1568, 310), (768, 300)], False: [(928, 620), (624, 580)]}[elongated]
+    w_h = {True: [(1560, 300), (980, 0)], False: [(940, 590), (430, 420)]}[elongated]
     base = dict(points=x[:n], tets=tets, arrows=loads, supports=held)
+    util_bar = dict(norm=plt.Normalize(*UTILISATION_SCALE_PCT), cmap=UTILISATION_CMAP, above=ABOVE_COLOUR)
     pics = {
-        "von_mises": (FieldView(values=pct[:n], clim=UTILISATION_SCALE_PCT, cmap="turbo", above=ABOVE_COLOUR,
+        "von_mises": (FieldView(values=pct[:n], clim=UTILISATION_SCALE_PCT, cmap=colormap(), above=ABOVE_COLOUR,
                                 marks=[(x[hi], f"max {vm[hi]:.1f} MPa ({pct[hi]:.1f} %)"),
                                        (x[lo], f"min {vm[lo]:.2g} MPa")], **base),
                       "von Mises stress, as utilisation",
-                      lambda f: _bar(f, [0.12, 0.055, 0.76, 0.03], plt.Normalize(*UTILISATION_SCALE_PCT), "turbo",
-                                     ABOVE_COLOUR, f"utilisation = von Mises / {allowable} (%); above 100 %: "
+                      lambda f: _bar(f, [0.12, 0.055, 0.76, 0.03], **util_bar,
+                                     label=f"utilisation = von Mises / {allowable} (%); above 100 %: "
                                      f"magenta; black line: this part's peak {pct[hi]:.1f} %",
-                                     [0, 20, 40, 60, 80, 100], lambda t: f"{t:.0f} %",
-                                     ("von Mises (MPa)", lambda p: p * limit / 100, np.linspace(0, limit, 6)),
-                                     [min(pct[hi], 100.0)])),
-        "displacement": (FieldView(values=umag[:n], clim=(0.0, float(umag.max()) or 1.0), cmap="viridis",
-                                   above=None, marks=[(x[int(np.argmax(umag))], f"max {umag.max():.3g} mm")],
+                                     ticks=[0, 20, 40, 60, 80, 100], fmt=lambda t: f"{t:.0f} %",
+                                     top_axis=("von Mises (MPa)", lambda p: p * limit / 100, np.linspace(0, limit, 6)),
+                                     marks=[min(pct[hi], 100.0)])),
+        "displacement": (FieldView(values=umag[:n], clim=(0.0, float(umag.max()) or 1.0),
+                                   cmap=colormap(DISPLACEMENT_CMAP, None), above=None,
+                                   marks=[(x[int(np.argmax(umag))], f"max {umag.max():.3g} mm")],
                                    ghost=fm.nodes[:n], **base),
                          "displacement magnitude (grey: undeformed)",
                          lambda f: _bar(f, [0.12, 0.07, 0.76, 0.03], plt.Normalize(0, float(umag.max()) or 1.0),
-                                        "viridis", None, "displacement magnitude (mm)",
+                                        DISPLACEMENT_CMAP, None, "displacement magnitude (mm)",
                                         np.linspace(0, float(umag.max()) or 1.0, 6), lambda t: f"{t:.3g}")),
-        "safety_factor": (FieldView(values=fos[:n], clim=(0.0, FOS_TOP), cmap="RdYlGn", above="#00441b",
+        # the factor of safety coloured as its utilisation (100 / FoS %) on the one scale: the same colour
+        # means the same thing in every picture; the bar reads the factor of safety
+        "safety_factor": (FieldView(values=pct[:n], clim=UTILISATION_SCALE_PCT, cmap=colormap(), above=ABOVE_COLOUR,
                                     marks=[(x[hi], f"min {fos[hi]:.2f}")], **base),
                           "factor of safety",
-                          lambda f: _bar(f, [0.12, 0.07, 0.76, 0.03], plt.Normalize(0, FOS_TOP), "RdYlGn", "#00441b",
-                                         f"factor of safety = {allowable.split(' =')[0]} / von Mises (–), black line: 1; above "
-                                         f"{FOS_TOP:g}: dark green (capped at {SAFETY_CAP:g})",
-                                         [0, 1, 2, 3, 4, 5], lambda t: f"{t:.0f}",
-                                         marks=[1.0])),
+                          lambda f: _bar(f, [0.12, 0.07, 0.76, 0.03], **util_bar,
+                                         label=f"factor of safety = {allowable.split(' =')[0]} / von Mises (–), on the "
+                                         f"utilisation scale (100 % / factor); black line: 1; below 1: magenta",
+                                         ticks=[100.0 / t for t in FOS_TICKS], fmt=lambda t: f"{100.0 / t:.3g}",
+                                         marks=[100.0])),
     }
     files = {}
     for key, (view, what, bar) in pics.items():
         name = f"{r.case.name}.png" if key == "von_mises" else f"{r.case.name}_{key}.png"
         try:
-            images = [render(view, w_h[0], d, up), render(view, w_h[1], d, up, box)]
+            whole = render(view, w_h[0], d, up, shrink=elongated)
+            size = w_h[1] if not elongated else (980, _TOP - _GAP * 2 - whole.image.shape[0] - _BOTTOM)
+            shots = [whole, render(view, size, d, up, box, shrink=elongated)]
         except Exception:  # noqa: BLE001 - no OpenGL context on this machine: the simpler picture
             field_picture(fm.nodes, fm.elements, view.values, folder / name, f"{label}: {what}", what,
                           norm=plt.Normalize(*view.clim))
             files[key], renderer = name, "matplotlib"
             continue
         lines = [head[0].format(what=what), *head[1:]]
-        _page(images, elongated, lines, entry["verdict"], legend, folder / name, bar)
+        _page(shots, elongated, lines, entry["verdict"], legend, folder / name, bar, (whole.right, whole.up, d))
         files[key], renderer = name, "pyvista"
     return {"files": files, "renderer": renderer, "deformation_scale": scale,
             "utilisation_scale_pct": list(UTILISATION_SCALE_PCT), "utilisation_scale_mpa": [0.0, limit],
-            "safety_factor_scale": [0.0, FOS_TOP], "displacement_scale_mm": [0.0, float(umag.max())]}
+            # the factor of safety is coloured as 100 / FoS % on the one scale: 1 at its top, none at 0 %
+            "safety_factor_scale": [1.0, None], "displacement_scale_mm": [0.0, float(umag.max())]}
 
 
 def _nice(x: float) -> float:

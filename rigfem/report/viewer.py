@@ -51,7 +51,7 @@ def _part(pvd: Path, limit_mpa: float) -> dict | None:
     return {"name": pvd.stem.removesuffix("_cycle"), "angles": [t for t, _ in series],
             "vertices": int(used.size), "pos": _b64(first.points[used].astype("<f4")),
             "tri": _b64(tri.reshape(-1, 3).astype("<u4")), "util": _b64(np.round(util * 100).astype("<u2")),
-            "peak": [float(u.max()) for u in util]}
+            "peak": [float(u.max()) for u in util], "governing": int(np.argmax(util.max(axis=1)))}
 
 
 def _cached_part(pvd: Path, limit_mpa: float, cache: Cache) -> dict | None:

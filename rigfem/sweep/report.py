@@ -48,7 +48,10 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     ok = _ok(table)
     if ok.empty or "config_util_pct" not in ok:
         return []
-    vmax = min(150.0, max(1.0, float(ok["config_util_pct"].max())))  # beyond 150 % all reads "fails"
+    from rigfem.report.scale import UTILISATION_SCALE_PCT, colormap
+
+    vmin, vmax = UTILISATION_SCALE_PCT  # the report's one scale: yellow is 100 %, magenta above, everywhere
+    cmap = colormap()
     fixed = ", ".join(f"{k} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
     note = f" (not shown, the same everywhere: {fixed})" if fixed else ""
     files = []
@@ -63,8 +66,8 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
             for ax, b2 in zip(axes.flat, b2s):
                 sub = ok[ok["b2"] == b2].groupby([y, x])["config_util_pct"].max().unstack()
                 grid = sub.reindex(index=ys, columns=xs).to_numpy(dtype=float)
-                im = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", vmin=0, vmax=vmax,
-                               cmap="viridis", extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
+                im = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", vmin=vmin, vmax=vmax,
+                               cmap=cmap, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
                 if np.nanmax(np.nan_to_num(grid, nan=0.0)) >= 100.0:
                     ax.contour(xs, ys, np.nan_to_num(grid, nan=0.0), levels=[100.0], colors="r")
                 # computed but not mountable (a rig rule broken): hatched; failing: red outline
@@ -87,8 +90,8 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
                 ax.set_xlabel(f"{x} (mm)")
             for ax in axes[:, 0]:
                 ax.set_ylabel(f"{y} (mm)")
-            fig.colorbar(im, ax=axes, shrink=0.6, extend="max" if vmax >= 150.0 else "neither",
-                         label=f"peak utilisation (%), max over {over}")
+            fig.colorbar(im, ax=axes, shrink=0.6, extend="max",
+                         label=f"peak utilisation (%), max over {over}; magenta: above 100 %")
             fig.suptitle(f"four-bar: peak part utilisation vs σu/2 ({p.speed_hz:g} Hz, {p.model}, {p.fidelity}){note}\n"
                          f"grey: cannot assemble or toggle; hatched: breaks a rig rule (not mountable); "
                          f"red outline: fails or undecided; ★ the study's final design", fontsize="small")
@@ -101,11 +104,11 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
         xs, ys = sorted(table["b2"].unique()), sorted(table["b3"].unique())
         grid = ok.groupby(["b3", "b2"])["config_util_pct"].max().unstack().reindex(index=ys, columns=xs)
         fig, ax = plt.subplots(figsize=(6, 5))
-        im = ax.imshow(np.ma.masked_invalid(grid.to_numpy(dtype=float)), origin="lower", aspect="auto",
-                       vmin=0, vmax=vmax, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
+        im = ax.imshow(np.ma.masked_invalid(grid.to_numpy(dtype=float)), origin="lower", aspect="auto", cmap=cmap,
+                       vmin=vmin, vmax=vmax, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
         ax.set_facecolor("0.85")
         ax.set_xlabel("b2 (mm)"), ax.set_ylabel("b3 (mm)")
-        fig.colorbar(im, label="peak utilisation (%)")
+        fig.colorbar(im, extend="max", label="peak utilisation (%); magenta: above 100 %")
         ax.set_title(f"slider-crank: peak part utilisation, {p.speed_hz:g} Hz{note}", fontsize="x-small")
         f = "map_slider-crank_b2_b3.png"
         with whole_file(out / f) as tmp:

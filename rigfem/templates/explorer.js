@@ -11,11 +11,13 @@
   const fmt = (v, n = 1) => (v === null || v === undefined ? "–" : v.toFixed(n));
   let D = null, kind = null, index = null, pos = null, pick = {}, theta = 0, timer = null;
   const key = (vals) => vals.join("|");
+  // utilisation (%) -> the report's one scale (rigfem/report/scale.py): its stops 0..100 %, its colour above
+  const SCALE = JSON.parse(document.getElementById("util-scale").textContent);
   function colour(u) {
-    if (u === null) return "#c8c8c8";
-    if (u > 100) return "rgb(230,0,200)";
-    const s = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-    const x = Math.max(0, u) / 100 * (s.length - 1), i = Math.min(s.length - 2, Math.floor(x)), f = x - i;
+    if (u === null) return SCALE.none;
+    if (u > SCALE.range_pct[1]) return SCALE.above;
+    const s = SCALE.stops, x = Math.max(0, u) / SCALE.range_pct[1] * (s.length - 1);
+    const i = Math.min(s.length - 2, Math.floor(x)), f = x - i;
     return `rgb(${s[i].map((v, j) => Math.round(v + f * (s[i + 1][j] - v))).join(",")})`;
   }
   function setKind(k) {

@@ -17,16 +17,16 @@
     for (let i = 0; i < pos.length; i++) { lo[i % 3] = Math.min(lo[i % 3], pos[i]); hi[i % 3] = Math.max(hi[i % 3], pos[i]); }
     const c = lo.map((v, i) => (v + hi[i]) / 2), r = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 || 1;
     P = { d, pos, tri, util, c, r, n: d.vertices };
-    slider.max = String(d.angles.length - 1); slider.value = "0";
+    slider.max = String(d.angles.length - 1); slider.value = String(d.governing || 0);  // opens at the governing angle
     draw();
   }
-  function colour(u) {  // utilisation (%) -> viridis-like ramp 0..100 %, magenta above the allowable
-    if (u > 100) return "rgb(230,0,200)";
-    const t = Math.max(0, Math.min(1, u / 100));
-    const stops = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-    const x = t * (stops.length - 1), i = Math.min(stops.length - 2, Math.floor(x)), f = x - i;
-    const m = stops[i].map((v, j) => Math.round(v + f * (stops[i + 1][j] - v)));
-    return m;
+  // utilisation (%) -> the report's one scale (rigfem/report/scale.py): its stops 0..100 %, its colour above
+  const SCALE = JSON.parse(document.getElementById("util-scale").textContent);
+  function colour(u) {
+    if (u > SCALE.range_pct[1]) return SCALE.above;
+    const s = SCALE.stops, t = Math.max(0, Math.min(1, u / SCALE.range_pct[1]));
+    const x = t * (s.length - 1), i = Math.min(s.length - 2, Math.floor(x)), f = x - i;
+    return s[i].map((v, j) => Math.round(v + f * (s[i + 1][j] - v)));
   }
   function draw() {
     const k = Number(slider.value), { pos, tri, util, c, r, n, d } = P;
@@ -58,14 +58,25 @@
       if (Math.abs(ux * vy - uy * vx) < 0.5) continue;
       g.strokeStyle = g.fillStyle; g.lineWidth = 0.5; g.stroke();
     }
+    let top = 0;  // the peak of this crank angle: a ringed dot and its value
+    for (let i = 1; i < n; i++) if (util[base + i] > util[base + top]) top = i;
+    g.lineWidth = 3; g.strokeStyle = "#000"; g.fillStyle = "#fff";
+    g.beginPath(); g.arc(X[top], Y[top], 7, 0, 2 * Math.PI); g.fill(); g.stroke();
+    g.fillStyle = "#000"; g.beginPath(); g.arc(X[top], Y[top], 3, 0, 2 * Math.PI); g.fill();
+    g.font = "bold 15px system-ui, sans-serif";
+    const tag = `peak ${(util[base + top] / 100).toFixed(1)} %`, tw = g.measureText(tag).width;
+    const tx = Math.min(X[top] + 12, cv.width - 100 - tw), ty = Math.max(Y[top] - 12, 20);
+    g.fillStyle = "rgba(255,255,255,0.85)"; g.fillRect(tx - 4, ty - 15, tw + 8, 21);
+    g.fillStyle = "#000"; g.fillText(tag, tx, ty);
     legend();
-    angle.textContent = `${d.angles[k].toFixed(1)}° (${k + 1} of ${d.angles.length})`;
+    const gov = k === (d.governing || 0) ? ", governing: the highest peak of the cycle" : "";
+    angle.textContent = `${d.angles[k].toFixed(1)}° (${k + 1} of ${d.angles.length}${gov})`;
     peak.textContent = `peak at this angle: ${d.peak[k].toFixed(1)} % of the allowable`;
   }
   function legend() {
     const x = cv.width - 70, y0 = 40, h = 200;
     for (let i = 0; i < h; i++) { const m = colour(100 * (1 - i / h)); g.fillStyle = `rgb(${m.join(",")})`; g.fillRect(x, y0 + i, 18, 1); }
-    g.fillStyle = "rgb(230,0,200)"; g.fillRect(x, y0 - 22, 18, 18);
+    g.fillStyle = SCALE.above; g.fillRect(x, y0 - 22, 18, 18);
     g.fillStyle = "#111"; g.font = "14px system-ui, sans-serif";
     g.fillText("> 100 %", x - 4, y0 - 28); g.fillText("100 %", x + 22, y0 + 5); g.fillText("50 %", x + 22, y0 + h / 2 + 5);
     g.fillText("0 %", x + 22, y0 + h + 5); g.fillText("utilisation", x - 20, y0 + h + 28);
