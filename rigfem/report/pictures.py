@@ -4,6 +4,7 @@ factor of safety), the reactions and the peaks over the crank cycle (matplotlib,
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import matplotlib
@@ -16,6 +17,22 @@ from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
 
 matplotlib.use("Agg")
+
+
+def save_png(fig, path: str | Path, dpi: float) -> None:
+    """``fig.savefig(path, dpi=dpi)`` as a PNG, but RGB where every pixel is opaque (every picture
+    here: the figures have an opaque background), not RGBA: the same pixels, a tenth smaller.
+    Pillow's ``optimize=True`` would save another 2 % at four times the encoding time: not used."""
+    from PIL import Image  # matplotlib's own dependency
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    buf.seek(0)
+    with Image.open(buf) as im:
+        im.load()
+        if im.mode == "RGBA" and im.getextrema()[3] == (255, 255):
+            im = im.convert("RGB")
+        im.save(path, format="PNG")
 
 
 def _panel(ax, verts: np.ndarray, vals: np.ndarray, norm, cmap, mark: np.ndarray) -> None:
@@ -53,7 +70,7 @@ def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path
     fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, label=label)
     path = Path(path)
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
     return path
 
@@ -77,7 +94,7 @@ def reactions_plot(h, path: str | Path) -> None:
                  f"pin reactions and driver over one crank turn", fontsize="small")
     fig.tight_layout()
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=120)
+        save_png(fig, tmp, dpi=120)
     plt.close(fig)
 
 
@@ -96,7 +113,7 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path, allowable: 
     ax.set_title("peak von Mises stress per part over the crank cycle (cycle mode)", fontsize=13)
     fig.tight_layout()
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
 
 
@@ -121,7 +138,7 @@ def utilisation_plot(r: CaseResult, limit: float, path: str | Path, label: str, 
     fig.tight_layout()
     path = Path(path)
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
     return path
 
@@ -192,7 +209,7 @@ def _page(images, elongated: bool, lines: list[str], verdict: str, legend: str, 
     fig.axes[-1].set_title("close-up of the peak, mesh edges shown", fontsize=14)
     fig.text(*(_RECTS[elongated][2][:2] if elongated else (0.015, 0.155)), legend, fontsize=14, va="bottom")
     bar(fig)
-    fig.savefig(path, dpi=100)
+    save_png(fig, path, dpi=100)
     plt.close(fig)
 
 
