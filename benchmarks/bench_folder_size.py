@@ -33,7 +33,7 @@ _FRAME = re.compile(r"_\d{3}\.vtu$")
 
 def _tree_commit(path: Path) -> dict:
     def git(*args: str) -> str:
-        return subprocess.run(["git", "-C", str(path), *args], capture_output=True, text=True).stdout.strip()
+        return subprocess.run(["git", "-C", str(path), *args], capture_output=True, text=True, check=False).stdout.strip()
     return {"sha": git("rev-parse", "HEAD"), "dirty": bool(git("status", "--porcelain", "--untracked-files=no"))}
 
 
