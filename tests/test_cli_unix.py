@@ -4,7 +4,6 @@ traceback, no user file overwritten, nothing half-written."""
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import sys

@@ -17,7 +17,7 @@ import pytest
 
 import rigfem.cli.outputs as outputs
 from rigfem.cli import main
-from said import one_line, said
+from said import one_line
 
 USER = "the user's own file, saved while rigfem ran\n"
 FUNC = ["synthesize", "function", "x*log(x)", "--x", "1", "3", "--input", "20", "90", "--output", "80", "90",

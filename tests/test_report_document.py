@@ -15,7 +15,8 @@ import pytest
 
 from rigfem.cli import main
 from rigfem.report.compare import compare
-from rigfem.report.document import REPORT_SCHEMA, by_utilisation, render_markdown
+from rigfem.report.document import REPORT_SCHEMA, render_markdown
+from rigfem.report.figures import by_utilisation
 
 ROOT = Path(__file__).resolve().parents[1]
 #: a check of a subset: plate_A and post_B (very different peaks), original mode only

@@ -70,7 +70,8 @@ def _overrides(a: argparse.Namespace) -> dict:
 def _summary(r: dict) -> str:
     """The terminal's summary: the governing part case first, then every part case by utilisation
     (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
-    from rigfem.report.document import allowable_label, band, by_utilisation, sf_text, stopped_text, verdict_line
+    from rigfem.report.document import verdict_line
+    from rigfem.report.figures import allowable_label, band, by_utilisation, sf_text, stopped_text
 
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
     lines = [f"{plain(r['scene'])}: {plain(r['description'])}"]

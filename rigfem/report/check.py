@@ -16,19 +16,8 @@ from rigfem.context import Context
 from rigfem.fe.partcase import CaseResult, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.job import Checked
-from rigfem.report.document import (
-    ASSUMPTIONS,
-    REPORT_SCHEMA,
-    UNITS,
-    allowable_label,
-    conclusion,
-    material_table,
-    part_label,
-    part_minima,
-    render_markdown,
-    safety_factor,
-    write_json,
-)
+from rigfem.report.document import ASSUMPTIONS, REPORT_SCHEMA, UNITS, material_table, render_markdown, write_json
+from rigfem.report.figures import allowable_label, conclusion, part_label, part_minima, safety_factor
 from rigfem.report.entries import part_entry
 from rigfem.report.folder import Output, atomic_dir
 from rigfem.report.html import write_html

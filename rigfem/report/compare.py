@@ -7,7 +7,8 @@ overall verdict too); a part case checked in one report only is listed, never ju
 
 from __future__ import annotations
 
-from rigfem.report.document import md_text, part_label, verdict_line
+from rigfem.report.document import md_text, verdict_line
+from rigfem.report.figures import part_label
 from rigfem.report.pages import markdown_html, render_page
 
 __all__ = ["RANK", "compare", "render_compare_markdown", "render_compare_html"]

@@ -15,20 +15,9 @@ import io
 from pathlib import Path
 
 from rigfem.cache import Cache
-from rigfem.report.document import (
-    MODE_TEXT,
-    allowable_label,
-    assumption_lines,
-    band,
-    by_utilisation,
-    configuration_lines,
-    loads_lines,
-    model_lines,
-    safety_factor,
-    stopped_text,
-    study_tables,
-    title_block,
-)
+from rigfem.report.document import (MODE_TEXT, assumption_lines, configuration_lines, loads_lines, model_lines,
+                                    study_tables, title_block)
+from rigfem.report.figures import allowable_label, band, by_utilisation, safety_factor, stopped_text
 from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
 

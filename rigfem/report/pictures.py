@@ -4,6 +4,7 @@ factor of safety), the reactions and the peaks over the crank cycle (matplotlib,
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import matplotlib
@@ -14,7 +15,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from rigfem.fe.partcase import CaseResult
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
-from rigfem.report.document import band, stopped_text
+from rigfem.report.figures import band, stopped_text
 from rigfem.report.scale import (
     ABOVE_COLOUR,
     DISPLACEMENT_CMAP,
@@ -24,6 +25,22 @@ from rigfem.report.scale import (
 )
 
 matplotlib.use("Agg")
+
+
+def save_png(fig, path: str | Path, dpi: float) -> None:
+    """``fig.savefig(path, dpi=dpi)`` as a PNG, but RGB where every pixel is opaque (every picture
+    here: the figures have an opaque background), not RGBA: the same pixels, a tenth smaller.
+    Pillow's ``optimize=True`` would save another 2 % at four times the encoding time: not used."""
+    from PIL import Image  # matplotlib's own dependency
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    buf.seek(0)
+    with Image.open(buf) as im:
+        im.load()
+        if im.mode == "RGBA" and im.getextrema()[3] == (255, 255):
+            im = im.convert("RGB")
+        im.save(path, format="PNG")
 
 
 def _panel(ax, verts: np.ndarray, vals: np.ndarray, norm, cmap, mark: np.ndarray) -> None:
@@ -61,7 +78,7 @@ def field_picture(points: np.ndarray, tets: np.ndarray, values: np.ndarray, path
     fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, label=label)
     path = Path(path)
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
     return path
 
@@ -85,7 +102,7 @@ def reactions_plot(h, path: str | Path) -> None:
                  f"pin reactions and driver over one crank turn", fontsize="small")
     fig.tight_layout()
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=120)
+        save_png(fig, tmp, dpi=120)
     plt.close(fig)
 
 
@@ -104,7 +121,7 @@ def _plot_peaks(results: list[CaseResult], limit: float, path: Path, allowable: 
     ax.set_title("peak von Mises stress per part over the crank cycle (cycle mode)", fontsize=13)
     fig.tight_layout()
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
 
 
@@ -129,7 +146,7 @@ def utilisation_plot(r: CaseResult, limit: float, path: str | Path, label: str, 
     fig.tight_layout()
     path = Path(path)
     with whole_file(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        save_png(fig, tmp, dpi=110)
     plt.close(fig)
     return path
 
@@ -309,7 +326,7 @@ def _page(shots, elongated: bool, lines: list[str], verdict: str, legend: str, p
     anns = place_labels(fig, [(ax, x, y, text, kind) for ax, shot in zip(axes, shots)
                               for x, y, text, kind in shot.labels], obstacles)
     boxes = [(a.get_text(), _text_box(a, renderer)) for a in anns]
-    fig.savefig(path, dpi=100)
+    save_png(fig, path, dpi=100)
     plt.close(fig)
     return boxes
 
@@ -321,7 +338,7 @@ _TOP, _BOTTOM, _GAP = 790, 175, 60
 def _layout(shots, elongated: bool) -> list[tuple[int, int]]:
     """Lower-left corners (figure pixels) of the whole part's view and of the close-up: a long part
     as a full-width strip under the title with its close-up below; a compact one beside its close-up."""
-    (h0, w0), (h1, w1) = shots[0].image.shape[:2], shots[1].image.shape[:2]
+    (h0, w0), (h1, _) = shots[0].image.shape[:2], shots[1].image.shape[:2]
     if elongated:
         y0 = _TOP - _GAP // 2 - h0
         return [(int((1600 - w0) / 2), y0), (20, _BOTTOM + max(0, (y0 - _GAP - _BOTTOM - h1) // 2))]

@@ -1,10 +1,16 @@
-"""VTU output through meshio: opens in ParaView, warp-by-vector on ``displacement`` works.
+"""VTU output: opens in ParaView, warp-by-vector on ``displacement`` works.
 
 P2 models are written as ``tetra10`` cells (VTK quadratic tetra, same node order
-as C3D10), P1 as ``tetra``.  Point data: ``displacement`` (3), ``stress`` (6,
-Voigt xx, yy, zz, xy, yz, xz), ``von_mises`` and ``safety_factor`` =
-allowable / von Mises, capped at
-``SAFETY_CAP`` where the stress is (near) zero so no inf is written.
+as C3D10), P1 as ``tetra``.  Point data: ``displacement`` (3, mm), ``stress`` (6,
+MPa, Voigt xx, yy, zz, xy, yz, xz), ``von_mises`` (MPa) and ``safety_factor`` =
+allowable / von Mises, capped at ``SAFETY_CAP`` where the stress is (near) zero so
+no inf is written.
+
+The files are written by meshio as VTK XML, binary and zlib-compressed (ParaView, VTK and
+meshio read them).  Every array is float32 — node coordinates too (mm: 7 significant digits,
+below 1e-4 mm on a metre-long part) — and connectivity int32: same arrays, same names, a few times
+smaller than uncompressed float64 files (results/benchmarks/folder_size.json).  What is left is
+mostly the float32 fields themselves: zlib takes little off them.
 """
 
 from __future__ import annotations
@@ -20,28 +26,39 @@ from rigfem.tensors import von_mises
 SAFETY_CAP = 100.0
 
 
+def write_unstructured(path: str | Path, points: np.ndarray, cell_type: str, cells: np.ndarray,
+                       point_data: dict[str, np.ndarray]) -> Path:
+    """Write one cell kind's unstructured grid with its point data as a zlib-compressed binary VTU
+    (meshio); arrays keep the dtype they come in: the caller chooses the precision."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = meshio.Mesh(np.asarray(points), [(cell_type, np.asarray(cells).astype(np.int32))],
+                       point_data=dict(point_data))
+    mesh.write(path, file_format="vtu", binary=True, compression="zlib")
+    return path
+
+
+def _safety(vm: np.ndarray, allowable: float) -> np.ndarray:
+    vm = np.asarray(vm, dtype=float)
+    return np.minimum(allowable / np.maximum(vm, allowable / SAFETY_CAP), SAFETY_CAP)
+
+
 def write_vtu(path: str | Path, sol: Solution, c, allowable: float) -> Path:
     """Write the combination ``c`` of load cases (None: the only case) of ``sol`` as VTU, its safety
-    factor against the ``allowable`` stress (MPa)."""
+    factor against the ``allowable`` stress (MPa); every array float32 (computed in float64)."""
     fm, allow = sol.model.mesh, float(allowable)
     s = sol.stress(c)
     vm = von_mises(s)
-    sf = np.minimum(allow / np.maximum(vm, allow / SAFETY_CAP), SAFETY_CAP)
-    data = {"displacement": sol.displacement(c), "stress": s, "von_mises": vm, "safety_factor": sf}
-    mesh = meshio.Mesh(fm.nodes, [("tetra10" if fm.order == 2 else "tetra", fm.elements)], point_data=data)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    mesh.write(path, file_format="vtu", compression=None)  # float data barely compresses: zlib costs time
-    return path
+    data = {"displacement": sol.displacement(c), "stress": s, "von_mises": vm, "safety_factor": _safety(vm, allow)}
+    return write_unstructured(path, fm.nodes.astype(np.float32), "tetra10" if fm.order == 2 else "tetra",
+                              fm.elements, {k: v.astype(np.float32) for k, v in data.items()})
 
 
 def write_frame(path: str | Path, vertices: np.ndarray, tets: np.ndarray, fields: dict[str, np.ndarray],
                 allowable: float) -> Path:
     """Write one animation frame (:func:`rigfem.fe.partcase.finish`'s vertex fields, float32) as a
     compact VTU: linear ``tetra`` cells on the vertices, with the safety factor against ``allowable``."""
-    vm = fields["von_mises"].astype(float)
-    sf = np.minimum(allowable / np.maximum(vm, allowable / SAFETY_CAP), SAFETY_CAP).astype(np.float32)
-    mesh = meshio.Mesh(vertices.astype(np.float32), [("tetra", tets.astype(np.int32))],
-                       point_data={**fields, "safety_factor": sf})
-    mesh.write(path, file_format="vtu", compression=None)
-    return Path(path)
+    sf = _safety(fields["von_mises"], float(allowable))
+    return write_unstructured(path, vertices.astype(np.float32), "tetra", tets,
+                              {**{k: np.asarray(v, np.float32) for k, v in fields.items()},
+                               "safety_factor": sf.astype(np.float32)})
