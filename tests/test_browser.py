@@ -72,10 +72,16 @@ def test_report_3d_view(browser, tmp_path):
     run_check(Request("final-cm", {"fidelity": "draft", "parts": ["plate_A"], "frames": 3}), Output(out))
     page = _check_page(browser, out / "report.html", tmp_path)
     first = page.eval("document.getElementById('v-canvas').toDataURL()")
-    assert page.eval("document.getElementById('v-angle').textContent").startswith("0.0°")
-    page.eval("(() => { const s = document.getElementById('v-frame'); s.value = '2';"
+    text = page.eval("document.getElementById('v-angle').textContent")
+    assert "governing" in text  # opens at the cycle's governing crank angle, not at 0°
+    n = int(page.eval("document.getElementById('v-frame').max")) + 1
+    assert n in (3, 4)  # 3 even frames and the governing angle (unless it is one of them)
+    page.eval("(() => { const s = document.getElementById('v-frame'); s.value = '0';"
               " s.dispatchEvent(new Event('input')); })()")
-    assert "(3 of 3)" in page.eval("document.getElementById('v-angle').textContent")
+    assert page.eval("document.getElementById('v-angle').textContent").startswith("0.0°")
+    page.eval(f"(() => {{ const s = document.getElementById('v-frame'); s.value = '{n - 1}';"
+              " s.dispatchEvent(new Event('input')); })()")
+    assert f"({n} of {n}" in page.eval("document.getElementById('v-angle').textContent")
     page.eval("document.getElementById('v-zin').click()")
     assert page.eval("document.getElementById('v-canvas').toDataURL()") != first
     assert page.errors() == []

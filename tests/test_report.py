@@ -107,7 +107,8 @@ def test_band_in_mpa_is_in_every_entry_the_tables_and_the_pictures(two_plates):
         assert p["band_pct_of_allowable"] == pytest.approx(100 * p["band_mpa"] / report["limit_mpa"], rel=1e-9)
         cells = f"| ±{p['band_mpa']:.1f} | ±{p['band_pct_of_allowable']:.1f} | ±{p['error_pct']:.1f} |"
         assert cells in md, cells
-        assert f"±{p['band_mpa']:.1f}</td><td class=num>±{p['band_pct_of_allowable']:.1f}</td>" in html
+        assert (f"±{p['band_mpa']:.1f} MPa</span><br><span class=note>±{p['band_pct_of_allowable']:.1f} % of "
+                f"allowable, ±{p['error_pct']:.1f} % of peak") in html
         assert p["mesh"]["stopped"] and p["mesh"]["stopped"] in md and p["mesh"]["stopped"] in html
         row = next(x for x in summary.splitlines() if x.startswith(p["name"]))
         assert f"{p['band_mpa']:.1f}" in row.split() and f"{p['band_pct_of_allowable']:.1f}" in row.split()
