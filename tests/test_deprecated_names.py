@@ -7,6 +7,8 @@ plus the presets' mapping access of that time (``FIDELITY["standard"]["order"]``
 import subprocess
 import sys
 
+import pytest
+
 OLD_SCRIPT = '''
 import warnings
 warnings.simplefilter("always", DeprecationWarning)
@@ -56,3 +58,19 @@ def test_old_names_mean_the_new_ones():
         assert MeshSettings(size=6.0, refine_size=1.2, refine_dist=9.0) == MeshSettings(6.0, (), 1.2, 9.0)
         assert [FIDELITY["fine"][k] for k in ("order", "size_mm", "local_size_mm", "bearing_directions")] == [2, 4.0, 0.6, 12]
         assert Peak(1.0, 0, (0.0, 0.0, 0.0), "hole", ("hole",), 0.03, 4.5).error == 0.03
+
+
+def test_run_sweep_in_its_form_before_0_2_runs_with_a_warning(monkeypatch, tmp_path):
+    """``run_sweep(p, work_dir, chunk_size=..., workers=..., scheduler=...)`` (docs before 0.2) maps to a
+    Context and SweepOptions, warning; an unknown keyword is still a TypeError."""
+    from rigfem.context import Context
+    from rigfem.sweep import run as sweep_run
+
+    monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
+    with pytest.warns(DeprecationWarning, match="run_sweep.p, work_dir"):
+        ctx, opts = sweep_run.old_call(str(tmp_path / ".work"), {"chunk_size": 8, "workers": 2, "configs": [{"a": 1}],
+                                                                 "scheduler": None, "progress": False})
+    assert isinstance(ctx, Context) and ctx.workers == 2 and ctx.cache.root == tmp_path / "cache"
+    assert (opts.chunk_size, opts.configs, opts.scheduler) == (8, ({"a": 1},), None)
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="work_folder"):
+        sweep_run.old_call("w", {"work_folder": "x"})

@@ -224,6 +224,7 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
 
 def write_report(table: pd.DataFrame, p: SweepParams, out: Path, seconds: float | None = None) -> list[str]:
     """Write the CSV, the maps and worst_<type>.md into ``out``; returns the file names."""
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     csv = f"sweep_{p.linkage_type}.csv.gz"  # gzip: most rows are configurations that cannot assemble
     with whole_file(out / csv) as tmp:

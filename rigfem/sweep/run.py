@@ -36,7 +36,7 @@ import numpy as np
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
 from rigfem.cache import Cache
-from rigfem.context import Context
+from rigfem.context import Context, default_context
 from rigfem.errors import ComputeError, InputError, check_range
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import part_cases
@@ -201,12 +201,38 @@ class SweepOptions:
             Scheduler(self.scheduler)
 
 
-def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions()):
+#: the keywords of run_sweep before 0.2 that SweepOptions and Context now hold
+_OLD_OPTIONS = ("chunk_size", "scheduler", "distributed", "configs", "bases", "machine_gib")
+_OLD_CONTEXT = ("workers", "solver")
+
+
+def old_call(work_dir, old: dict) -> tuple[Context, SweepOptions]:
+    """The Context and SweepOptions of a call in the form before 0.2, ``run_sweep(p, work_dir,
+    chunk_size=..., workers=..., scheduler=...)``, with a DeprecationWarning: the finished chunks now
+    live in the cache (``work_dir`` is not used); ``progress`` and ``on_stage`` are the observer's."""
+    import warnings
+
+    from rigfem.cache import from_environment
+
+    warnings.warn("run_sweep(p, work_dir, **keywords) is deprecated: pass a rigfem.context.Context and "
+                  "rigfem.sweep.SweepOptions (finished chunks live in the cache, not in work_dir); the old "
+                  "form goes in rigfem 0.3", DeprecationWarning, stacklevel=3)
+    unknown = set(old) - set(_OLD_OPTIONS) - set(_OLD_CONTEXT) - {"progress", "on_stage"}
+    if unknown:
+        raise TypeError(f"run_sweep() got unexpected keyword arguments {sorted(unknown)}")
+    opts = {k: (tuple(v) if k == "configs" and v is not None else v) for k, v in old.items() if k in _OLD_OPTIONS}
+    ctx = Context(cache=from_environment(), **{k: v for k, v in old.items() if k in _OLD_CONTEXT})
+    return ctx, SweepOptions(**opts)
+
+
+def run_sweep(p: SweepParams, ctx: Context | None = None, options: SweepOptions = SweepOptions(), **old):
     """Run (or resume) a sweep; return the table (pandas DataFrame, one row per configuration).
 
     Finished chunks are stored in ``ctx.cache`` (with the unit bases, meshes and solutions), so a
     later run of the same sweep reads them; with no cache everything is computed and nothing
-    resumes.  On Dask, a LocalCluster with ``ctx.workers`` processes runs inside this process unless
+    resumes (no context: the environment's cache; the form before 0.2, ``run_sweep(p, work_dir,
+    **keywords)``, still runs, with a DeprecationWarning: :func:`old_call`).  On Dask, a
+    LocalCluster with ``ctx.workers`` processes runs inside this process unless
     ``options.scheduler`` names an existing cluster; with ``ctx.workers`` > 1 the unit bases are
     built two geometries at a time (:func:`~rigfem.sweep.bases.build_bases`).  The job's cost is
     estimated from the counts before any work (:mod:`rigfem.sweep.cost`; past
@@ -215,6 +241,9 @@ def run_sweep(p: SweepParams, ctx: Context, options: SweepOptions = SweepOptions
     """
     import pandas as pd
 
+    if old or (ctx is not None and not isinstance(ctx, Context)):  # the form before 0.2
+        ctx, options = old_call(ctx, old)
+    ctx = default_context(ctx)
     cache, observer, workers = ctx.cache, ctx.observer, ctx.workers  # (Context holds workers in 1-256)
     configs = enumerate_configs(p) if options.configs is None else list(options.configs)
     bases, scheduler = options.bases, options.scheduler
