@@ -23,7 +23,7 @@ def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_
     drawing from the whole result in this process; a picture the cache holds is only copied."""
     import rigfem.report.picture_cache as pc
 
-    entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
+    entry = {"peak_mpa": 37.5, "utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
     jobs = {d: [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path / d) for r in results]
             for d in ("here", "children", "copied")}
     for d in jobs:
@@ -55,7 +55,7 @@ def test_an_error_while_they_draw_ends_the_children_first(results, tmp_path, mon
     import rigfem.report.picture_cache as pc
 
     monkeypatch.setenv("RIGFEM_CACHE", str(tmp_path / "cache"))
-    entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
+    entry = {"peak_mpa": 37.5, "utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
     jobs = [(r, r.coef[r.row], entry, 375.0, r.case.name, "allowable", tmp_path) for r in results]
     def drawing() -> int:
         return len([p for p in mp.active_children() if p.name == "rigfem-pictures"])

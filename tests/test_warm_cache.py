@@ -100,7 +100,7 @@ def test_changed_field_draws_the_part_again(warm, monkeypatch):
     _, _, (r,) = solved("final-cm", FAST, whole=True)  # every unit solution: any combination
     drawn = []
     monkeypatch.setattr(pictures, "part_pictures", lambda *a, **k: drawn.append(a) or {"files": {}})
-    entry = {"utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
+    entry = {"peak_mpa": 37.5, "utilisation_pct": 10.0, "error_pct": 5.0, "verdict": "pass"}
     c = r.coef[r.row]
     (root / "p").mkdir()
     part_pictures(r, c, entry, 100.0, "plate A", "allowable", root / "p")
