@@ -28,10 +28,14 @@ import pytest
 PRIVATE = {"HOME": "home", "RIGFEM_CACHE": "cache", "XDG_CACHE_HOME": "home/.cache",
            "XDG_CONFIG_HOME": "home/.config", "XDG_DATA_HOME": "home/.local/share",
            "MPLCONFIGDIR": "home/.config/matplotlib"}
+#: the run's temporary folder, made once per run: a conftest imported again inside the run (pytester's
+#: in-process sandboxes in tests/test_ci*.py) finds it in the environment and keeps it
+ROOT_ENV = "RIGFEM_TESTS_ROOT"
+_OWN = ROOT_ENV not in os.environ
 #: the user's own values, for tests/test_harmless.py to compare with
 USER_ENV = {k: os.environ.get(k) for k in PRIVATE}
-#: the run's temporary folder
-ROOT = Path(tempfile.mkdtemp(prefix="rigfem-tests-"))
+ROOT = Path(tempfile.mkdtemp(prefix="rigfem-tests-")) if _OWN else Path(os.environ[ROOT_ENV])
+os.environ[ROOT_ENV] = str(ROOT)
 
 
 def private_home(root: Path) -> None:
@@ -45,7 +49,8 @@ private_home(ROOT)  # at import: before pytest imports any test module (and rigf
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
-    shutil.rmtree(ROOT, ignore_errors=True)
+    if _OWN:
+        shutil.rmtree(ROOT, ignore_errors=True)
 
 #: the Debian package that provides each program the tests run (tests/run.sh installs them)
 TOOLS = {"ccx": "calculix-ccx", "chromium": "chromium"}

@@ -3,7 +3,6 @@
 ``xfail`` (marked or imperative, failing as expected or passing unexpectedly) fail; outside CI they
 keep pytest's meaning.  Each case runs the repository's tests/conftest.py in a pytester sandbox."""
 
-import os
 from pathlib import Path
 
 import pytest
@@ -25,15 +24,9 @@ MODULES = {
 
 @pytest.fixture
 def sandbox(pytester):
-    """A pytester folder with the repository's conftest.py, run in this process: that conftest points
-    HOME and the cache at a temporary folder of its own as it is imported, so the run's environment
-    is put back afterwards (else every later test would use the sandbox's folders, removed by then)."""
-    saved = dict(os.environ)
     pytester.makeconftest((ROOT / "tests" / "conftest.py").read_text())
     pytester.makepyfile(**MODULES)
-    yield pytester
-    os.environ.clear()
-    os.environ.update(saved)
+    return pytester
 
 
 @pytest.mark.parametrize("module, reason", [("test_importorskip", "a_module_no_machine_has"),

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import importlib
 import json
 import os
 import shutil
@@ -39,7 +40,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "results" / "mutation"
 sys.path.insert(0, str(ROOT / "benchmarks"))
-import record  # noqa: E402  (benchmarks/record.py: machine(), commit(), command_line())
+record = importlib.import_module("record")  # benchmarks/record.py, a sibling script: machine(), commit(), command_line()
 
 T = "tests/test_physics_truths.py::"
 REF = "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures"
