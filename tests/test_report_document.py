@@ -216,7 +216,7 @@ def test_html_holds_every_section_of_the_markdown_and_is_one_file(subset):
                                                                   if i["data-file"].startswith(("plate", "post")))
     text = " ".join(" ".join(page.text).split())
     assert all(" ".join(n.split()) in text for p in r["parts"] for n in p["notes"])
-    assert page.images and all(i["src"].startswith("data:image/png;base64,") for i in page.images)
+    assert page.images and all(i["src"].startswith("data:image/webp;base64,") for i in page.images)
     assert all((out / link).is_file() for link in page.links), page.links
 
 

@@ -43,6 +43,14 @@ def _png(data: bytes) -> np.ndarray:
     return mpimg.imread(io.BytesIO(data), format="png")
 
 
+def _picture(data: bytes):
+    """An embedded picture (WebP) as an RGB array in [0, 1]."""
+    from PIL import Image
+
+    with Image.open(io.BytesIO(data)) as im:
+        return np.asarray(im.convert("RGB"), dtype=float) / 255.0
+
+
 def test_html_shows_every_picture_and_carries_the_json_numbers(checked):
     report, out = checked
     assert json.loads((out / "report.json").read_text()) == json.loads(json.dumps(report))
@@ -51,8 +59,8 @@ def test_html_shows_every_picture_and_carries_the_json_numbers(checked):
     pngs = sorted(f for f in report["files"] if f.endswith(".png"))
     assert sorted(i["data-file"] for i in page.images) == pngs
     for img in page.images:  # each picture embedded (the page is one file to hand in), its file beside it
-        assert img["src"].startswith("data:image/png;base64,") and (out / img["data-file"]).is_file()
-        pix = _png(base64.b64decode(img["src"].split(",", 1)[1]))
+        assert img["src"].startswith("data:image/webp;base64,") and (out / img["data-file"]).is_file()
+        pix = _picture(base64.b64decode(img["src"].split(",", 1)[1]))
         assert pix.shape[1] >= 550 and pix[..., :3].std() > 0.02, img["data-file"]  # not blank
     text = " ".join(page.text)
     for p in report["parts"]:
