@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import importlib
 import io
 import json
 import os
@@ -40,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "results" / "mutation"
 FATES = ROOT / "tools" / "mutation_fates.toml"
 sys.path.insert(0, str(ROOT / "benchmarks"))
-import record  # noqa: E402  (benchmarks/record.py: machine(), commit())
+record = importlib.import_module("record")  # benchmarks/record.py, a sibling script: machine(), commit()
 
 sys.path.insert(0, str(ROOT / "tools"))
 from physics_mutations import scratch_copy  # noqa: E402
