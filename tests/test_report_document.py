@@ -322,3 +322,28 @@ def test_compare_two_scenes(tmp_path, capsys):
     assert c["scenes"] == ["slow", "fast"] and [r["change"] for r in c["rows"]] == ["same"]
     assert c["rows"][0]["peak_change_mpa"] > 0  # twice the speed: larger inertia forces
     assert set(Path(tempfile.gettempdir()).glob("rigfem-compare-*")) == before
+
+
+def test_dirty_means_the_code_that_ran_changed(tmp_path):
+    """A changed result or page leaves a run clean; a changed or added package file makes it dirty."""
+    import subprocess
+
+    from rigfem.report.provenance import _commit
+
+    def git(*a):
+        subprocess.run(["git", "-C", str(tmp_path), *a], check=True, capture_output=True)
+
+    (tmp_path / "rigfem").mkdir(), (tmp_path / "results").mkdir()
+    for f in ("pyproject.toml", "rigfem/a.py", "results/r.md", "README.md"):
+        (tmp_path / f).write_text("x\n")
+    git("init", "-q"), git("add", "."), git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c")
+    assert _commit(tmp_path)[1] is False
+    (tmp_path / "results/r.md").write_text("y\n"), (tmp_path / "README.md").write_text("y\n")
+    (tmp_path / "results/new.json").write_text("{}\n")
+    assert _commit(tmp_path)[1] is False
+    (tmp_path / "rigfem/b.py").write_text("y\n")
+    assert _commit(tmp_path)[1] is True
+    (tmp_path / "rigfem/b.py").unlink(), (tmp_path / "pyproject.toml").write_text("y\n")
+    assert _commit(tmp_path)[1] is True
+    git("checkout", "pyproject.toml"), (tmp_path / "geometry").mkdir(), (tmp_path / "geometry/p.toml").write_text("")
+    assert _commit(tmp_path)[1] is True

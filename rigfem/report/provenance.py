@@ -1,8 +1,9 @@
 """Where a result came from: rigfem's version and commit, the date, Python and the key libraries,
 the machine, and the hashes of what was checked.  Never fails: what cannot be read says so.
 
-The commit is read from git when rigfem runs from a checkout (``dirty``: tracked files differ
-from it); an installed package says ``not a checkout``.
+The commit is read from git when rigfem runs from a checkout (``dirty``: what ran, the package,
+its part files (geometry/) or pyproject.toml, differs from it; a changed result or page elsewhere in
+the checkout does not change what ran); an installed package says ``not a checkout``.
 """
 
 from __future__ import annotations
@@ -33,15 +34,18 @@ def _git(root: Path, *args: str) -> str | None:
     return out.stdout.strip() if out.returncode == 0 else None
 
 
-def _commit() -> tuple[str, bool | None]:
+#: what runs, relative to the checkout: its changes (untracked files included) make a result dirty
+CODE = ("rigfem", "geometry", "pyproject.toml")
+
+
+def _commit(root: Path = Path(__file__).resolve().parents[2]) -> tuple[str, bool | None]:
     """(commit, dirty) of the checkout rigfem runs from; ('not a checkout', None) otherwise."""
-    root = Path(__file__).resolve().parents[2]
     if not (root / ".git").exists() or not (root / "pyproject.toml").is_file():
         return "not a checkout", None
     head = _git(root, "rev-parse", "HEAD")
     if not head:
         return "unknown (git could not read the checkout)", None
-    status = _git(root, "status", "--porcelain", "--untracked-files=no")
+    status = _git(root, "status", "--porcelain", "--untracked-files=normal", "--", *CODE)
     return head, None if status is None else bool(status)
 
 
