@@ -3,6 +3,7 @@ are cache entries keyed by everything they come from (issue 26); a changed input
 again, and a damaged entry is discarded, logged and made again."""
 
 import logging
+import re
 import shutil
 
 import numpy as np
@@ -64,10 +65,12 @@ def test_fallback_picture_is_not_stored(tmp_path, monkeypatch):
 
 @pytest.fixture(scope="module")
 def warm(tmp_path_factory):
-    """A small check run twice on one cache: the second run may draw nothing."""
+    """A small check run twice on one cache: the second run may draw, write or encode nothing."""
     import matplotlib.figure
+    import PIL.Image
 
     import rigfem.report.views as views
+    import rigfem.report.vtu as vtu
 
     root = tmp_path_factory.mktemp("warm")
     mp = pytest.MonkeyPatch()
@@ -76,6 +79,8 @@ def warm(tmp_path_factory):
     drawn = []  # every 3-D render and every matplotlib picture saved
     mp.setattr(views, "render", lambda *a, **k: drawn.append("render"))
     mp.setattr(matplotlib.figure.Figure, "savefig", lambda *a, **k: drawn.append("savefig"))
+    mp.setattr(vtu, "write_unstructured", lambda *a, **k: drawn.append("vtu"))  # field files and frames
+    mp.setattr(PIL.Image.Image, "save", lambda *a, **k: drawn.append("webp"))  # report.html's pictures
     run_check(Request("final-cm", FAST), Output(root / "warm"))
     yield root, drawn
     mp.undo()
@@ -88,6 +93,19 @@ def test_warm_check_copies_every_picture_byte_for_byte(warm):
     assert len(cold) >= 5 and cold == sorted(p.name for p in (root / "warm").glob("*.png"))
     for name in cold:
         assert (root / "warm" / name).read_bytes() == (root / "cold" / name).read_bytes(), name
+
+
+def test_warm_check_copies_the_field_files_and_the_embedded_pictures(warm):
+    """The VTU fields, the animation frames and report.html's WebP pictures: copied, the same bytes."""
+    root, drawn = warm
+    assert drawn == []
+    cold = sorted(p.name for p in (root / "cold").glob("*.vtu"))
+    assert any("_cycle_0" in n for n in cold) and cold == sorted(p.name for p in (root / "warm").glob("*.vtu"))
+    for name in cold:
+        assert (root / "warm" / name).read_bytes() == (root / "cold" / name).read_bytes(), name
+    embedded = [re.findall(r"data:image/webp;base64,[A-Za-z0-9+/=]+", (root / d / "report.html").read_text())
+                for d in ("cold", "warm")]
+    assert len(embedded[0]) >= 5 and embedded[0] == embedded[1]
 
 
 def test_changed_field_draws_the_part_again(warm, monkeypatch):

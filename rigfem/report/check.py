@@ -26,6 +26,7 @@ from rigfem.report.picture_cache import (  # drawn once, then copied from the ca
     reactions_plot,
     started_part_pictures,
     utilisation_plot,
+    write_frames,
     write_vtu,
 )
 from rigfem.report.vtu import write_frame
@@ -105,18 +106,20 @@ def document(checked: Checked) -> dict:
     }
 
 
-def _frames(d: Path, r: CaseResult, limit: float) -> str | None:
+def _frames(d: Path, r: CaseResult, limit: float, cache) -> str | None:
     """Write a cycle case's animation frames and their ParaView collection; the collection's name."""
     rows = sorted(r.frames)
     if not rows:
         return None
     fm = r.solution.model.mesh
-    series = []
-    for k, i in enumerate(rows):
-        name = f"{r.case.name}_{r.mode}_{k:03d}.vtu"
-        write_frame(d / name, fm.nodes[:fm.n_vertices], fm.elements[:, :4], r.frames[i], limit)
-        series.append((float(r.case.rows[i]), name))
-    pvd = "\n".join(f'    <DataSet timestep="{t:g}" file="{f}"/>' for t, f in series)
+    names = [f"{r.case.name}_{r.mode}_{k:03d}.vtu" for k in range(len(rows))]
+
+    def write(folder: Path) -> None:
+        for name, i in zip(names, rows):
+            write_frame(folder / name, fm.nodes[:fm.n_vertices], fm.elements[:, :4], r.frames[i], limit)
+
+    write_frames(d, names, r.solution, r.coef[rows], limit, write, cache)
+    pvd = "\n".join(f'    <DataSet timestep="{float(r.case.rows[i]):g}" file="{f}"/>' for i, f in zip(rows, names))
     stem = f"{r.case.name}_{r.mode}"
     (d / f"{stem}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                                    f"  <Collection>\n{pvd}\n  </Collection>\n</VTKFile>\n")
@@ -155,7 +158,7 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
                 utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
                                  part_label(entry["name"], entry["part"]), allowable, cache)
                 of[id(r)].append(f"{r.case.name}_utilisation.png")
-            pvd = _frames(d, r, limit)
+            pvd = _frames(d, r, limit, cache)
             if pvd:
                 fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + [pvd]
         for (r, entry), pics in zip(drawn, wait()):

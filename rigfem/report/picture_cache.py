@@ -7,8 +7,8 @@ versions; the package's code is in every key) into the key of a verified cache e
 (:mod:`rigfem.cache`, kind ``pictures``), and a hit copies the stored files: byte for byte the
 pictures a cold run drew, without pyvista.  A fallback picture (matplotlib, where no OpenGL
 runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU field files of a
-cached solution (:func:`write_vtu`) are stored the same way, keyed by the solution's entry and
-the load combination.
+cached solution (:func:`write_vtu`) and a cycle case's animation frames (:func:`write_frames`)
+are stored the same way, keyed by the solution's entry and the load combinations.
 
 The drawing code (matplotlib) is imported only where a picture is drawn, so a warm check, which
 draws none, does not import it.
@@ -253,3 +253,20 @@ def write_vtu(path: str | Path, sol, c, allowable: float, cache: Cache | None = 
 
     cached("vtu", inputs, path.parent, draw, resolve(cache))
     return path
+
+
+def write_frames(folder: Path, names: list[str], sol, coef: np.ndarray, allowable: float,
+                 write: Callable[[Path], None], cache: Cache | None = None) -> None:
+    """``write(folder)``, which writes the animation frames ``names`` of the load combinations
+    ``coef`` (one row a frame) of ``sol``, through the cache when ``sol`` is a cached solution."""
+    if not sol.key:
+        write(folder)
+        return
+    inputs = {"solution": sol.key, "c": array_digest(np.asarray(coef, dtype=float)), "allowable": allowable,
+              "names": names}
+
+    def draw(d: Path) -> tuple[dict, list[str]]:
+        write(d)
+        return {}, names
+
+    cached("frames", inputs, folder, draw, resolve(cache))
