@@ -51,10 +51,11 @@ def map_cells(table: pd.DataFrame, x: str, y: str, at: dict[str, float]) -> pd.D
     return ok.set_index([y, x])[["config_util_pct", "verdict", "rules_ok"]]
 
 
-def _panel(ax, cells: pd.DataFrame, xs: list, ys: list, cmap, plt):
+def _panel(ax: "matplotlib.axes.Axes", cells: pd.DataFrame, xs: list, ys: list, cmap: "matplotlib.colors.Colormap",
+           plt: "module") -> "matplotlib.image.AxesImage":
     """Draw one slice: colour by utilisation, hatch what does not meet the rig rules, outline what
     does not pass the stress criterion, a red line at 100 %; returns the image."""
-    def grid(col):
+    def grid(col: str) -> np.ndarray:
         return cells[col].unstack().reindex(index=ys, columns=xs).to_numpy() if len(cells) else \
             np.full((len(ys), len(xs)), np.nan)
 
