@@ -60,7 +60,7 @@ def _fits(lay: RailLayout, b: float) -> bool:
 
 
 def count(pitch: float, p: SweepParams = SweepParams()) -> dict:
-    """Four-bar configurations on a ``pitch`` grid: all mountable ones and those checked by FE."""
+    """Four-bar configurations on a ``pitch`` grid: all of them and those checked by FE."""
     b2s, b3s, b4s = (np.array(grid_lengths(r, pitch)) for r in p.rails)
     ds = np.array([d for d in grid_lengths(p.ground_mm, pitch) if d >= MIN_GROUND_MM])
     b2, b3, b4, d = np.meshgrid(b2s, b3s, b4s, ds, indexing="ij")

@@ -77,7 +77,7 @@ def sweep(rec: dict) -> str:
 def sweep_grid_cost(rec: dict) -> str:
     d = rec["derived"]
     lines = head(rec, "Sweep cost of a finer rig grid (four-bar, draft)")
-    lines += ["| hole pitch | lengths b2 × b3 × b4 × d | mountable configurations | with FE check (full turn) |",
+    lines += ["| hole pitch | lengths b2 × b3 × b4 × d | configurations on the rig | with FE check (full turn) |",
               "|---|---|---|---|"]
     for c in d["counts"].values():
         lines.append(f"| {c['pitch_mm']:g} mm | {' × '.join(map(str, c['lengths']))} | {c['mountable']:,} | "
@@ -90,7 +90,7 @@ def grid_rows(rec: dict) -> list[str]:
     """The projection table (also README's, under "Running the sweep on a cluster")."""
     d = rec["derived"]
     ns = list(next(iter(d["projected_s"].values())))
-    out = ["| hole pitch | mountable four-bars | with an FE check (crank turns fully) | per configuration | "
+    out = ["| hole pitch | four-bars on the rig | with an FE check (crank turns fully) | per configuration | "
            + " | ".join(f"N = {n}" for n in ns) + " |", "|---|---|---|---|" + "---|" * len(ns)]
     for pitch, c in d["counts"].items():
         out.append(f"| {pitch} mm{' (the rig)' if pitch == '60' else ''} | {c['mountable']:,} | {c['fe_checked']:,} | "

@@ -104,8 +104,8 @@ def read_job(request: Request, cache: Cache) -> Job:
     broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
     if broken and not request.allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
-                         f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it cannot be "
-                         f"mounted as given; pass --allow-rule-violations to check it anyway")
+                         f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it does not meet "
+                         f"the rig rules; pass --allow-rule-violations to check it anyway")
     settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
     csv_path = None
     if dyn["reactions_csv"] is not None:

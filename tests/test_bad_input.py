@@ -119,7 +119,7 @@ SCENES = [
     ("mass-model-bad", _set("check", "mass_model", "newton"), "[check].mass_model"),
     ("csv-missing", _set("check", "reactions_csv", "nope.csv"), "[check].reactions_csv"),
     ("rule-broken", lambda d: d["linkage"].update(b2=540.0), "transmission angle"),
-    ("off-grid", lambda d: d["linkage"].update(d=1021.0), "mountable"),
+    ("off-grid", lambda d: d["linkage"].update(d=1021.0), "on the hole grid"),
 ]
 
 

@@ -50,12 +50,37 @@ def test_sweep_pages(browser, name, tmp_path):
 
 def test_explorer_responds(browser, tmp_path):
     page = _check_page(browser, SWEEP / "explorer.html", tmp_path)
-    text = page.eval("document.body.innerText")
-    assert "Mounts" in text and "crank_rail (original)" in text and "38.7 %" in text  # the study's final design
+    text = page.eval("document.getElementById('verdict').innerText")
+    assert "Assembles" in text and "Meets the rig rules" in text and "Passes the stress criterion" in text
+    assert "38.7 % of σu/2" in text and "crank_rail (original)" in page.eval("document.body.innerText")
     page.eval("(() => { const s = document.querySelector('select[data-l=d]'); s.value = '660';"
               " s.dispatchEvent(new Event('change')); })()")
-    assert "Does not mount" in page.eval("document.body.innerText")
+    assert "Does not meet the rig rules" in page.eval("document.getElementById('verdict').innerText")
+    assert "mount" not in page.eval("document.body.innerText").lower()
     assert page.errors() == []
+
+
+def test_explorer_maps_have_labels_a_colour_bar_and_little_grey(browser, tmp_path):
+    """Each map: both axes named with their unit (the y one turned upright), a colour bar in % of
+    σu/2, and cropped to the cells with a number: the grey of "no number" is not most of it."""
+    page = _check_page(browser, SWEEP / "explorer.html", tmp_path)
+    drawn = page.eval("""(() => {
+        const seen = [], fill = CanvasRenderingContext2D.prototype.fillText;
+        CanvasRenderingContext2D.prototype.fillText = function (t, x, y) {
+            if (this.canvas.parentNode && this.canvas.parentNode.id === 'maps') seen.push([String(t), this.getTransform().b]);
+            return fill.apply(this, arguments); };
+        const s = document.querySelector('select[data-l=b2]'); s.dispatchEvent(new Event('change'));
+        CanvasRenderingContext2D.prototype.fillText = fill;
+        return seen; })()""")
+    upright = {t for t, b in drawn if b != 0}
+    flat = {t for t, b in drawn if b == 0}
+    assert {"d (mm)", "b4 (mm)"} <= flat and "b3 (mm)" in upright, drawn
+    assert "peak utilisation (% of σu/2)" in upright and {"0", "100", "> 100"} <= flat
+    grey = page.eval("""[...document.querySelectorAll('#maps canvas')].map((c) => {
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0; for (let i = 0; i < d.length; i += 4) if (d[i] === 200 && d[i + 1] === 200 && d[i + 2] === 200) n++;
+        return n / (c.width * c.height); })""")
+    assert len(grey) == 2 and max(grey) < 0.45, grey  # 0.58-0.61 uncropped
 
 
 @pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes

@@ -175,7 +175,7 @@ def test_the_reactions_summary_states_independent_figures():
         "crank guide clears the rocker pivot": (d, 660.0, True, ">=", "mm"),
         "transmission angle min": (pytest.approx(mu[0]), 35.0, True, ">", "deg"),
         "transmission angle max": (pytest.approx(mu[1]), 145.0, True, "<", "deg"),
-        "mountable": (0.0, 0.0, True, "==", "mm")}
+        "on the hole grid": (0.0, 0.0, True, "==", "mm")}
 
 
 def test_a_history_known_by_its_samples_finds_the_newton_euler_peaks():

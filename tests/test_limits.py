@@ -100,7 +100,7 @@ def test_section_properties_of_the_grooved_rail():
 def test_verdicts_and_rules(checked):
     scene, r = checked
     assert bool(r["rule_violations"]) == SCENES[scene][3]
-    assert r["verdict"] == ("fail" if r["rule_violations"] else "pass")  # not mountable: never a pass
+    assert r["verdict"] == ("fail" if r["rule_violations"] else "pass")  # does not meet the rig rules: never a pass
     for p in r["parts"]:
         assert p["verdict"] == "pass" and p["utilisation_pct"] < 100, (p["name"], p["mode"])
         assert p["peak_mpa"] == pytest.approx(p["utilisation_pct"] / 100 * LIMIT_MPA, rel=1e-12)

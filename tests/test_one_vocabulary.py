@@ -69,3 +69,79 @@ def test_mesh_help_lists_only_its_exit_codes():
 def test_mesh_local_size_above_size_is_bad_input(tmp_path, capsys):
     rc = main(["mesh", GEO, "--size", "4", "--local-size", "5", "--out", str(tmp_path / "m.vtu")])
     assert rc == 2 and "--local-size" in capsys.readouterr().err
+
+
+# One vocabulary for what a configuration is (issue 40 §3): it *assembles* (closes over a full turn),
+# it *meets the rig rules* (geometry/RIG.md §2), it *passes the stress criterion* (σu/2) — never "mountable".
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+FINAL_NC = ROOT / "results" / "final-nc"
+
+
+def test_mountable_is_not_a_word_of_rigfem():
+    """Nowhere in the package, the docs or the README; the sweep table's legacy column name aside."""
+    files = [*ROOT.joinpath("rigfem").rglob("*.*"), *ROOT.joinpath("docs").rglob("*.md"), ROOT / "README.md",
+             ROOT / "geometry/RIG.md"]
+    found = [f"{f.relative_to(ROOT)}: {line.strip()}" for f in files if f.suffix in (".py", ".j2", ".js", ".toml", ".md")
+             for line in f.read_text(encoding="utf-8").splitlines() if "mountable" in line.lower()
+             and '"on_the_hole_grid": "mountable"' not in line and 'formerly "mountable"' not in line]
+    assert found == []
+
+
+def test_the_check_report_says_the_three_things_apart():
+    """A configuration that breaks a rig rule but passes on stress: FAIL overall, beside the stress
+    criterion's own PASS, in the Markdown, the HTML and the command line."""
+    import json
+
+    from rigfem.cli.check import _summary
+    from rigfem.report.document import render_markdown
+    from rigfem.report.html import render_html
+
+    r = json.loads((FINAL_NC / "report.json").read_text())
+    said = "the configuration assembles; does not meet the rig rules; passes the stress criterion"
+    md = render_markdown(r)
+    assert f"**Overall verdict: FAIL** — {said}." in md and "Stress criterion: **PASS** — peak von Mises" in md
+    assert "does not meet the rig rules (geometry/RIG.md §2)" in md and "cannot be mounted" not in md
+    html = render_html(r, FINAL_NC)
+    assert said in html and 'Stress criterion <span class="badge pass">PASS</span>' in html
+    assert "DOES NOT MEET THE RIG RULES" in html and "MOUNTABLE" not in html
+    assert _summary(r).splitlines()[-1].startswith(f"overall: FAIL — {said} (allowable σu/2 = 375 MPa)")
+    r_ok = dict(r, rule_violations=[], verdict="pass")
+    assert "assembles; meets the rig rules; passes the stress criterion" in render_markdown(r_ok)
+    assert "the rig rules do not apply" in render_markdown(dict(r_ok, rules=[]))  # not a rig configuration
+
+
+def test_scene_descriptions_use_the_vocabulary(capsys):
+    assert main(["check", "--list"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line.strip()}
+    assert "assembles; does not meet the rig rules" in lines["final-nc"]
+    assert "assembles; meets the rig rules" in lines["final-cm"]
+
+
+def test_the_sweep_and_the_explorer_use_the_vocabulary(tmp_path):
+    """The sweep's counts and the explorer's words come from rigfem.rig.rules: a configuration on the
+    rig is not said to mount; those that do not assemble are counted apart."""
+    import json
+    import re
+
+    import pandas as pd
+
+    from rigfem.rig.rules import ASSEMBLES, MEETS_RULES, STRESS
+    from rigfem.sweep.configs import SweepParams
+    from rigfem.sweep.explorer import write_explorer
+    from rigfem.sweep.report import worst_markdown
+
+    table = pd.DataFrame([dict(type="four-bar", b2=480.0, b3=840.0, b4=780.0, d=1020.0, rules_ok=True, status="ok",
+                               note=None, mu_min_deg=38.7, mu_max_deg=135.6, peak_O2_N=472.0, peak_A_N=420.0,
+                               peak_B_N=273.0, peak_O4_N=242.0, peak_torque_Nm=123.7, error_pct=10.0,
+                               crank_rail_original_util_pct=38.7, limiting_part="crank_rail (original)",
+                               max_util_pct=38.7, verdict="pass"),
+                          dict(type="four-bar", b2=60.0, b3=60.0, b4=60.0, d=660.0, rules_ok=False,
+                               status="cannot assemble", note=None, verdict=None)])
+    md = worst_markdown(table, SweepParams())
+    assert "configurations on the rig (each length on the 60 mm hole grid within its rail): 2" in md
+    assert "do not assemble (cannot close over a full turn): 1" in md and "meet the rig rules (geometry/RIG.md §2): 1" in md
+    assert "pass the stress criterion: 1" in md and "mountable" not in md.lower()
+    page = write_explorer(tmp_path, {"four-bar": table}).read_text(encoding="utf-8")
+    words = json.loads(re.search(r'<script type="application/json" id="words">(.*?)</script>', page).group(1))
+    assert words == {"assembles": list(ASSEMBLES), "rules": list(MEETS_RULES), "stress": STRESS}
+    assert "mount" not in page.lower()

@@ -141,7 +141,7 @@ def test_cli_writes_a_checkable_scene_and_refuses_bad_options(tmp_path, capsys):
             "--ground", "2"]
     assert main([*args, "--rig", "--no-stress", "--top", "2", "--scene-out", str(scene)]) == 0
     out = capsys.readouterr().out
-    assert "nearest buildable rig configurations" in out and out.count("mountable (whole 60 mm") == 2
+    assert "nearest buildable rig configurations" in out and out.count("on the hole grid (whole 60 mm") == 2
     lk = build(load_scene(scene))
     first = out.split("\n1. ")[1].split(" mm,")[0]
     assert first == "b2 {b2:g}, b3 {b3:g}, b4 {b4:g}, d {d:g}".format(**lk.meta["lengths_mm"])

@@ -41,7 +41,7 @@ def bases(params):
     return build_bases(params)
 
 
-def test_enumeration_is_every_mountable_length():
+def test_enumeration_is_every_length_on_the_hole_grid():
     four = enumerate_configs(SweepParams())
     # crank 60..540 on the 700 mm rail, coupler/rocker 60..840 on 1000 mm, ground 660..2340 on 2500 mm
     assert len(four) == 9 * 14 * 14 * 29

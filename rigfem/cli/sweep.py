@@ -1,4 +1,4 @@
-"""``rigfem sweep``: every mountable configuration → rules, reactions, part utilisation, verdict."""
+"""``rigfem sweep``: every rig configuration → assembles, rig rules, reactions, part utilisation, verdict."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 import os
 import sys
 
-HELP = "sweep every mountable four-bar or slider-crank configuration of the rig (table, maps, worst list)"
+HELP = "sweep every four-bar or slider-crank configuration of the rig (table, maps, worst list)"
 #: the meaning of exit code 0 (the command has no verdict)
 SUCCESS = "sweep written (a configuration that fails is a row of the table, not an exit code)"
 

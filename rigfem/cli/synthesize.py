@@ -29,7 +29,7 @@ SUCCESS = ("linkage found (with --rig and stress: a listed configuration passes)
 def _rig_arguments(p: argparse.ArgumentParser, motion: bool) -> None:
     g = p.add_argument_group("snap to the rig")
     g.add_argument("--rig", action="store_true",
-                   help="rank the mountable rig four-bars (60 mm grid, every rig rule) that do the job best, "
+                   help="rank the rig four-bars that meet the rig rules (60 mm grid, every rule) that do the job best, "
                         "each with its rule table and stress verdict")
     g.add_argument("--top", metavar="N", help="rig configurations listed (default 5, 1-50)")
     g.add_argument("--fidelity", help="FE preset of the stress verdicts: draft (default), standard, fine")

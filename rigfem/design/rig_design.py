@@ -6,12 +6,12 @@ rig's four-bars by how well they do the wanted job and attaches each one's rule 
 stress verdict (the sweep's superposed unit solutions, ``rigfem.sweep.run.evaluate``):
 
 * function generation (:func:`snap_function`): the structural error does not depend on the
-  scale, so *every* mountable, rule-abiding four-bar is evaluated (both assembly branches,
+  scale, so *every* rig four-bar that assembles and meets the rig rules is evaluated (both assembly branches,
   vectorised closed-form kinematics) and ranked by its structural error in % of the output
   range;
 * motion generation (:func:`snap_motion`): the design is scaled (``scale`` rig mm per unit
   of the positions, or a range of scales that fit the rails), each link rounded down and up
-  to the hole grid, and for each mountable result the coupler point is re-fitted: the ground
+  to the hole grid, and for each result that meets the rig rules the coupler point is re-fitted: the ground
   pivot O2 and the ground line stay where the design put them, the coupler point (a marker
   fixed to the coupler, not on the hole grid, carrying no load) and the three crank angles
   are chosen by least squares; the motion error is the largest distance from a wanted
@@ -45,7 +45,7 @@ LENGTH_KEYS = ("b2", "b3", "b4", "d")
 
 
 def rig_fourbars(p: SweepParams | None = None) -> np.ndarray:
-    """Every mountable four-bar of the rig that obeys every rig rule: (n, 4) b2, b3, b4, d (mm)."""
+    """Every four-bar of the rig that meets the rig rules (so it assembles): (n, 4) b2, b3, b4, d (mm)."""
     p = p or SweepParams()
     rows = [[c[k] for k in LENGTH_KEYS] for c in enumerate_configs(p)]
     return np.array([r for r in rows if all(x.ok for x in fourbar_rules(*r))], float).reshape(-1, 4)
@@ -225,7 +225,7 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
                             crank_deg=[float(c) for c in crank], error_mm=float(dist.max()),
                             error_pct=float(100 * dist.max() / (s * span)), rules=rule_table(lengths)))
     if not out:
-        raise ComputeError("no mountable rig four-bar near the design reaches the positions in order")
+        raise ComputeError("no rig four-bar near the design that meets the rig rules reaches the positions in order")
     out.sort(key=lambda c: c["error_pct"])
     uniq, keys = [], set()
     for c in out:  # the same lengths at several scales: keep the best

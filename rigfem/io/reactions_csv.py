@@ -71,7 +71,7 @@ MAX_SINGULAR_SHARE = 0.05
 
 #: the largest joint force of a real rig linkage (N): below MIN it is not in N (kN?): the
 #: lightest rig crank (a 700 mm rail, 1.9 kg, at 1 Hz) already carries ~15 N; above MAX it is not
-#: a mountable rig (a toggle, or the wrong unit)
+#: a rig linkage that meets the rig rules (a toggle, or the wrong unit)
 FORCE_RANGE_N = (5.0, 1e6)
 
 

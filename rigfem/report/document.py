@@ -14,6 +14,8 @@ from pathlib import Path
 from rigfem.errors import plain
 from rigfem.report.figures import (allowable_label, band, by_utilisation, part_label, safety_factor, sf_text,
                                    stopped_text)
+from rigfem.rig.rules import standing
+from rigfem.verdict.criterion import overall
 
 #: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning, goes or
 #: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa)
@@ -151,6 +153,19 @@ def verdict_line(r: dict) -> str:
     return r["verdict"].upper() + (f" ({checked})" if checked else "")
 
 
+def stress_verdict(r: dict) -> str:
+    """The verdict on stress alone, a broken rig rule aside: the parts' verdicts (a toggle fails it)."""
+    if r.get("singular"):
+        return "fail"
+    return overall(r["parts"]) if r["parts"] else "undecided"
+
+
+def standing_text(r: dict) -> str:
+    """What the checked configuration is, in the one vocabulary (:func:`rigfem.rig.rules.standing`):
+    it assembles (a check computes only one that does), meets the rig rules or not, passes the stress criterion or not."""
+    return standing(True, not r.get("rule_violations") if r.get("rules") else None, stress_verdict(r))
+
+
 def title_block(r: dict) -> list[str]:
     """Markdown of the title block: what was checked, when, by whom, with what (schema 4 and later)."""
     pv = r.get("provenance")
@@ -173,8 +188,9 @@ def conclusion_lines(r: dict) -> list[str]:
     """Markdown of the conclusion: the verdict, the governing part case, its utilisation with the
     band, the minimum factor of safety, the reserve, and what a check of a subset left out."""
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
-    out = ["", "## Conclusion", "", f"**Overall verdict: {verdict_line(r)}** — criterion: peak von Mises < the "
-           f"{allowable} ({md_text(r['settings']['material'])}, σu = {r['settings']['sigma_u_mpa']:g} MPa)."]
+    out = ["", "## Conclusion", "", f"**Overall verdict: {verdict_line(r)}** — the configuration {standing_text(r)}.",
+           "", f"Stress criterion: **{stress_verdict(r).upper()}** — peak von Mises < the {allowable} "
+           f"({md_text(r['settings']['material'])}, σu = {r['settings']['sigma_u_mpa']:g} MPa)."]
     c = r.get("conclusion")
     if c:
         lo, hi = c["utilisation_band_pct"]
@@ -329,9 +345,9 @@ def warning_lines(r: dict) -> list[str]:
     """Markdown of the rule violations and assumed inputs, shown before anything else."""
     lines = []
     if r.get("rule_violations"):
-        lines += ["", "**WARNING: this configuration breaks rig rules and cannot be mounted as given; it was "
+        lines += ["", "**WARNING: this configuration does not meet the rig rules (geometry/RIG.md §2); it was "
                   "checked only because --allow-rule-violations was passed, and its overall verdict is FAIL "
-                  "whatever its stresses:**", ""]
+                  "whatever its stresses. Rules broken:**", ""]
         lines += [f"- {md_text(v)}" for v in r["rule_violations"]]
     if r.get("assumed"):
         lines += ["", "**ASSUMED: the input lacked data the model needs; the scene stated its value:**", ""]

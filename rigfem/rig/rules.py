@@ -2,6 +2,10 @@
 
 Each rule is reported with its value, its limit and pass/fail, so a report can show
 how far a configuration is from every limit.  Lengths in mm, angles in degrees.
+
+One vocabulary for what a configuration is, in every output (:func:`standing`): it *assembles*
+(closes over a full turn), it *meets the rig rules* (every rule below) and it *passes the stress
+criterion* (every part's peak von Mises below σu/2) — three separate statements.
 """
 
 from __future__ import annotations
@@ -21,6 +25,20 @@ MIN_GROUND_MM = 660.0
 
 #: acceptable transmission-angle band of the final design (deg)
 MU_LIMITS_DEG = (35.0, 145.0)
+
+
+#: the one vocabulary's three statements, each with its negation (see :func:`standing`)
+ASSEMBLES = ("assembles", "does not assemble")
+MEETS_RULES = ("meets the rig rules", "does not meet the rig rules")
+STRESS = {"pass": "passes the stress criterion", "fail": "fails the stress criterion",
+          "undecided": "undecided on the stress criterion (its error band contains the limit)"}
+
+
+def standing(assembles: bool, meets_rules: bool | None, stress: str | None = None) -> str:
+    """A configuration in the one vocabulary: ``assembles; meets the rig rules; passes the stress
+    criterion`` (``meets_rules`` None: not a rig configuration; ``stress`` None: not computed)."""
+    rules = "the rig rules do not apply" if meets_rules is None else MEETS_RULES[not meets_rules]
+    return "; ".join([ASSEMBLES[not assembles], rules, STRESS.get(stress, "stress not computed")])
 
 
 @dataclass
@@ -56,12 +74,16 @@ def transmission_angle_range(b2: float, b3: float, b4: float, d: float) -> tuple
     return mu(d - b2), mu(d + b2)
 
 
-def _mountable(lengths: dict[str, float]) -> Rule:
+#: the start of the hole-grid rule's name (formerly "mountable", a word the vocabulary no longer uses)
+ON_HOLE_GRID = "on the hole grid"
+
+
+def _on_hole_grid(lengths: dict[str, float]) -> Rule:
     """Largest distance (mm) of any length from a whole number of hole pitches; limit 0."""
     errs = {k: abs(v - HOLE_PITCH_MM * round(v / HOLE_PITCH_MM)) for k, v in lengths.items()}
     worst = max(errs, key=errs.get)
     off = f"; {worst} is off by {errs[worst]:g} mm" if errs[worst] > 1e-9 else ""
-    return _rule(f"mountable (whole 60 mm hole pitches{off})", errs[worst], "==", 0.0)
+    return _rule(f"{ON_HOLE_GRID} (whole 60 mm hole pitches{off})", errs[worst], "==", 0.0)
 
 
 def fourbar_rules(b2: float, b3: float, b4: float, d: float) -> list[Rule]:
@@ -73,7 +95,7 @@ def fourbar_rules(b2: float, b3: float, b4: float, d: float) -> list[Rule]:
         _rule("crank guide clears the rocker pivot (d >= 660 mm)", d, ">=", MIN_GROUND_MM),
         _rule("transmission angle min (mu_min > 35 deg)", mu_min, ">", MU_LIMITS_DEG[0], "deg"),
         _rule("transmission angle max (mu_max < 145 deg)", mu_max, "<", MU_LIMITS_DEG[1], "deg"),
-        _mountable(dict(b2=b2, b3=b3, b4=b4, d=d)),
+        _on_hole_grid(dict(b2=b2, b3=b3, b4=b4, d=d)),
     ]
 
 
@@ -82,7 +104,7 @@ def slider_crank_rules(b2: float, b3: float, offset: float = 0.0) -> list[Rule]:
     rules = [_rule("rod and crank cannot align (b2 < b3)", b2, "<", b3)]
     if offset:
         rules.append(_rule("crank turns fully with the offset (b2 + |offset| < b3)", b2 + abs(offset), "<", b3))
-    rules.append(_mountable(dict(b2=b2, b3=b3)))
+    rules.append(_on_hole_grid(dict(b2=b2, b3=b3)))
     return rules
 
 

@@ -1,4 +1,4 @@
-"""The rig sweep: every mountable configuration's rules, reactions and stress verdicts.
+"""The rig sweep: every rig configuration's rules, reactions and stress verdicts.
 
 Loaded on first use (``lazy_loader``): importing one name does not import the whole subpackage.
 """

@@ -1,5 +1,6 @@
-"""The rig sweep's parameters and the configurations it enumerates: every mountable rail
-geometry and hole of a linkage type, with its rig rules (:mod:`rigfem.sweep.run`).
+"""The rig sweep's parameters and the configurations it enumerates: every configuration on the
+rig (each length on the hole grid within its rail) of a linkage type, with its rig rules
+(:mod:`rigfem.sweep.run`).
 
 Units: mm, Hz, deg.
 """
@@ -116,7 +117,8 @@ def rail_lengths(length_mm: float, first: float = HOLE_PITCH_MM) -> list[float]:
 
 
 def enumerate_configs(p: SweepParams) -> list[dict]:
-    """Every mountable configuration: each length on the hole grid within its rail (geometry/RIG.md §1-2).
+    """Every configuration on the rig: each length on the hole grid within its rail (geometry/RIG.md §1-2);
+    whether it assembles and meets the rig rules is decided later, per configuration.
 
     Four-bar: b2, b3, b4 on their rails, d on the ground rail from 660 mm (the rule; shorter
     ground lengths collide and are not enumerated).  Slider-crank: b2, b3 on their rails,
@@ -130,8 +132,13 @@ def enumerate_configs(p: SweepParams) -> list[dict]:
     return [dict(b2=b2, b3=b3, offset=0.0) for b2 in b2s for b3 in b3s if b2 + b3 <= max(ground)]
 
 
+#: a renamed rule keeps its table column, so tables written before and after read alike
+_COLUMN = {"on_the_hole_grid": "mountable"}
+
+
 def _slug(name: str) -> str:
-    return re.sub(r"[^a-z0-9]+", "_", name.split("(")[0].strip().lower()).strip("_")
+    slug = re.sub(r"[^a-z0-9]+", "_", name.split("(")[0].strip().lower()).strip("_")
+    return _COLUMN.get(slug, slug)
 
 
 def rules_row(p: SweepParams, cfg: dict) -> dict:

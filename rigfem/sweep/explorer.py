@@ -1,9 +1,10 @@
 """The design-space explorer: one offline page where a student picks a rig configuration.
 
-Built from the sweep's tables (results/sweep/): for the picked lengths it shows whether the
-linkage mounts and every rig rule with its numbers (geometry/RIG.md §2), the worst part with its
-utilisation and error band, the transmission-angle range, the linkage turning (closed-form
-position analysis in the page) and utilisation maps through the picked point.
+Built from the sweep's tables (results/sweep/): for the picked lengths it shows, in the one
+vocabulary of :mod:`rigfem.rig.rules`, whether the linkage assembles, meets the rig rules (each with
+its numbers, geometry/RIG.md §2) and passes the stress criterion (the worst part with its
+utilisation and error band), the transmission-angle range, the linkage turning (closed-form
+position analysis in the page) and utilisation maps sliced through the picked point.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import pandas as pd
 
 from rigfem.files import whole_file
 from rigfem.report.pages import json_script, render_page
-from rigfem.rig.rules import fourbar_rules, slider_crank_rules
+from rigfem.rig.rules import ASSEMBLES, MEETS_RULES, STRESS, fourbar_rules, slider_crank_rules
 from rigfem.sweep.configs import JOINTS, LENGTHS
 
 __all__ = ["explorer_data", "write_explorer"]
@@ -75,6 +76,8 @@ def write_explorer(out: Path, tables: dict[str, pd.DataFrame], name: str = "expl
     """Write the explorer page for the given linkage types' tables into ``out``."""
     data = {kind: explorer_data(kind, t) for kind, t in tables.items()}
     path = Path(out) / name
+    words = json_script({"assembles": ASSEMBLES, "rules": MEETS_RULES, "stress": STRESS})
     with whole_file(path) as tmp:
-        tmp.write_text(render_page("explorer.html.j2", kinds=list(data), data=json_script(data)), encoding="utf-8")
+        tmp.write_text(render_page("explorer.html.j2", kinds=list(data), data=json_script(data), words=words),
+                       encoding="utf-8")
     return path

@@ -7,12 +7,15 @@ rank correlations that test both statements on every configuration the sweep com
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from rigfem.files import whole_file
+from rigfem.report.scale import NO_DATA_COLOUR, UTILISATION_SCALE_PCT, colormap
+from rigfem.rig.rules import fourbar_rules, slider_crank_rules
 from rigfem.sweep.run import JOINTS, LENGTHS, SweepParams
 
 #: rows in each worst-configuration list
@@ -39,8 +42,47 @@ def _ok(table: pd.DataFrame) -> pd.DataFrame:
     return ok
 
 
+def map_cells(table: pd.DataFrame, x: str, y: str, at: dict[str, float]) -> pd.DataFrame:
+    """One map's cells: the computed configurations with ``at``'s lengths (the slice through it),
+    indexed by (``y``, ``x``), each one real configuration with its own utilisation, verdict and rules."""
+    ok = _ok(table)
+    for k, v in at.items():
+        ok = ok[ok[k] == v]
+    return ok.set_index([y, x])[["config_util_pct", "verdict", "rules_ok"]]
+
+
+def _panel(ax: "matplotlib.axes.Axes", cells: pd.DataFrame, xs: list, ys: list, cmap: "matplotlib.colors.Colormap",
+           plt: "module") -> "matplotlib.image.AxesImage":
+    """Draw one slice: colour by utilisation, hatch what does not meet the rig rules, outline what
+    does not pass the stress criterion, a red line at 100 %; returns the image."""
+    def grid(col: str) -> np.ndarray:
+        return cells[col].unstack().reindex(index=ys, columns=xs).to_numpy() if len(cells) else \
+            np.full((len(ys), len(xs)), np.nan)
+
+    util = np.asarray(grid("config_util_pct"), dtype=float)
+    vmin, vmax = UTILISATION_SCALE_PCT  # the report's one scale: yellow is 100 %, magenta above, everywhere
+    im = ax.imshow(np.ma.masked_invalid(util), origin="lower", aspect="auto", vmin=vmin, vmax=vmax, cmap=cmap,
+                   extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
+    if np.nan_to_num(util, nan=0.0).max() >= 100.0:
+        ax.contour(xs, ys, np.nan_to_num(util, nan=0.0), levels=[100.0], colors="r")
+    rules = grid("rules_ok")
+    verdict = grid("verdict")
+    for (i, j) in zip(*np.nonzero(rules == False)):  # noqa: E712 (an object array: NaN where nothing computed)
+        ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, hatch="///", edgecolor="white", lw=0))
+    for (i, j) in zip(*np.nonzero((verdict == "fail") | (verdict == "undecided"))):
+        ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, edgecolor="red", lw=1.2))
+    ax.set_facecolor(NO_DATA_COLOUR)
+    return im
+
+
+#: what a map's cell is and what its marks mean, for every map's legend
+LEGEND = ("each cell is one configuration; colour: its peak utilisation (% of σu/2) over the cases whose load "
+          "depends on the configuration; grey: does not assemble (or passes a toggle: no number); "
+          "hatched: does not meet the rig rules; red outline: fails the stress criterion or undecided")
+
+
 def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
-    """PNG maps of the peak utilisation over the lengths; returns the file names."""
+    """PNG maps of the utilisation, slices through the study's final design; returns the file names."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -48,42 +90,25 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
     ok = _ok(table)
     if ok.empty or "config_util_pct" not in ok:
         return []
-    from rigfem.report.scale import UTILISATION_SCALE_PCT, colormap
-
-    vmin, vmax = UTILISATION_SCALE_PCT  # the report's one scale: yellow is 100 %, magenta above, everywhere
     cmap = colormap()
-    fixed = ", ".join(f"{k} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
+    fixed = ", ".join(f"{_case(k)} {v:.1f} %" for k, v in ok.attrs.get("fixed", {}).items())
     note = f" (not shown, the same everywhere: {fixed})" if fixed else ""
+    final = "/".join(f"{FINAL_DESIGN[k]:g}" for k in LENGTHS["four-bar"])
     files = []
     if p.linkage_type == "four-bar":
-        for (x, y, over), name in ((("d", "b3", "b4"), "d_b3"), (("b4", "b3", "d"), "b4_b3")):
+        for (x, y, hidden), name in ((("d", "b3", "b4"), "d_b3"), (("b4", "b3", "d"), "b4_b3")):
             b2s = sorted(table["b2"].unique())
+            at = FINAL_DESIGN[hidden]
             cols = 3
             fig, axes = plt.subplots(int(np.ceil(len(b2s) / cols)), cols, figsize=(13, 3.6 * np.ceil(len(b2s) / cols)),
                                      squeeze=False, sharex=True, sharey=True)
             xs, ys = sorted(table[x].unique()), sorted(table[y].unique())
             im = None
             for ax, b2 in zip(axes.flat, b2s):
-                sub = ok[ok["b2"] == b2].groupby([y, x])["config_util_pct"].max().unstack()
-                grid = sub.reindex(index=ys, columns=xs).to_numpy(dtype=float)
-                im = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", vmin=vmin, vmax=vmax,
-                               cmap=cmap, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
-                if np.nanmax(np.nan_to_num(grid, nan=0.0)) >= 100.0:
-                    ax.contour(xs, ys, np.nan_to_num(grid, nan=0.0), levels=[100.0], colors="r")
-                # computed but not mountable (a rig rule broken): hatched; failing: red outline
-                bad = ok[(ok["b2"] == b2) & ~ok["rules_ok"].astype(bool)].groupby([y, x]).size().unstack()
-                bad = bad.reindex(index=ys, columns=xs).notna().to_numpy()
-                fail = ok[(ok["b2"] == b2) & (ok["verdict"] != "pass")].groupby([y, x]).size().unstack()
-                fail = fail.reindex(index=ys, columns=xs).notna().to_numpy()
-                for (i, j) in zip(*np.nonzero(bad)):
-                    ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, hatch="///",
-                                               edgecolor="white", lw=0))
-                for (i, j) in zip(*np.nonzero(fail)):
-                    ax.add_patch(plt.Rectangle((xs[j] - 30, ys[i] - 30), 60, 60, fill=False, edgecolor="red", lw=1.2))
+                im = _panel(ax, map_cells(table, x, y, {"b2": b2, hidden: at}), xs, ys, cmap, plt)
                 if b2 == FINAL_DESIGN["b2"]:
                     ax.plot(FINAL_DESIGN[x], FINAL_DESIGN[y], marker="*", ms=14, color="white", mec="k")
-                ax.set_facecolor("0.85")
-                ax.set_title(f"b2 = {b2:g} mm", fontsize="small")
+                ax.set_title(f"b2 = {b2:g} mm, at {hidden} = {at:g} mm", fontsize="small")
             for ax in axes.flat[len(b2s):]:
                 ax.axis("off")
             for ax in axes[-1]:
@@ -91,10 +116,11 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
             for ax in axes[:, 0]:
                 ax.set_ylabel(f"{y} (mm)")
             fig.colorbar(im, ax=axes, shrink=0.6, extend="max",
-                         label=f"peak utilisation (%), max over {over}; magenta: above 100 %")
-            fig.suptitle(f"four-bar: peak part utilisation vs σu/2 ({p.speed_hz:g} Hz, {p.model}, {p.fidelity}){note}\n"
-                         f"grey: cannot assemble or toggle; hatched: breaks a rig rule (not mountable); "
-                         f"red outline: fails or undecided; ★ the study's final design", fontsize="small")
+                         label="peak utilisation (% of σu/2); magenta: above 100 %")
+            fig.suptitle(f"four-bar at {hidden} = {at:g} mm (the final design's): peak part utilisation vs σu/2 "
+                         f"({p.speed_hz:g} Hz, {p.model}, {p.fidelity}){note}\n"
+                         + textwrap.fill(f"{LEGEND}; ★ the study's final design {final} mm, on its own cell", 170),
+                         fontsize="small")
             f = f"map_four-bar_{name}.png"
             with whole_file(out / f) as tmp:
                 fig.savefig(tmp, dpi=90)
@@ -102,17 +128,17 @@ def write_maps(table: pd.DataFrame, p: SweepParams, out: Path) -> list[str]:
             files.append(f)
     else:
         xs, ys = sorted(table["b2"].unique()), sorted(table["b3"].unique())
-        grid = ok.groupby(["b3", "b2"])["config_util_pct"].max().unstack().reindex(index=ys, columns=xs)
-        fig, ax = plt.subplots(figsize=(6, 5))
-        im = ax.imshow(np.ma.masked_invalid(grid.to_numpy(dtype=float)), origin="lower", aspect="auto", cmap=cmap,
-                       vmin=vmin, vmax=vmax, extent=(xs[0] - 30, xs[-1] + 30, ys[0] - 30, ys[-1] + 30))
-        ax.set_facecolor("0.85")
+        at = {k: float(table[k].iloc[0]) for k in LENGTHS[p.linkage_type] if k not in ("b2", "b3")}
+        fig, ax = plt.subplots(figsize=(7, 6.2))
+        im = _panel(ax, map_cells(table, "b2", "b3", at), xs, ys, cmap, plt)
         ax.set_xlabel("b2 (mm)"), ax.set_ylabel("b3 (mm)")
-        fig.colorbar(im, extend="max", label="peak utilisation (%); magenta: above 100 %")
-        ax.set_title(f"slider-crank: peak part utilisation, {p.speed_hz:g} Hz{note}", fontsize="x-small")
+        fig.colorbar(im, extend="max", label="peak utilisation (% of σu/2); magenta: above 100 %")
+        where = ", ".join(f"{k} = {v:g} mm" for k, v in at.items())
+        ax.set_title(f"slider-crank at {where}: peak part utilisation, {p.speed_hz:g} Hz{note}\n"
+                     + textwrap.fill(LEGEND, 80), fontsize="x-small")
         f = "map_slider-crank_b2_b3.png"
         with whole_file(out / f) as tmp:
-            fig.savefig(tmp, dpi=90)
+            fig.savefig(tmp, dpi=90, bbox_inches="tight")
         plt.close(fig)
         files.append(f)
     return files
@@ -123,20 +149,55 @@ def _spearman(a: pd.Series, b: pd.Series) -> str:
     return "n/a" if not np.isfinite(r) else f"{r:+.2f}"
 
 
+#: the table columns the lists show, with readable headers and units
+HEADERS = {"b2": "b2 (mm)", "b3": "b3 (mm)", "b4": "b4 (mm)", "d": "d (mm)", "offset": "offset (mm)",
+           "mu_min_deg": "μ min (deg)", "mu_max_deg": "μ max (deg)", "broken_rules": "rig rules broken",
+           "max_reaction_N": "largest peak reaction (N)", "peak_torque_Nm": "peak driver torque (N·m)",
+           "config_limiting": "limiting case (configuration-dependent)",
+           "config_util_pct": "its utilisation (% of σu/2)", "limiting_part": "limiting part (mode), every case",
+           "max_util_pct": "peak utilisation, every case (% of σu/2)", "verdict": "stress criterion"}
+
+
+def broken_rules_text(kind: str, lengths: dict[str, float]) -> str:
+    """The rig rules a configuration breaks, each with its value and limit ("none" when it meets them)."""
+    rules = (fourbar_rules if kind == "four-bar" else slider_crank_rules)(**lengths)
+    broken = [f"{r.name.split(' (')[0]}: {r.value:.4g} {r.unit}, must be {r.relation} {r.limit:.4g} {r.unit}"
+              for r in rules if not r.ok]
+    return "; ".join(broken) or "none"
+
+
+def _case(column: str) -> str:
+    """A part case as the pages name it: ``crank_rail_original`` -> ``crank_rail (original)``."""
+    return column.replace("_original", " (original)").replace("_cycle", " (cycle)")
+
+
 def _fmt(df: pd.DataFrame, p: SweepParams) -> str:
-    cols = [*LENGTHS[p.linkage_type]] + (["mu_min_deg", "mu_max_deg"] if p.linkage_type == "four-bar" else [])
-    cols += ["rules_ok", "max_reaction_N", "peak_torque_Nm", "config_limiting", "config_util_pct",
+    lengths = list(LENGTHS[p.linkage_type])
+    cols = lengths + (["mu_min_deg", "mu_max_deg"] if p.linkage_type == "four-bar" else [])
+    cols += ["broken_rules", "max_reaction_N", "peak_torque_Nm", "config_limiting", "config_util_pct",
              "limiting_part", "max_util_pct", "verdict"]
-    head = "| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n"
+    df = df.assign(broken_rules=[broken_rules_text(p.linkage_type, {k: float(r[k]) for k in lengths})
+                                 for _, r in df.iterrows()])
+    head = "| " + " | ".join(HEADERS[c] for c in cols) + " |\n|" + "---|" * len(cols) + "\n"
     lines = []
     for _, r in df.iterrows():
         cells = []
         for c in cols:
             v = r[c]
-            cells.append("yes" if v is True or v is np.True_ else "no" if v is False or v is np.False_
-                         else f"{v:.1f}" if isinstance(v, float) else str(v))
+            cells.append("–" if pd.isna(v) else f"{v:.1f}" if isinstance(v, float) else _case(str(v)))
         lines.append("| " + " | ".join(cells) + " |")
     return head + "\n".join(lines) + "\n"
+
+
+def _rule_counts(table: pd.DataFrame, p: SweepParams) -> dict[str, int]:
+    """How many of ``table``'s configurations break each rig rule, by the rule's name."""
+    lengths = list(LENGTHS[p.linkage_type])
+    counts: dict[str, int] = {}
+    for cfg in table[lengths].to_dict("records"):
+        for r in (fourbar_rules if p.linkage_type == "four-bar" else slider_crank_rules)(**cfg):
+            counts.setdefault(r.name.split(" (")[0], 0)
+            counts[r.name.split(" (")[0]] += not r.ok
+    return counts
 
 
 def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = None) -> str:
@@ -146,18 +207,22 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
     joints = [f"peak_{j}_N" for j in JOINTS[p.linkage_type]]
     ok["max_reaction_N"] = ok[joints].max(axis=1)
     n_rules = int(t["rules_ok"].sum())
-    lines = [f"# Sweep of every mountable {p.linkage_type} configuration", "",
+    assembles = t["status"] != "cannot assemble"
+    lines = [f"# Sweep of every {p.linkage_type} configuration on the rig", "",
              f"Generated by `rigfem sweep --{p.linkage_type}` (speed {p.speed_hz:g} Hz, dynamics model "
              f"{p.model}, fidelity {p.fidelity}, {p.samples} crank angles, rails {list(p.rails)} mm, "
              f"ground rail {p.ground_mm:g} mm). Utilisation = peak von Mises / (σu/2) over every part "
-             f"and both modes (the study's original load case and the real crank cycle).", "",
-             f"- mountable configurations (lengths on the 60 mm grid within the rails): {len(t)}",
-             f"- cannot be assembled over a full turn: {int((t['status'] == 'cannot assemble').sum())}",
-             f"- toggle (dead point, or transmission angle within 5° of 0/180°; no number): {int((t['status'] == 'toggle').sum())}",
-             f"- computed: {len(ok)}; pass: {int((ok['verdict'] == 'pass').sum())}, "
-             f"fail: {int((ok['verdict'] == 'fail').sum())}, undecided (the preset's error band "
-             f"contains the limit): {int((ok['verdict'] == 'undecided').sum())}",
-             f"- comply with every rig rule (geometry/RIG.md §2): {n_rules}; of these computed "
+             f"and both modes (the study's original load case and the real crank cycle). A configuration "
+             f"*assembles* (closes over a full turn), *meets the rig rules* (geometry/RIG.md §2) and "
+             f"*passes the stress criterion* (σu/2): three separate statements.", "",
+             f"- configurations on the rig (each length on the 60 mm hole grid within its rail): {len(t)}",
+             f"- do not assemble (cannot close over a full turn): {int((~assembles).sum())}",
+             f"- assemble: {int(assembles.sum())}; of these pass a toggle (dead point, or transmission angle "
+             f"within 5° of 0/180°; no stress number): {int((t['status'] == 'toggle').sum())}",
+             f"- computed (assemble, no toggle): {len(ok)}; pass the stress criterion: "
+             f"{int((ok['verdict'] == 'pass').sum())}, fail it: {int((ok['verdict'] == 'fail').sum())}, "
+             f"undecided (the preset's error band contains the limit): {int((ok['verdict'] == 'undecided').sum())}",
+             f"- meet the rig rules (geometry/RIG.md §2): {n_rules}; of these computed "
              f"{int(ok['rules_ok'].sum())}, failing the stress criterion "
              f"{int(((ok['verdict'] == 'fail') & ok['rules_ok']).sum())}"]
     if seconds is not None:
@@ -166,18 +231,21 @@ def worst_markdown(table: pd.DataFrame, p: SweepParams, seconds: float | None = 
     if ok.empty:
         return "\n".join(lines) + "\n"
     fixed = ok.attrs.get("fixed", {})
+    lines += ["", "Rig rules broken by the configurations that assemble (count; one may break several):", ""]
+    lines += [f"- {name}: {n}" for name, n in _rule_counts(t[assembles], p).items()]
     lines += ["", "Parts that limit the computed configurations (count):", ""]
     lines += [f"- {k}: {v}" for k, v in ok["limiting_part"].value_counts().items()]
     if fixed:
         lines += ["", "Cases whose utilisation is the same for every configuration (their load does not "
-                  "depend on it): " + ", ".join(f"{k} {v:.1f} %" for k, v in fixed.items())
-                  + ". The lists below rank by `config_util_pct`, the highest utilisation of the other "
-                  "cases (`config_limiting` names it); `max_util_pct` and the verdict cover every case."]
+                  "depend on it): " + ", ".join(f"{_case(k)} {v:.1f} %" for k, v in fixed.items())
+                  + ". The lists below rank by the highest utilisation of the other cases (*its utilisation*; "
+                  "*limiting case* names it); *peak utilisation, every case* and the stress criterion's verdict "
+                  "cover every case."]
     lines += ["", "Parts that limit the configuration-dependent utilisation (count):", ""]
-    lines += [f"- {k}: {v}" for k, v in ok["config_limiting"].value_counts().items()]
+    lines += [f"- {_case(k)}: {v}" for k, v in ok["config_limiting"].value_counts().items()]
     lines += ["", f"## The {WORST} worst configurations (highest utilisation)", "",
               _fmt(ok.nlargest(WORST, "config_util_pct"), p),
-              f"## The {WORST} worst that comply with every rig rule", "",
+              f"## The {WORST} worst that meet the rig rules", "",
               _fmt(ok[ok["rules_ok"]].nlargest(WORST, "config_util_pct"), p),
               f"## The {WORST} largest peak reactions", "",
               _fmt(ok.nlargest(WORST, "max_reaction_N"), p)]

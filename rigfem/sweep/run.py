@@ -1,4 +1,4 @@
-"""Sweep every mountable rig configuration: rules, dynamics and part stresses by superposition.
+"""Sweep every rig configuration: rules, dynamics and part stresses by superposition.
 
 For each rail geometry and support set, one FE factorisation gives the *unit* stress fields
 of every load a configuration can apply (bearing loads in fixed directions on every hole a
@@ -185,7 +185,7 @@ def _stored_chunk(cache: Cache, key: str, configs: list[dict]) -> tuple[object, 
 class SweepOptions:
     """How a sweep runs: configurations per stored chunk (1-100000), on Dask or not (None: when the
     context has more than one worker or a ``scheduler`` ``tcp://HOST:PORT`` is given), only some
-    configurations (None: every mountable one), unit bases already built, and the memory limit the
+    configurations (None: every one on the rig), unit bases already built, and the memory limit the
     job's estimate is held against (GiB)."""
 
     chunk_size: int = 64

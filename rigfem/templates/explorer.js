@@ -13,6 +13,7 @@
   const key = (vals) => vals.join("|");
   // utilisation (%) -> the report's one scale (rigfem/report/scale.py): its stops 0..100 %, its colour above
   const SCALE = JSON.parse(document.getElementById("util-scale").textContent);
+  const WORDS = JSON.parse(document.getElementById("words").textContent);  // rigfem/rig/rules.py's vocabulary
   function colour(u) {
     if (u === null) return SCALE.none;
     if (u > SCALE.range_pct[1]) return SCALE.above;
@@ -45,18 +46,26 @@
     maps(); drawLinkage();
   }
   function show(i) {
-    const status = D.status_names[D.status[i]], mounts = D.rules_ok[i] === "1", c = pos.get(i);
+    const status = D.status_names[D.status[i]], meets = D.rules_ok[i] === "1", c = pos.get(i);
     const verdict = c !== undefined && D.verdict[c] >= 0 ? D.verdict_names[D.verdict[c]] : null;
-    let v = mounts ? '<span class="ok">Mounts</span>: every rig rule holds.' : '<span class="no">Does not mount</span>: a rig rule is broken.';
-    v += ` Status: ${esc(status)}`;
+    const assembles = status !== "cannot assemble", u = c === undefined ? null : D.max_util_pct[c];
+    const say = (good, text) => `<span class="${good ? "ok" : "no"}">${esc(text[0].toUpperCase() + text.slice(1))}</span>`;
+    const broken = D.rules.filter((r) => r.ok[i] !== "1").map((r) => r.name.split(" (")[0]);
+    let v = say(assembles, WORDS.assembles[assembles ? 0 : 1]) +
+      (assembles ? " (closes over a full turn)" : " (cannot close over a full turn)");
+    if (status === "toggle") v += ", but passes a toggle (no stress number)";
+    v += ". " + say(meets, WORDS.rules[meets ? 0 : 1]) + (meets ? "" : ": " + esc(broken.join(", "))) + ".";
     if (D.note[i] >= 0) v += ` (${esc(D.note_names[D.note[i]])})`;
-    if (verdict) v += `. Verdict <span class="badge ${esc(verdict)}">${esc(verdict.toUpperCase())}</span>`;
-    $("verdict").innerHTML = v + ".";
+    if (verdict) {
+      v += ` ${say(verdict === "pass", WORDS.stress[verdict])}: <span class="badge ${esc(verdict)}">` +
+        `${esc(verdict.toUpperCase())}</span> at ${fmt(u)} % of σu/2.`;
+    }
+    $("verdict").innerHTML = v;
     $("rules").innerHTML = "<tr><th>rig rule</th><th>value</th><th>limit</th><th>holds</th></tr>" + D.rules.map((r) =>
       `<tr><td>${esc(r.name)}</td><td class=num>${fmt(at(r.value, i), 1)} ${esc(r.unit)}</td>` +
       `<td class=num>${esc(r.relation)} ${fmt(at(r.limit, i), 1)} ${esc(r.unit)}</td>` +
       `<td class="${r.ok[i] === "1" ? "ok" : "no"}">${r.ok[i] === "1" ? "yes" : "no"}</td></tr>`).join("");
-    const u = c === undefined ? null : D.max_util_pct[c], e = c === undefined ? null : D.error_pct[c];
+    const e = c === undefined ? null : D.error_pct[c];
     const facts = [];
     if (u !== null) {
       facts.push(["worst part (mode)", esc(D.limiting_part_names[D.limiting_part[c]])]);
@@ -108,35 +117,76 @@
     }
     if (kind === "slider-crank") { const p = P(q.B); g.strokeRect(p[0] - 18, p[1] - 12, 36, 24); }
   }
+  function ticks(lo, hi, n) {  // about n round tick values (mm) from lo to hi
+    const step = [60, 120, 180, 300, 600].find((t) => (hi - lo) / t <= n) || 1200, out = [];
+    for (let v = Math.ceil(lo / step) * step; v <= hi; v += step) out.push(v);
+    return out;
+  }
+  function colourBar(g, x0, y0, w, h) {  // 0..100 % of σu/2 upwards, magenta above
+    const top = y0 + 26, span = h - 26;
+    for (let k = 0; k < span; k++) { g.fillStyle = colour(100 * (1 - k / span)); g.fillRect(x0, top + k, w, 1.5); }
+    g.fillStyle = SCALE.above; g.fillRect(x0, y0, w, 14);
+    g.fillStyle = "#111"; g.font = "12px system-ui, sans-serif"; g.textAlign = "left";
+    g.fillText("> 100", x0 + w + 4, y0 + 11);
+    for (let v = 0; v <= 100; v += 20) g.fillText(String(v), x0 + w + 4, top + span * (1 - v / 100) + 4);
+    g.save(); g.translate(x0 + w + 52, y0 + h / 2); g.rotate(-Math.PI / 2); g.textAlign = "center";
+    g.fillText("peak utilisation (% of σu/2)", 0, 0); g.restore();
+  }
   function maps() {
     const host = $("maps"); host.innerHTML = "";
     const pairs = kind === "four-bar" ? [["d", "b3"], ["b4", "b3"]] : [["b2", "b3"]];
     for (const [x, y] of pairs) {
-      const cv = document.createElement("canvas"); cv.width = 520; cv.height = 420; host.appendChild(cv);
-      const g = cv.getContext("2d"), xs = D.grid[x], ys = D.grid[y], L = 60, B = 50;
-      const w = (cv.width - L - 20) / xs.length, h = (cv.height - B - 40) / ys.length;
+      const cv = document.createElement("canvas"); cv.width = 600; cv.height = 440; host.appendChild(cv);
+      const g = cv.getContext("2d"), X = D.grid[x], Y = D.grid[y], L = 70, T = 40, R = 110, B = 56;
+      const cell = (a, b) => {  // the table row with the picked lengths but X[a], Y[b] (undefined: not on the rig)
+        const at = Object.assign({}, pick, { [x]: X[a], [y]: Y[b] });
+        return index.get(key(D.lengths.map((n) => at[n])));
+      };
+      // crop to the cells with a number in this slice and the pick, with one cell of margin
+      let a0 = X.indexOf(pick[x]), a1 = a0, b0 = Y.indexOf(pick[y]), b1 = b0;
+      for (let a = 0; a < X.length; a++) for (let b = 0; b < Y.length; b++) {
+        const i = cell(a, b);
+        if (i !== undefined && pos.has(i)) { a0 = Math.min(a0, a); a1 = Math.max(a1, a); b0 = Math.min(b0, b); b1 = Math.max(b1, b); }
+      }
+      a0 = Math.max(0, a0 - 1); a1 = Math.min(X.length - 1, a1 + 1); b0 = Math.max(0, b0 - 1); b1 = Math.min(Y.length - 1, b1 + 1);
+      const xs = X.slice(a0, a1 + 1), ys = Y.slice(b0, b1 + 1);
+      const w = (cv.width - L - R) / xs.length, h = (cv.height - T - B) / ys.length;
+      cv.dataset.cells = `${xs.length}x${ys.length}`;
       g.fillStyle = "#fff"; g.fillRect(0, 0, cv.width, cv.height);
       for (let a = 0; a < xs.length; a++) for (let b = 0; b < ys.length; b++) {
-        const at = Object.assign({}, pick, { [x]: xs[a], [y]: ys[b] });
-        const i = index.get(key(D.lengths.map((n) => at[n])));
-        const c = i === undefined ? undefined : pos.get(i);
+        const i = cell(a0 + a, b0 + b), c = i === undefined ? undefined : pos.get(i);
+        const px = L + a * w, py = T + (ys.length - 1 - b) * h;
         g.fillStyle = i === undefined ? "#fff" : colour(c === undefined ? null : D.max_util_pct[c]);
-        g.fillRect(L + a * w, 40 + (ys.length - 1 - b) * h, w + 0.5, h + 0.5);
+        g.fillRect(px, py, w + 0.5, h + 0.5);
+        if (c !== undefined && D.rules_ok[i] !== "1") {  // computed, does not meet the rig rules: hatched
+          g.save(); g.beginPath(); g.rect(px, py, w, h); g.clip();
+          g.strokeStyle = "rgba(255,255,255,0.85)"; g.lineWidth = 1; g.beginPath();
+          for (let k = 0; k < w + h; k += 9) { g.moveTo(px + k, py + h); g.lineTo(px + k + h, py); g.moveTo(px - k, py + h); g.lineTo(px - k + h, py); }
+          g.stroke(); g.restore();
+        }
+        if (c !== undefined && D.verdict[c] >= 0 && D.verdict_names[D.verdict[c]] !== "pass") {
+          g.strokeStyle = "#d50000"; g.lineWidth = 1.5; g.strokeRect(px + 1, py + 1, w - 2, h - 2);
+        }
       }
       const a = xs.indexOf(pick[x]), b = ys.indexOf(pick[y]);
       g.strokeStyle = "#fff"; g.lineWidth = 3; g.beginPath();
-      g.arc(L + (a + 0.5) * w, 40 + (ys.length - 0.5 - b) * h, Math.max(6, Math.min(w, h) * 0.6), 0, 2 * Math.PI); g.stroke();
+      g.arc(L + (a + 0.5) * w, T + (ys.length - 0.5 - b) * h, Math.max(6, Math.min(w, h, 60) * 0.4), 0, 2 * Math.PI); g.stroke();
       g.strokeStyle = "#000"; g.lineWidth = 1; g.stroke();
-      g.fillStyle = "#111"; g.font = "14px system-ui, sans-serif";
-      const fixed = D.lengths.filter((n) => n !== x && n !== y).map((n) => `${n} = ${pick[n]}`).join(", ");
-      g.fillText(`${y} over ${x} (mm)${fixed ? ", " + fixed + " mm" : ""}`, L, 24);
-      for (let k = 0; k < xs.length; k += Math.ceil(xs.length / 8)) g.fillText(String(xs[k]), L + k * w, cv.height - B + 24);
-      for (let k = 0; k < ys.length; k += Math.ceil(ys.length / 8)) g.fillText(String(ys[k]), 6, 40 + (ys.length - 0.5 - k) * h + 5);
-      g.fillText(`${x} (mm)`, cv.width / 2, cv.height - 6);
-      g.save(); g.translate(14, cv.height / 2); g.rotate(-Math.PI / 2); g.restore();
+      g.fillStyle = "#111"; g.font = "14px system-ui, sans-serif"; g.textAlign = "left";
+      const fixed = D.lengths.filter((n) => n !== x && n !== y).map((n) => `${n} = ${pick[n]} mm`).join(", ");
+      g.fillText(fixed ? `${y} over ${x}, at ${fixed}` : `${y} over ${x}`, L, 24);
+      g.font = "12px system-ui, sans-serif"; g.textAlign = "center";
+      for (const v of ticks(xs[0], xs[xs.length - 1], 8)) g.fillText(String(v), L + (xs.indexOf(v) + 0.5) * w, cv.height - B + 18);
+      g.textAlign = "right";
+      for (const v of ticks(ys[0], ys[ys.length - 1], 8)) g.fillText(String(v), L - 6, T + (ys.length - 0.5 - ys.indexOf(v)) * h + 4);
+      g.font = "14px system-ui, sans-serif"; g.textAlign = "center";
+      g.fillText(`${x} (mm)`, L + (cv.width - L - R) / 2, cv.height - 12);
+      g.save(); g.translate(20, T + (cv.height - T - B) / 2); g.rotate(-Math.PI / 2); g.fillText(`${y} (mm)`, 0, 0); g.restore();
+      colourBar(g, cv.width - R + 14, T, 16, cv.height - T - B);
+      g.textAlign = "left";
       cv.addEventListener("click", (ev) => {
         const r = cv.getBoundingClientRect(), px = (ev.clientX - r.left) * cv.width / r.width, py = (ev.clientY - r.top) * cv.height / r.height;
-        const ia = Math.floor((px - L) / w), ib = ys.length - 1 - Math.floor((py - 40) / h);
+        const ia = Math.floor((px - L) / w), ib = ys.length - 1 - Math.floor((py - T) / h);
         if (ia >= 0 && ia < xs.length && ib >= 0 && ib < ys.length) { pick[x] = xs[ia]; pick[y] = ys[ib]; update(); }
       });
     }
