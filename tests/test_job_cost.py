@@ -22,7 +22,7 @@ FAST = ["--parts", "plate_A", "--modes", "original", "--fidelity", "draft", "--f
 
 
 def test_turning_configurations_are_the_ones_the_sweep_checks():
-    # the committed sweep computed these many (results/sweep/worst_*.md: "computed: 3306" / "81")
+    # the committed sweep computed these many (results/sweep/worst_*.md: "computed (assemble, no toggle): 3306" / "81")
     p = SweepParams()
     assert turning(p, enumerate_configs(p)) == 3306
     q = SweepParams(linkage_type="slider-crank")

@@ -191,11 +191,11 @@ def test_report_files(params, bases, tmp_path):
                      "sweep_four-bar.html", "explorer.html"]
     assert (tmp_path / "out" / "explorer.html").is_file()
     page = (tmp_path / "out" / "sweep_four-bar.html").read_text()
-    assert page.count('src="data:image/png;base64,') == 2 and "computed: 3" in page
+    assert page.count('src="data:image/png;base64,') == 2 and "computed (assemble, no toggle): 3" in page
     text = gzip.decompress((tmp_path / "out" / "sweep_four-bar.csv.gz").read_bytes()).decode().lower()
     assert "nan" not in text and "inf" not in text
     md = (tmp_path / "out" / "worst_four-bar.md").read_text()
-    assert "worst configurations" in md and "2013 study" in md and "computed: 3" in md
+    assert "worst configurations" in md and "2013 study" in md and "computed (assemble, no toggle): 3" in md
 
 
 def test_cli_bad_input(capsys):
