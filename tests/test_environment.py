@@ -186,3 +186,14 @@ def test_a_cache_folder_inside_out_is_refused_naming_both(tmp_path, capsys, monk
     line = one_line(capsys.readouterr().err)
     assert code == 2 and str(out) in line and str(cache) in line and "RIGFEM_CACHE" in line, line
     assert (cache / "meshes" / "abc" / "mesh.npz").read_bytes() == b"cached"
+
+
+def test_a_long_temporary_folder_still_meshes(tmp_path):
+    """TMPDIR past what a Unix socket's path holds: the mesher's children are spawned, not forked from a
+    forkserver whose socket cannot be made (it was 'could not compute: ... AF_UNIX path too long')."""
+    tmp = tmp_path / ("t" * (100 - len(str(tmp_path))))
+    tmp.mkdir()
+    r = _run(["mesh", str(Path(__file__).parents[1] / "examples" / "plate_with_hole.geo"), "--fidelity", "draft", "--out", "p.vtu"],
+             tmp_path, env={"TMPDIR": str(tmp)})
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "p.vtu").is_file()

@@ -4,7 +4,8 @@ gmsh holds the interpreter while it meshes (Ctrl-C was acted on minutes later); 
 process the parent stays responsive, ends the child within a fraction of a second of SIGINT
 or SIGTERM, and the memory gmsh took is returned to the system when the child exits.
 Children come from a ``forkserver`` that has imported the mesher once, so a call costs a fork,
-not a fresh interpreter.
+not a fresh interpreter; where the forkserver's socket cannot be made (a temporary folder whose
+path leaves no room in a Unix socket's 107 bytes) they are spawned.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import multiprocessing as mp
 import os
 import signal
 import sys
+import tempfile
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -26,10 +28,15 @@ __all__ = ["call"]
 POLL_S = 0.05
 
 _START = threading.Lock()
+#: the longest Unix socket path (Linux sun_path, 108 bytes with its NUL), and what multiprocessing
+#: adds to the temporary folder for the forkserver's (``/pymp-XXXXXXXX/listener-XXXXXXXX``)
+SOCKET_PATH_MAX, SOCKET_SUFFIX = 107, 33
 
 
 @functools.lru_cache(maxsize=None)
 def _context() -> mp.context.BaseContext:
+    if len(os.fsencode(tempfile.gettempdir())) + SOCKET_SUFFIX > SOCKET_PATH_MAX:
+        return mp.get_context("spawn")
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(["rigfem.mesh.mesher"])
     return ctx
