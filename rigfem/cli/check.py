@@ -29,7 +29,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true",
                    help="replace an existing result folder (only one rigfem wrote: it holds .rigfem-result)")
     add_rule_argument(p)
-    p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene)")
+    p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene): each part is refined until "
+                   "its verdict is decided and its band is within ±10 | ±3 | ±1 %% of the allowable; fine also "
+                   "refines every part until its band is within ±5 %% of its own peak or it reaches the fine mesh")
     p.add_argument("--order", type=int, help="element order 1 | 2")
     p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
     p.add_argument("--local-size", type=float, metavar="MM", help="mesh size at loaded interfaces (mm)")

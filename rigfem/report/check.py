@@ -97,6 +97,7 @@ def document(checked: Checked) -> dict:
         "torque_Nm": sm.get("torque_Nm") or sm.get("driver_force_N"),
         "settings": {"modes": list(s.modes), "fidelity": s.fidelity, "order": s.order, "size_mm": s.size_mm,
                      "local_size_mm": s.local_size_mm, "adaptive": s.adaptive, "target_pct": s.target_pct,
+                     "target_pct_of_peak": s.target_peak_pct,
                      "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},

@@ -66,6 +66,18 @@ def stopped_text(p: dict) -> str:
     return m.get("stopped") or "–"
 
 
+def asked_text(p: dict) -> str:
+    """What the check asked of the part's mesh (``mesh.asked``): ``fine: band ≤ ±1 % of the allowable
+    and ≤ ±5 % of the peak, coarse up to fine``; ``–`` when not recorded (a report before schema 6)."""
+    a = (p.get("mesh") or {}).get("asked")
+    if not a:
+        return "–"
+    if not a["adaptive"]:
+        return f"{a['fidelity']}: one fixed mesh ({a['cap']}), no target"
+    peak = f" and ≤ ±{a['target_pct_of_peak']:g} % of the peak" if a.get("target_pct_of_peak") is not None else ""
+    return f"{a['fidelity']}: band ≤ ±{a['target_pct_of_allowable']:g} % of the allowable{peak}, coarse up to {a['cap']}"
+
+
 def by_utilisation(parts: list[dict]) -> list[dict]:
     """The part cases, highest utilisation first (unsolved ones, which fail, at the top)."""
     return sorted(parts, key=lambda p: -math.inf if p.get("peak_mpa") is None else -p["utilisation_pct"])
