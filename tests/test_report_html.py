@@ -137,3 +137,25 @@ def test_the_3d_view_opens_at_the_governing_crank_angle(checked):
     assert view["peak"][view["governing"]] == max(view["peak"])
     page = (out / "report.html").read_text()
     assert "slider.value = String(d.governing || 0)" in page and "peak ${" in page
+
+
+def test_the_other_mode_is_pictured_at_its_critical_crank_angle(checked):
+    """Issue 40 §2: the field pictures showed the original mode only.  The part's other mode (here the cycle
+    mode, at its governing crank angle) gets its von Mises picture too: the same picture code and colour scale,
+    beside the original mode's in report.md and report.html."""
+    report, out = checked
+    by_mode = {p["mode"]: p for p in report["parts"]}
+    full, cycle = by_mode["original"]["pictures"], by_mode["cycle"]["pictures"]
+    assert set(full["files"]) == {"von_mises", "displacement", "safety_factor"}
+    assert cycle["files"] == {"von_mises": "plate_A_cycle_mode.png"}
+    assert cycle["utilisation_scale_pct"] == full["utilisation_scale_pct"] == [0.0, 100.0]
+    assert cycle["utilisation_scale_mpa"] == full["utilisation_scale_mpa"]
+    pix, orig = _png((out / "plate_A_cycle_mode.png").read_bytes()), _png((out / "plate_A.png").read_bytes())
+    assert pix.shape[:2] == (1000, 1600) and pix[..., :3].std() > 0.05 and not np.array_equal(pix, orig)
+    md = (out / "report.md").read_text()
+    crank = by_mode["cycle"]["crank_deg"]
+    assert f"plate\\_A \\(PF\\_4b\\_006\\), cycle mode at crank {crank:.1f}°: von Mises as utilisation" \
+           "](plate_A_cycle_mode.png)" in md
+    html = (out / "report.html").read_text()
+    assert html.index('data-file="plate_A.png"') < html.index('data-file="plate_A_cycle_mode.png"') \
+        < html.index('data-file="plate_A_utilisation.png"')

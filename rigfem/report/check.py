@@ -136,9 +136,14 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
         if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
             worst[r.case.name] = r
     drawn = [(r, entry) for r, entry in zip(results, parts) if output.pictures and worst[r.case.name] is r]
+    # and the part's other mode at its own critical crank angle (the cycle mode's governing angle): its
+    # von Mises picture, same scale, same code, beside the full set's
+    other = [(r, entry) for r, entry in zip(results, parts) if output.pictures and worst[r.case.name] is not r]
     of = {id(r): [] for r in results}  # each case's picture files, in the report's order
     jobs = [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d)
             for r, entry in drawn]
+    jobs += [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d, 30.0,
+              ("von_mises",), f"{r.case.name}_{r.mode}_mode") for r, entry in other]
     with started_part_pictures(jobs, cache) as wait:  # drawn in child processes while this one writes files
         if output.pictures:
             reactions_plot(checked.reactions.history, d / "reactions.png", cache)
@@ -159,7 +164,7 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
             pvd = _frames(d, r, limit)
             if pvd:
                 fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + [pvd]
-        for (r, entry), pics in zip(drawn, wait()):
+        for (r, entry), pics in zip(drawn + other, wait()):
             entry["pictures"] = pics
             of[id(r)][:0] = list(pics["files"].values())
     return first + [f for r in results for f in of[id(r)]], fields

@@ -362,7 +362,8 @@ def render_markdown(r: dict) -> str:
                   f"triad shows the part frame of the *where (mm)* column.", ""]
         for p in pics:
             label = part_label(p["name"], p["part"])
-            lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]
+            lines += [f"![{md_text(label)}, {p['mode']} mode at crank {p['crank_deg']:.1f}°: {_PICTURE[k]}]({f})"
+                      for k, f in p["pictures"]["files"].items()]
     if r.get("pictures"):
         lines += ["", "## Pictures", "", f"Pictures {r['pictures']}."]
     lines += study_tables(r)

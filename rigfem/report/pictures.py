@@ -16,6 +16,7 @@ from rigfem.fe.partcase import CaseResult
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
 from rigfem.report.figures import band, stopped_text
+from rigfem.report.picture_cache import PICTURES
 from rigfem.report.scale import (
     ABOVE_COLOUR,
     DISPLACEMENT_CMAP,
@@ -346,9 +347,11 @@ def _layout(shots, elongated: bool) -> list[tuple[int, int]]:
 
 
 def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
-                  folder: str | Path, zoom_mm: float = 30.0) -> dict:
-    """Three pictures of a part at its critical crank angle: utilisation of the allowable (von Mises) on
-    the report's one scale :data:`UTILISATION_SCALE_PCT`, displacement magnitude, factor of safety.
+                  folder: str | Path, zoom_mm: float = 30.0, kinds: tuple[str, ...] = PICTURES,
+                  stem: str | None = None) -> dict:
+    """The pictures ``kinds`` of a part at its critical crank angle: utilisation of the allowable (von
+    Mises) on the report's one scale :data:`UTILISATION_SCALE_PCT`, displacement magnitude, factor of safety;
+    files ``<stem>.png`` (von Mises) and ``<stem>_<kind>.png`` (``stem`` default: the part's name).
 
     Each states the part ``label``, its verdict, utilisation ± band, mode and crank angle, marks the
     extremes with values, draws the pin loads (N) and the supports.  Returns what was drawn: the file
@@ -417,9 +420,9 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
                                          ticks=[100.0 / t for t in FOS_TICKS], fmt=lambda t: f"{100.0 / t:.3g}",
                                          marks=[100.0])),
     }
-    files = {}
-    for key, (view, what, bar) in pics.items():
-        name = f"{r.case.name}.png" if key == "von_mises" else f"{r.case.name}_{key}.png"
+    files, stem = {}, stem or r.case.name
+    for key, (view, what, bar) in ((k, pics[k]) for k in kinds):
+        name = f"{stem}.png" if key == "von_mises" else f"{stem}_{key}.png"
         try:
             whole = render(view, w_h[0], d, up, shrink=elongated)
             size = w_h[1] if not elongated else (980, _TOP - _GAP * 2 - whole.image.shape[0] - _BOTTOM)
