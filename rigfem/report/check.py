@@ -2,13 +2,17 @@
 
 The folder holds ``report.json`` (the dict), ``report.md`` and ``report.html`` beside one VTU per
 part and mode (the critical crank angle), a ParaView ``.pvd`` animation per part over the crank
-cycle (cycle mode), and PNG pictures.  It appears only when everything is written
+cycle (cycle mode) with the 3-D view's markers (``<part>_cycle_markers.json``: supports, pin loads per
+frame), and PNG pictures.  It appears only when everything is written
 (:func:`rigfem.report.folder.atomic_dir`).
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+
+import numpy as np
 
 from rigfem import __version__
 from rigfem.report.provenance import provenance
@@ -16,7 +20,8 @@ from rigfem.context import Context
 from rigfem.fe.partcase import CaseResult, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.job import Checked
-from rigfem.report.document import ASSUMPTIONS, REPORT_SCHEMA, UNITS, material_table, render_markdown, write_json
+from rigfem.report.document import (ASSUMPTIONS, REPORT_SCHEMA, UNITS, finite, material_table, render_markdown,
+                                    write_json)
 from rigfem.report.figures import allowable_label, conclusion, part_label, part_minima, safety_factor
 from rigfem.report.entries import part_entry
 from rigfem.report.folder import Output, atomic_dir
@@ -106,11 +111,12 @@ def document(checked: Checked) -> dict:
     }
 
 
-def _frames(d: Path, r: CaseResult, limit: float) -> str | None:
-    """Write a cycle case's animation frames and their ParaView collection; the collection's name."""
+def _frames(d: Path, r: CaseResult, limit: float) -> list[str]:
+    """Write a cycle case's animation frames, their ParaView collection and its markers (:func:`_markers`);
+    the collection's and the markers' names (none without frames)."""
     rows = sorted(r.frames)
     if not rows:
-        return None
+        return []
     fm = r.solution.model.mesh
     series = []
     for k, i in enumerate(rows):
@@ -121,7 +127,22 @@ def _frames(d: Path, r: CaseResult, limit: float) -> str | None:
     stem = f"{r.case.name}_{r.mode}"
     (d / f"{stem}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                                    f"  <Collection>\n{pvd}\n  </Collection>\n</VTKFile>\n")
-    return f"{stem}.pvd"
+    (d / f"{stem}_markers.json").write_text(json.dumps(finite(_markers(r, rows))))
+    return [f"{stem}.pvd", f"{stem}_markers.json"]
+
+
+def _markers(r: CaseResult, rows: list[int]) -> dict:
+    """What the 3-D view draws on an animation besides the field: each support (its kind and the
+    vertices of its surface), whether the part is a free body, and per frame the pin load on each
+    loaded hole (its centre, mm, and force, N, in the part frame)."""
+    fm = r.solution.model.mesh
+    supports = [{"name": g, "kind": kind,
+                 "vertices": [int(v) for v in np.unique(fm.surfaces[g]) if v < fm.n_vertices]}
+                for kind, groups in r.case.supports for g in groups if g in fm.surfaces]
+    frames = [{"crank_deg": float(r.case.rows[i]),
+               "loads": [{"hole": g, "at_mm": [float(v) for v in at], "force_N": [float(v) for v in f]}
+                         for g, at, f in r.frame_loads.get(i, [])]} for i in rows]
+    return {"free_body": any(kind == "free" for kind, _ in r.case.supports), "supports": supports, "frames": frames}
 
 
 def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: Context) -> tuple[list, list]:
@@ -161,9 +182,9 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
                 utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
                                  part_label(entry["name"], entry["part"]), allowable, cache)
                 of[id(r)].append(f"{r.case.name}_utilisation.png")
-            pvd = _frames(d, r, limit)
-            if pvd:
-                fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + [pvd]
+            animation = _frames(d, r, limit)
+            if animation:
+                fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + animation
         for (r, entry), pics in zip(drawn + other, wait()):
             entry["pictures"] = pics
             of[id(r)][:0] = list(pics["files"].values())
