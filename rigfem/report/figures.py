@@ -6,6 +6,10 @@ from __future__ import annotations
 
 import math
 
+#: the pictures of a part case (rigfem.report.pictures.part_pictures): utilisation (von Mises), displacement,
+#: factor of safety
+PICTURES = ("von_mises", "displacement", "safety_factor")
+
 
 def part_label(name: str, part: str) -> str:
     """The one name a reader sees for a part: its role and its catalogue name, ``crank_rail (rail_size25)``."""

@@ -29,6 +29,7 @@ import numpy as np
 
 from rigfem.cache import Cache, Entry, array_digest, resolve
 from rigfem.memory import trim_heap
+from rigfem.report.figures import PICTURES
 
 _RESULT = "result.json"
 #: numbers the calls of started_part_pictures (their jobs' keys in the pool)
@@ -81,11 +82,6 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
 
         cache.put("pictures", _full(kind, inputs), write)
     return result
-
-
-#: the pictures of a part case (rigfem.report.pictures.part_pictures): utilisation (von Mises), displacement,
-#: factor of safety; named here, where the drawing code (matplotlib) is not imported
-PICTURES = ("von_mises", "displacement", "safety_factor")
 
 
 def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str, zoom_mm: float = 30.0,

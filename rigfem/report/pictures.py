@@ -16,8 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from rigfem.fe.partcase import CaseResult, hole_forces
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
-from rigfem.report.figures import band, stopped_text
-from rigfem.report.picture_cache import PICTURES
+from rigfem.report.figures import PICTURES, band, stopped_text
 from rigfem.report.scale import (
     ABOVE_COLOUR,
     DISPLACEMENT_CMAP,
@@ -166,11 +165,6 @@ def band_lines(entry: dict, allowable: str) -> list[str]:
             f"({u - b['pct_of_allowable']:.1f}–{u + b['pct_of_allowable']:.1f} %) of the {allowable}",
             f"band: ±{b['mpa']:.1f} MPa = ±{b['pct_of_allowable']:.1f} % of the allowable = ±{b['pct_of_peak']:.1f} % "
             f"of the peak (error estimate, not a bound)"]
-
-
-def _pin_loads(r: CaseResult, c: np.ndarray, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
-    """(tip, force N, label) of each loaded hole: the applied nodal forces summed over the hole."""
-    return [(x[nodes].mean(0), f, f"{g}: {np.linalg.norm(f):.0f} N") for g, nodes, f in hole_forces(r, c)]
 
 
 #: the longest line of a picture's legend (characters): the legend beside a rail's close-up ends inside the picture
@@ -382,7 +376,7 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
     nb = tets[(np.asarray(fm.elements) == hi).any(1)]
     normal = x[hi] - x[nb].reshape(-1, 3).mean(0)
     d, up, elongated = framing(x[:n], x[hi], normal / (np.linalg.norm(normal) or 1.0))
-    loads = _pin_loads(r, c, x)
+    loads = [(x[nodes].mean(0), f, f"{g}: {np.linalg.norm(f):.0f} N") for g, nodes, f in hole_forces(r, c)]
     held, how = _supports(r, fm)
     inertia = any(ld.kind != "bearing" for ld in r.case.loads)
     deg = float(r.case.rows[r.row])
