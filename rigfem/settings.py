@@ -9,7 +9,8 @@ Every field is optional::
     order = 2                       # element order (1 | 2)
     size_mm = 6.0                   # global mesh size
     local_size_mm = 1.2             # mesh size at the interfaces that carry load
-    adaptive = true                 # refine each part coarse → preset only until decided (see LADDER);
+    adaptive = true                 # refine each part coarse → preset only until decided (see LADDER;
+                                    # fine: until its band is also within 5 % of its peak);
                                     # size_mm / local_size_mm mesh exactly that (no ladder)
     material = "rig_steel"          # rigfem.material library name, or a table {name, E, nu, sigma_u, density}
     load_factor = 1.4               # the study's factor on peak reactions (original mode)
@@ -164,6 +165,12 @@ def preset(name: str) -> Preset:
 #: parts (results/convergence/summary.md); the sweep, which estimates no band, reports it as its band.
 PRESET_ERROR_PCT: dict[str, float] = {"draft": 10.0, "standard": 3.0, "fine": 1.0}
 
+#: the second target of a preset, % of the peak: ``fine`` refines every part, however far below the
+#: limit, until its band is within ±5 % of its own peak (or it reaches the fine mesh), so "fine"
+#: means a fine answer for every part, not only a decided verdict; draft and standard have none
+#: (a part far below the limit stops as soon as its verdict is decided within PRESET_ERROR_PCT)
+PRESET_PEAK_PCT: dict[str, float | None] = {"draft": None, "standard": None, "fine": 5.0}
+
 #: the adaptive ladder's first level, coarser than draft (global, local size mm): parts far below
 #: the limit are decided on it (results/benchmarks/adaptive.md)
 COARSE = Preset(size_mm=12.0, local_size_mm=2.4)
@@ -243,6 +250,19 @@ class CheckSettings(Preset):
     def target_pct(self) -> float:
         """The reporting target: the band's half-width, % of the allowable (:data:`PRESET_ERROR_PCT`)."""
         return PRESET_ERROR_PCT[self.fidelity]
+
+    @property
+    def target_peak_pct(self) -> float | None:
+        """The second reporting target, the band's half-width in % of the peak (:data:`PRESET_PEAK_PCT`;
+        None: none)."""
+        return PRESET_PEAK_PCT[self.fidelity]
+
+    def asked(self) -> dict:
+        """What the check asked of each part's mesh (report.json's ``mesh.asked``): the preset, its
+        targets (% of the allowable, % of the peak or None) and the finest level it may reach."""
+        levels = self.levels()
+        return {"fidelity": self.fidelity, "adaptive": self.adaptive, "target_pct_of_allowable": self.target_pct,
+                "target_pct_of_peak": self.target_peak_pct, "cap": levels[-1][0]}
 
     def levels(self) -> list[tuple[str, "CheckSettings"]]:
         """The mesh levels to try, coarsest first: the ladder, or only these settings when not adaptive."""

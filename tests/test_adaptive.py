@@ -189,3 +189,75 @@ def test_an_interruption_while_waiting_for_a_mesh_cancels_the_meshers(monkeypatc
     with pytest.raises(KeyboardInterrupt):
         solve("final-cm", PLATE_DRAFT)
     assert cancelled[-1] is True
+
+
+def _plate_outcome(error_pct: float = 43.7):
+    """The plate's coarse-level outcome of the reference check: 2.2 % of the allowable, ±43.7 % of its peak."""
+    from rigfem.verdict.part import Outcome
+
+    return Outcome("plate_A", "PF_4b_006", "original", 8.2, error_pct, 0.0)
+
+
+def _settings(fidelity: str):
+    from stages import job_of
+
+    return job_of("final-cm", {"parts": ["plate_A"], "modes": ["original"], "fidelity": fidelity}).settings
+
+
+def test_fine_means_fine_for_a_part_far_below_the_limit():
+    """Issue 40 §2: ``--fidelity fine`` on a plate at 2 % of the allowable stopped on the coarse mesh at
+    ±43.7 % of its peak (its verdict decided within 1 % of the allowable).  Fine also asks for a band
+    within PRESET_PEAK_PCT of the peak: the plate is not settled there and climbs straight to fine (draft
+    and standard cannot bring 43.7 % under 5 % even at the asymptotic rate); at ±4 % it is settled."""
+    from types import SimpleNamespace
+
+    from rigfem.fe.ladder import next_step
+    from rigfem.settings import PRESET_PEAK_PCT
+    from rigfem.verdict.part import Target
+
+    fine = _settings("fine")
+    assert PRESET_PEAK_PCT == {"draft": None, "standard": None, "fine": 5.0} and fine.target_peak_pct == 5.0
+    judge, levels = Target(fine), fine.levels()
+    assert not judge.settled(_plate_outcome()) and judge.settled(_plate_outcome(4.0))
+    step = next_step([SimpleNamespace(outcome=_plate_outcome())], 0, levels, judge)
+    assert not step.final and levels[step.next_level][0] == "fine" and step.skipped == ("draft", "standard")
+    last = next_step([SimpleNamespace(outcome=_plate_outcome(6.0))], len(levels) - 1, levels, judge)
+    assert last.final and last.stopped == "reached the cap"
+    assert fine.asked() == {"fidelity": "fine", "adaptive": True, "target_pct_of_allowable": 1.0,
+                            "target_pct_of_peak": 5.0, "cap": "fine"}
+
+
+@pytest.mark.parametrize("fidelity", ["draft", "standard"])
+def test_draft_and_standard_settle_as_before(fidelity):
+    """The default check's cost is unchanged: draft and standard settle exactly when the verdict is decided
+    and the band is within their target in % of the allowable (the rule before fine got its peak target)."""
+    from rigfem.verdict.criterion import half_ultimate
+    from rigfem.verdict.part import Outcome, Target
+
+    s = _settings(fidelity)
+    assert s.target_peak_pct is None and s.asked()["target_pct_of_peak"] is None
+    for peak in (1.0, 8.2, 100.0, 300.0, 370.0, 400.0):
+        for err in (0.5, 3.0, 9.3, 43.7, 80.0):
+            o = Outcome("p", "PF_4b_006", "original", peak, err, 0.0)
+            v = half_ultimate(peak, s.material.sigma_u, err, s.limit_factor)
+            before = v.verdict != "undecided" and peak * err <= s.target_pct * v.limit_mpa
+            assert Target(s).settled(o) is before
+
+
+def test_the_report_states_what_was_asked_and_what_was_done(far):
+    (p,) = far["parts"]
+    assert p["mesh"]["asked"] == {"fidelity": "standard", "adaptive": True, "target_pct_of_allowable": 3.0,
+                                  "target_pct_of_peak": None, "cap": "standard"}
+    assert far["settings"]["target_pct_of_peak"] is None and far["schema"] == 6
+    from rigfem.report.document import render_markdown
+
+    fine = {**far, "settings": {**far["settings"], "fidelity": "fine", "target_pct": 1.0, "target_pct_of_peak": 5.0},
+            "parts": [{**p, "mesh": {**p["mesh"], "level": "fine", "stopped": "reached the cap",
+                                     "asked": _settings("fine").asked()}}]}
+    md = render_markdown(fine)
+    assert "| asked (preset: target band, levels) | level | why it stopped |" in md
+    assert ("| fine: band ≤ ±1 % of the allowable and ≤ ±5 % of the peak, coarse up to fine | fine | reached the cap |"
+            in md)
+    assert "within ±5 % of its own peak however far below the limit" in md
+    assert "| standard: band ≤ ±3 % of the allowable, coarse up to standard | coarse | decided within the reporting" \
+        in render_markdown(far)

@@ -99,6 +99,14 @@ def test_report_3d_view(browser, tmp_path):
     first = page.eval("document.getElementById('v-canvas').toDataURL()")
     text = page.eval("document.getElementById('v-angle').textContent")
     assert "governing" in text  # opens at the cycle's governing crank angle, not at 0°
+    # the pin load's arrow (the pictures' colour) and the two screws' dark faces are drawn (issue 40 §2)
+    counts = page.eval("(() => { const c = document.getElementById('v-canvas'), d = c.getContext('2d')"
+                       ".getImageData(0, 0, c.width, c.height).data; let load = 0, held = 0;"
+                       " for (let i = 0; i < d.length; i += 4) {"
+                       "  if (Math.abs(d[i] - 216) < 4 && Math.abs(d[i + 1] - 27) < 4 && Math.abs(d[i + 2] - 96) < 4) load++;"
+                       "  if (d[i] === d[i + 1] && d[i + 1] === d[i + 2] && d[i] > 20 && d[i] <= 48) held++; }"
+                       " return [load, held]; })()")
+    assert counts[0] > 200 and counts[1] > 50, counts
     n = int(page.eval("document.getElementById('v-frame').max")) + 1
     assert n in (3, 4)  # 3 even frames and the governing angle (unless it is one of them)
     page.eval("(() => { const s = document.getElementById('v-frame'); s.value = '0';"

@@ -170,3 +170,20 @@ def test_the_quick_return_motion_plot_has_no_empty_panel_nor_curves_on_top_of_ea
         assert ax.lines, ax  # no empty panel
         ys = [tuple(np.round(np.asarray(line.get_ydata(), float), 9)) for line in ax.lines]
         assert len(set(ys)) == len(ys)  # no two identical curves on top of each other
+
+
+def test_a_free_body_legend_stays_in_the_picture(tmp_path):
+    """A cycle-mode rail's legend (a free body: the longest support text) ran past the right edge of the
+    picture beside the rail's close-up: its lines are wrapped, and drawn where _page puts it they end inside."""
+    import matplotlib.pyplot as plt
+
+    from rigfem.report.pictures import LEGEND_CHARS, legend_text
+
+    text = legend_text(True, "free body in dynamic equilibrium (inertia relief), no support")
+    assert max(len(line) for line in text.split("\n")) <= LEGEND_CHARS and "inertia relief" in text
+    fig = plt.figure(figsize=(16, 10), dpi=100)
+    t = fig.text((20 + 980 + 30) / 1600, 185 / 1000, text, fontsize=13, va="bottom")  # _page's place beside a rail
+    fig.canvas.draw()
+    box = t.get_window_extent(fig.canvas.get_renderer())
+    plt.close(fig)
+    assert box.x1 <= 1600 and box.y1 <= 300, box  # inside, and under the triad's lowest text (≈ 320 px up)

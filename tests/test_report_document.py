@@ -95,12 +95,16 @@ def test_summary_names_the_governing_part_first_with_units_in_every_header(subse
     rows = [x.split()[0] for x in lines[header + 1:header + 3]]
     assert rows == ["post_B", "plate_A"]  # by utilisation, the governing one first
     assert not re.search(r"\d\.\d{3,}", "\n".join(lines[header:])), "numbers rounded to what they mean"
+    for row, part in zip(lines[header + 1:header + 3], ("post_B", "plate_A")):  # the mesh it reached, and why
+        level = next(p for p in r["parts"] if p["name"] == part)["mesh"]["level"]
+        assert re.search(rf"  {level} \(.+\)$", row), row
+    assert any(x.startswith("mesh asked: ") and "% of the allowable" in x for x in lines), "what the check asked"
 
 
 def test_title_block_carries_the_provenance(subset):
     _, out, r = subset
     pv = r["provenance"]
-    assert r["schema"] == REPORT_SCHEMA == 5
+    assert r["schema"] == REPORT_SCHEMA == 6
     assert pv["rigfem_version"] == r["rigfem_version"] and pv["author"] == "A. Student <lab 3>"
     import rigfem
 
@@ -234,7 +238,7 @@ def test_a_fresh_folder_as_committed_links_only_files_that_exist(subset, tmp_pat
     written before they were left out, must not link them."""
     _, out, r = subset
     folder = tmp_path / "committed"
-    shutil.copytree(out, folder, ignore=shutil.ignore_patterns("*.vtu", "*.pvd", "*.inp"))
+    shutil.copytree(out, folder, ignore=shutil.ignore_patterns("*.vtu", "*.pvd", "*.inp", "*_markers.json"))
     assert r["field_files"] and not list(folder.glob("*.vtu"))
     assert _links_to_missing_files(folder) == []
     assert all(f in (folder / "report.html").read_text() for f in r["field_files"])  # named, not linked

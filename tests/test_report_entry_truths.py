@@ -54,7 +54,9 @@ def settled(res, s, shrink=1.0) -> bool:
 
 def settings(order=2, material=None):
     return SimpleNamespace(material=material or get_material("rig_steel"), limit_factor=0.5, order=order,
-                           target_pct=3.0, fatigue={}, linkage_type="four_bar", parts={}, modes=MODES)
+                           target_pct=3.0, fatigue={}, linkage_type="four_bar", parts={}, modes=MODES,
+                           asked=lambda: {"fidelity": "standard", "adaptive": True, "target_pct_of_allowable": 3.0,
+                                          "target_pct_of_peak": None, "cap": "standard"})
 
 
 def test_the_entry_of_a_cantilever_is_beam_theory_and_statics():

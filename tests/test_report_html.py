@@ -137,3 +137,59 @@ def test_the_3d_view_opens_at_the_governing_crank_angle(checked):
     assert view["peak"][view["governing"]] == max(view["peak"])
     page = (out / "report.html").read_text()
     assert "slider.value = String(d.governing || 0)" in page and "peak ${" in page
+
+
+def test_the_other_mode_is_pictured_at_its_critical_crank_angle(checked):
+    """Issue 40 §2: the field pictures showed the original mode only.  The part's other mode (here the cycle
+    mode, at its governing crank angle) gets its von Mises picture too: the same picture code and colour scale,
+    beside the original mode's in report.md and report.html."""
+    report, out = checked
+    by_mode = {p["mode"]: p for p in report["parts"]}
+    full, cycle = by_mode["original"]["pictures"], by_mode["cycle"]["pictures"]
+    assert set(full["files"]) == {"von_mises", "displacement", "safety_factor"}
+    assert cycle["files"] == {"von_mises": "plate_A_cycle_mode.png"}
+    assert cycle["utilisation_scale_pct"] == full["utilisation_scale_pct"] == [0.0, 100.0]
+    assert cycle["utilisation_scale_mpa"] == full["utilisation_scale_mpa"]
+    pix, orig = _png((out / "plate_A_cycle_mode.png").read_bytes()), _png((out / "plate_A.png").read_bytes())
+    assert pix.shape[:2] == (1000, 1600) and pix[..., :3].std() > 0.05 and not np.array_equal(pix, orig)
+    md = (out / "report.md").read_text()
+    crank = by_mode["cycle"]["crank_deg"]
+    assert f"plate\\_A \\(PF\\_4b\\_006\\), cycle mode at crank {crank:.1f}°: von Mises as utilisation" \
+           "](plate_A_cycle_mode.png)" in md
+    html = (out / "report.html").read_text()
+    assert html.index('data-file="plate_A.png"') < html.index('data-file="plate_A_cycle_mode.png"') \
+        < html.index('data-file="plate_A_utilisation.png"')
+
+
+def test_the_3d_view_carries_the_supports_and_the_pin_load_of_every_frame(checked):
+    """Issue 40 §2: the 3-D view had no loads nor supports.  Its data holds, from the animation's markers
+    file, the part's supports (each surface vertex's support) and per frame the pin load on each loaded hole:
+    at the governing frame the same force as the report's loads table; the page draws them."""
+    from rigfem.report.viewer import viewer_data
+
+    report, out = checked
+    cyc = next(p for p in report["parts"] if p["mode"] == "cycle")
+    assert f"{cyc['name']}_cycle_markers.json" in report["field_files"]
+    (view,) = viewer_data(out, [f"{cyc['name']}_cycle.pvd"], report["limit_mpa"])
+    assert view["supports"] == ["screw_1 (bolt)", "screw_2 (bolt)"] and view["free_body"] is False
+    held = np.frombuffer(base64.b64decode(view["held"]), np.uint8)
+    assert held.size == view["vertices"] and {1, 2} <= set(held.tolist()) and (held == 0).mean() > 0.5
+    assert len(view["loads"]) == len(view["angles"]) and all(len(f) == 1 for f in view["loads"])
+    (load,) = view["loads"][view["governing"]]
+    (pin,) = [ld for ld in cyc["loads"]["loads"] if ld["kind"] == "bearing load"]
+    assert load["name"] == "bore" and np.allclose(load["force"], pin["force_N"], rtol=0.01, atol=0.01 * pin["magnitude_N"])
+    page = (out / "report.html").read_text()
+    assert "held: ${name}" in page and "${l.name}: ${f.toFixed(0)} N" in page
+
+
+def test_a_view_without_its_markers_file_still_draws_the_field(checked, tmp_path):
+    """An animation written before the markers were: the field, no supports, no loads."""
+    import shutil
+
+    from rigfem.report.viewer import viewer_data
+
+    report, out = checked
+    folder = tmp_path / "old"
+    shutil.copytree(out, folder, ignore=shutil.ignore_patterns("*_markers.json"))
+    (view,) = viewer_data(folder, ["plate_A_cycle.pvd"], report["limit_mpa"])
+    assert view["held"] is None and view["supports"] == [] and view["loads"] == [[]] * len(view["angles"])

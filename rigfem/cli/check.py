@@ -29,7 +29,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true",
                    help="replace an existing result folder (only one rigfem wrote: it holds .rigfem-result)")
     add_rule_argument(p)
-    p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene)")
+    p.add_argument("--fidelity", help="draft | standard | fine (overrides the scene): each part is refined until "
+                   "its verdict is decided and its band is within ±10 | ±3 | ±1 %% of the allowable; fine also "
+                   "refines every part until its band is within ±5 %% of its own peak or it reaches the fine mesh")
     p.add_argument("--order", type=int, help="element order 1 | 2")
     p.add_argument("--size", type=float, metavar="MM", help="global mesh size (mm)")
     p.add_argument("--local-size", type=float, metavar="MM", help="mesh size at loaded interfaces (mm)")
@@ -71,7 +73,7 @@ def _summary(r: dict) -> str:
     """The terminal's summary: the governing part case first, then every part case by utilisation
     (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
     from rigfem.report.document import standing_text, verdict_line
-    from rigfem.report.figures import allowable_label, band, by_utilisation, sf_text, stopped_text
+    from rigfem.report.figures import allowable_label, asked_text, band, by_utilisation, sf_text, stopped_text
 
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
     lines = [f"{plain(r['scene'])}: {plain(r['description'])}"]
@@ -98,9 +100,13 @@ def _summary(r: dict) -> str:
         lines.append(f"{p['name']:14s} {p['mode']:9s} {p['peak_mpa']:14.1f} {b['mpa']:11.1f} "
                      f"{b['pct_of_allowable']:11.1f} {b['pct_of_peak']:9.1f} {p['utilisation_pct']:9.1f} "
                      f"{sf_text(p.get('safety_factor')):>7s} {p['crank_deg']:11.1f}  "
-                     f"{p['verdict'].upper():9s}  {p['surface']}{why}  [{stopped_text(p)}]")
+                     f"{p['verdict'].upper():9s}  {p['surface']}{why}  "
+                     f"{(p.get('mesh') or {}).get('level', '–')} ({stopped_text(p)})")
     lines[0:0] = ([f"WARNING: breaks rig rule {plain(v)} (--allow-rule-violations)" for v in r["rule_violations"]]
                   + [f"ASSUMED: {plain(v)}" for v in r.get("assumed", [])])
+    asked = dict.fromkeys(asked_text(p) for p in r["parts"] if p.get("peak_mpa") is not None)
+    if asked:
+        lines.append(f"mesh asked: {'; '.join(asked)}")
     if r.get("not_checked", {}).get("parts"):
         lines.append(f"not checked: {', '.join(r['not_checked']['parts'])}")
     lines.append(f"overall: {verdict_line(r)} — the configuration {standing_text(r)} ({allowable})")

@@ -175,6 +175,8 @@ class CaseResult:
     ladder: tuple = ()  #: per level tried: name, sizes, DOF, seconds
     #: animation frames once final (:func:`finish`): case row -> vertex fields (float32)
     frames: dict = dataclasses.field(default_factory=dict)
+    #: the same rows' pin loads (:func:`finish`): case row -> (hole, its centre mm, force N) per loaded hole
+    frame_loads: dict = dataclasses.field(default_factory=dict)
 
     @property
     def loaded(self) -> bool:
@@ -277,6 +279,19 @@ def _solve_shared(model: Model, pm: PartMesh, sup_cases: list[tuple[str, PartCas
     return out
 
 
+def hole_forces(result: CaseResult, c: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(hole, its nodes, the applied force on them N) of each hole a pin or screw loads in the
+    combination ``c`` of the case's solution (none where the force is zero)."""
+    F, fm = result.solution.loads(c).reshape(-1, 3), result.solution.model.mesh
+    out = []
+    for g in dict.fromkeys(ld.group for ld in result.case.loads if ld.kind == "bearing" and ld.group):
+        nodes = np.unique(fm.surfaces[g]) if g in fm.surfaces else np.zeros(0, int)
+        f = F[nodes].sum(0)
+        if len(nodes) and np.linalg.norm(f) > 0:
+            out.append((g, nodes, f))
+    return out
+
+
 def frame_rows(result: CaseResult, frames: int) -> list[int]:
     """The rows of a cycle case's animation: ``frames`` crank angles, evenly spaced, and its critical
     row (the governing crank angle, which even steps miss: crank_rail's 30.5 % at 8° read 22.9 % at
@@ -290,18 +305,20 @@ def frame_rows(result: CaseResult, frames: int) -> list[int]:
 def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
     """The cases of a part that is final, holding only what a report reads: each case's animation
     frames (``frames`` rows of a cycle case: von Mises, stress and displacement on the mesh's
-    vertices, float32) and its solution reduced to the critical rows' combinations
+    vertices, float32, and the pin load on each loaded hole) and its solution reduced to the critical rows' combinations
     (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a solution share the reduced one):
     the unit solutions of a finished part are not held while the next parts solve."""
     out, kept = [], {}
     for r in results:
+        x = r.solution.model.mesh.nodes
         n = r.solution.model.mesh.n_vertices
-        fields = {}
+        fields, loads = {}, {}
         for i in frame_rows(r, frames):
             s = r.solution.stress(r.coef[i])[:n]
             fields[i] = {"displacement": r.solution.displacement(r.coef[i])[:n].astype(np.float32),
                          "stress": s.astype(np.float32), "von_mises": von_mises(s).astype(np.float32)}
-        out.append(dataclasses.replace(r, frames=fields))
+            loads[i] = [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
+        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads))
         kept.setdefault(id(r.solution), (r.solution, []))[1].append(r.coef[r.row])
     small = {k: sol.kept(np.vstack(C)) for k, (sol, C) in kept.items()}
     return [dataclasses.replace(r, solution=small[id(r.solution)]) for r in out]

@@ -2,13 +2,17 @@
 
 The folder holds ``report.json`` (the dict), ``report.md`` and ``report.html`` beside one VTU per
 part and mode (the critical crank angle), a ParaView ``.pvd`` animation per part over the crank
-cycle (cycle mode), and PNG pictures.  It appears only when everything is written
+cycle (cycle mode) with the 3-D view's markers (``<part>_cycle_markers.json``: supports, pin loads per
+frame), and PNG pictures.  It appears only when everything is written
 (:func:`rigfem.report.folder.atomic_dir`).
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+
+import numpy as np
 
 from rigfem import __version__
 from rigfem.report.provenance import provenance
@@ -16,7 +20,8 @@ from rigfem.context import Context
 from rigfem.fe.partcase import CaseResult, supports_of
 from rigfem.io.calculix import export_model
 from rigfem.job import Checked
-from rigfem.report.document import ASSUMPTIONS, REPORT_SCHEMA, UNITS, material_table, render_markdown, write_json
+from rigfem.report.document import (ASSUMPTIONS, REPORT_SCHEMA, UNITS, finite, material_table, render_markdown,
+                                    write_json)
 from rigfem.report.figures import allowable_label, conclusion, part_label, part_minima, safety_factor
 from rigfem.report.entries import part_entry
 from rigfem.report.folder import Output, atomic_dir
@@ -98,6 +103,7 @@ def document(checked: Checked) -> dict:
         "torque_Nm": sm.get("torque_Nm") or sm.get("driver_force_N"),
         "settings": {"modes": list(s.modes), "fidelity": s.fidelity, "order": s.order, "size_mm": s.size_mm,
                      "local_size_mm": s.local_size_mm, "adaptive": s.adaptive, "target_pct": s.target_pct,
+                     "target_pct_of_peak": s.target_peak_pct,
                      "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},
@@ -106,11 +112,12 @@ def document(checked: Checked) -> dict:
     }
 
 
-def _frames(d: Path, r: CaseResult, limit: float, cache) -> str | None:
-    """Write a cycle case's animation frames and their ParaView collection; the collection's name."""
+def _frames(d: Path, r: CaseResult, limit: float, cache) -> list[str]:
+    """Write a cycle case's animation frames, their ParaView collection and its markers (:func:`_markers`);
+    the collection's and the markers' names (none without frames)."""
     rows = sorted(r.frames)
     if not rows:
-        return None
+        return []
     fm = r.solution.model.mesh
     names = [f"{r.case.name}_{r.mode}_{k:03d}.vtu" for k in range(len(rows))]
 
@@ -123,7 +130,22 @@ def _frames(d: Path, r: CaseResult, limit: float, cache) -> str | None:
     stem = f"{r.case.name}_{r.mode}"
     (d / f"{stem}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                                    f"  <Collection>\n{pvd}\n  </Collection>\n</VTKFile>\n")
-    return f"{stem}.pvd"
+    (d / f"{stem}_markers.json").write_text(json.dumps(finite(_markers(r, rows))))
+    return [f"{stem}.pvd", f"{stem}_markers.json"]
+
+
+def _markers(r: CaseResult, rows: list[int]) -> dict:
+    """What the 3-D view draws on an animation besides the field: each support (its kind and the
+    vertices of its surface), whether the part is a free body, and per frame the pin load on each
+    loaded hole (its centre, mm, and force, N, in the part frame)."""
+    fm = r.solution.model.mesh
+    supports = [{"name": g, "kind": kind,
+                 "vertices": [int(v) for v in np.unique(fm.surfaces[g]) if v < fm.n_vertices]}
+                for kind, groups in r.case.supports for g in groups if g in fm.surfaces]
+    frames = [{"crank_deg": float(r.case.rows[i]),
+               "loads": [{"hole": g, "at_mm": [float(v) for v in at], "force_N": [float(v) for v in f]}
+                         for g, at, f in r.frame_loads.get(i, [])]} for i in rows]
+    return {"free_body": any(kind == "free" for kind, _ in r.case.supports), "supports": supports, "frames": frames}
 
 
 def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: Context) -> tuple[list, list]:
@@ -138,9 +160,14 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
         if r.case.name not in worst or r.peak.value > worst[r.case.name].peak.value:
             worst[r.case.name] = r
     drawn = [(r, entry) for r, entry in zip(results, parts) if output.pictures and worst[r.case.name] is r]
+    # and the part's other mode at its own critical crank angle (the cycle mode's governing angle): its
+    # von Mises picture, same scale, same code, beside the full set's
+    other = [(r, entry) for r, entry in zip(results, parts) if output.pictures and worst[r.case.name] is not r]
     of = {id(r): [] for r in results}  # each case's picture files, in the report's order
     jobs = [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d)
             for r, entry in drawn]
+    jobs += [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d, 30.0,
+              ("von_mises",), f"{r.case.name}_{r.mode}_mode") for r, entry in other]
     with started_part_pictures(jobs, cache) as wait:  # drawn in child processes while this one writes files
         if output.pictures:
             reactions_plot(checked.reactions.history, d / "reactions.png", cache)
@@ -158,10 +185,10 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
                 utilisation_plot(r, limit, d / f"{r.case.name}_utilisation.png",
                                  part_label(entry["name"], entry["part"]), allowable, cache)
                 of[id(r)].append(f"{r.case.name}_utilisation.png")
-            pvd = _frames(d, r, limit, cache)
-            if pvd:
-                fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + [pvd]
-        for (r, entry), pics in zip(drawn, wait()):
+            animation = _frames(d, r, limit, cache)
+            if animation:
+                fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + animation
+        for (r, entry), pics in zip(drawn + other, wait()):
             entry["pictures"] = pics
             of[id(r)][:0] = list(pics["files"].values())
     return first + [f for r in results for f in of[id(r)]], fields

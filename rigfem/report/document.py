@@ -12,14 +12,15 @@ import re
 from pathlib import Path
 
 from rigfem.errors import plain
-from rigfem.report.figures import (allowable_label, band, by_utilisation, part_label, safety_factor, sf_text,
-                                   stopped_text)
+from rigfem.report.figures import (allowable_label, asked_text, band, by_utilisation, part_label, safety_factor,
+                                   sf_text, stopped_text)
 from rigfem.rig.rules import standing
 from rigfem.verdict.criterion import overall
 
 #: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning, goes or
-#: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa)
-REPORT_SCHEMA = 5
+#: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa; 6: each part
+#: case's mesh.asked, the settings' target_pct_of_peak, the cycle-mode picture of a part drawn in original mode)
+REPORT_SCHEMA = 6
 
 #: the units of every number in a report
 UNITS = [("length, position, displacement", "mm"), ("stress, strength, modulus", "MPa"), ("force", "N"),
@@ -106,14 +107,14 @@ def study_tables(r: dict) -> list[str]:
         lines.append(f"| {m['property']} | {value} | {m['unit']} | {md_text(m['source'])} |")
     parts = [p for p in r["parts"] if p.get("mesh")]
     lines += ["", "## Mesh per part", "", "| part | mode | element | nodes | elements | size at the peak (mm) | "
-              "quality min (SICN, –) | level | why it stopped | ladder: level DOF (s) |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "quality min (SICN, –) | asked (preset: target band, levels) | level | why it stopped | "
+              "ladder: level DOF (s) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in parts:
         m = p["mesh"]
         steps = ", ".join(f"{s['level']} {s['dofs']} ({s['seconds']:.1f})"
                           + "".join(f", {n} skipped" for n in s.get("skipped", [])) for s in m.get("ladder", []))
         lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {m.get('element', '')} | {m.get('fe_nodes', m['nodes'])} | "
-                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | "
+                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | {asked_text(p)} | "
                      f"{m.get('level', '')} | {m.get('stopped', '')} | {steps} |")
     lines += ["", "## Free-body balance per part (critical crank angle; moments about the part frame's origin; "
               "applied = pin loads and body forces, with the inertia relief of a free body)",
@@ -139,7 +140,14 @@ def _mesh_sizes(s: dict) -> str:
     if not s.get("adaptive"):
         return sizes
     return (f"adaptive: each part refined from coarse up to {sizes}, only until its verdict is decided and its "
-            f"band is within ±{s['target_pct']:g} % of the allowable (each part's level: *Mesh per part*)")
+            f"band is within ±{s['target_pct']:g} % of the allowable{_of_peak(s)} (each part's level: "
+            f"*Mesh per part*)")
+
+
+def _of_peak(s: dict) -> str:
+    """The preset's target in % of the peak as the settings state it (``fine``), "" when it has none."""
+    t = s.get("target_pct_of_peak")
+    return "" if t is None else f" and within ±{t:g} % of its own peak however far below the limit"
 
 
 def _tolerance(r: dict) -> str:
@@ -370,7 +378,8 @@ def render_markdown(r: dict) -> str:
                   f"triad shows the part frame of the *where (mm)* column.", ""]
         for p in pics:
             label = part_label(p["name"], p["part"])
-            lines += [f"![{md_text(label)}: {_PICTURE[k]}]({f})" for k, f in p["pictures"]["files"].items()]
+            lines += [f"![{md_text(label)}, {p['mode']} mode at crank {p['crank_deg']:.1f}°: {_PICTURE[k]}]({f})"
+                      for k, f in p["pictures"]["files"].items()]
     if r.get("pictures"):
         lines += ["", "## Pictures", "", f"Pictures {r['pictures']}."]
     lines += study_tables(r)

@@ -129,7 +129,7 @@ def part_entry(res: CaseResult, pv: PartVerdict, settings) -> dict:
                  "curved_elements": int(sol.model.mesh.curved.sum()) if sol.model.mesh.curved is not None else 0,
                  "straightened": int(sol.model.mesh.straightened),
                  "cache": res.mesh.meta.get("cache", ""),
-                 "level": res.level, "stopped": res.stopped, "ladder": list(res.ladder)},
+                 "asked": settings.asked(), "level": res.level, "stopped": res.stopped, "ladder": list(res.ladder)},
         "solve": {"method": sol.method, "load_cases": int(sol.cases),
                   "rows": int(len(res.case.rows)),
                   "residual_max": float(sol.residuals.max()), "equilibrium_error": float(np.max(sol.equilibrium_error)),

@@ -6,6 +6,10 @@ from __future__ import annotations
 
 import math
 
+#: the pictures of a part case (rigfem.report.pictures.part_pictures): utilisation (von Mises), displacement,
+#: factor of safety
+PICTURES = ("von_mises", "displacement", "safety_factor")
+
 
 def part_label(name: str, part: str) -> str:
     """The one name a reader sees for a part: its role and its catalogue name, ``crank_rail (rail_size25)``."""
@@ -64,6 +68,18 @@ def stopped_text(p: dict) -> str:
     """Why the part's mesh stopped refining (the adaptive ladder), ``–`` when not recorded."""
     m = p.get("mesh") or {}
     return m.get("stopped") or "–"
+
+
+def asked_text(p: dict) -> str:
+    """What the check asked of the part's mesh (``mesh.asked``): ``fine: band ≤ ±1 % of the allowable
+    and ≤ ±5 % of the peak, coarse up to fine``; ``–`` when not recorded (a report before schema 6)."""
+    a = (p.get("mesh") or {}).get("asked")
+    if not a:
+        return "–"
+    if not a["adaptive"]:
+        return f"{a['fidelity']}: one fixed mesh ({a['cap']}), no target"
+    peak = f" and ≤ ±{a['target_pct_of_peak']:g} % of the peak" if a.get("target_pct_of_peak") is not None else ""
+    return f"{a['fidelity']}: band ≤ ±{a['target_pct_of_allowable']:g} % of the allowable{peak}, coarse up to {a['cap']}"
 
 
 def by_utilisation(parts: list[dict]) -> list[dict]:

@@ -18,9 +18,10 @@ from rigfem.cache import Cache, resolve
 from rigfem.files import file_sha256
 from rigfem.report.document import (MODE_TEXT, assumption_lines, configuration_lines, loads_lines, model_lines,
                                     standing_text, stress_verdict, study_tables, title_block)
-from rigfem.report.figures import allowable_label, band, by_utilisation, safety_factor, stopped_text
+from rigfem.report.figures import allowable_label, asked_text, band, by_utilisation, safety_factor, stopped_text
 from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
+from rigfem.settings import MODES
 
 __all__ = ["EMBED_HALVED_PX", "embedded_png", "render_html", "write_html"]
 
@@ -62,7 +63,8 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
     r = report
     names = list(dict.fromkeys(p["name"] for p in r["parts"]))
     pictures = {f: embedded_png(folder / f, cache) for f in ["reactions.png", "peak_von_mises.png"]
-                + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor")]}
+                + [f"{n}{s}.png" for n in names for s in ("", "_utilisation", "_displacement", "_safety_factor",
+                                                          *(f"_{m}_mode" for m in MODES))]}
     # links only to the files kept with the report; the field files (VTU/PVD/INP, not kept in the
     # repository's result folders) are named, never linked
     kept = [f for f in r.get("files", []) if (folder / f).is_file() and f != "report.html"]
@@ -71,13 +73,13 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
     viewer = viewer_data(folder, present, r["limit_mpa"], cache)
     return render_page(
         "report.html.j2", r=r, cfg=r["configuration"], s=r["settings"], torque=r.get("torque_Nm"),
-        pictures=pictures, mode_text=MODE_TEXT, kept=kept,
+        pictures=pictures, mode_text=MODE_TEXT, kept=kept, modes=MODES,
         fields=[f for f in fields if not f[:-4].rsplit("_", 1)[-1].isdigit()],
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
         viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
         allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
         standing=standing_text(r), stress=stress_verdict(r),
-        rows=by_utilisation(r["parts"]), band=band, stopped=stopped_text,
+        rows=by_utilisation(r["parts"]), band=band, stopped=stopped_text, asked=asked_text,
         safety=lambda p: p.get("safety_factor", safety_factor(p.get("peak_mpa"), r["limit_mpa"])),
         md={k: markdown_html("\n".join(f(r))) for k, f in
             (("title", title_block), ("configuration", configuration_lines), ("assumptions", assumption_lines),

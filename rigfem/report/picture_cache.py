@@ -29,6 +29,7 @@ import numpy as np
 
 from rigfem.cache import Cache, Entry, array_digest, resolve
 from rigfem.memory import trim_heap
+from rigfem.report.figures import PICTURES
 
 _RESULT = "result.json"
 #: numbers the calls of started_part_pictures (their jobs' keys in the pool)
@@ -83,7 +84,8 @@ def cached(kind: str, inputs: dict, folder: Path, draw: Callable[[Path], tuple[d
     return result
 
 
-def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str, zoom_mm: float) -> dict:
+def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str, zoom_mm: float = 30.0,
+                 kinds: tuple[str, ...] = PICTURES, stem: str | None = None) -> dict:
     sol, fm = r.solution, r.solution.model.mesh
     groups = sorted(fm.surfaces)
     return {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.loads(c)),
@@ -94,21 +96,23 @@ def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowa
             "entry": {**{k: entry.get(k) for k in ("peak_mpa", "utilisation_pct", "error_pct", "verdict", "band_mpa",
                                                    "band_pct_of_allowable")},
                       "mesh": {k: (entry.get("mesh") or {}).get(k) for k in ("level", "stopped")}},
-            "limit": limit, "label": label, "allowable": allowable, "zoom_mm": zoom_mm}
+            "limit": limit, "label": label, "allowable": allowable, "zoom_mm": zoom_mm, "kinds": list(kinds),
+            "stem": stem or r.case.name}
 
 
 def part_pictures(r, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
-                  folder: str | Path, zoom_mm: float = 30.0, cache: Cache | None = None) -> dict:
+                  folder: str | Path, zoom_mm: float = 30.0, kinds: tuple[str, ...] = PICTURES,
+                  stem: str | None = None, cache: Cache | None = None) -> dict:
     """:func:`rigfem.report.pictures.part_pictures` through ``cache`` (same arguments, same result)."""
 
     def draw(d: Path) -> tuple[dict, list[str]]:
         from rigfem.report import pictures
 
-        out = pictures.part_pictures(r, c, entry, limit, label, allowable, d, zoom_mm)
+        out = pictures.part_pictures(r, c, entry, limit, label, allowable, d, zoom_mm, kinds, stem)
         return out, list(out["files"].values())
 
-    return cached("part", _part_inputs(r, c, entry, limit, label, allowable, zoom_mm), Path(folder), draw,
-                  resolve(cache))
+    return cached("part", _part_inputs(r, c, entry, limit, label, allowable, zoom_mm, kinds, stem), Path(folder),
+                  draw, resolve(cache))
 
 
 def _one_combination(r, c: np.ndarray):
@@ -147,9 +151,8 @@ def started_part_pictures(jobs: list[tuple], cache: Cache, workers: int = 2) -> 
     from rigfem.mesh.worker import call
 
     done, todo = {}, []
-    for i, (r, c, entry, limit, label, allowable, folder, *zoom) in enumerate(jobs):
-        got = _lookup("part", _part_inputs(r, c, entry, limit, label, allowable, *(zoom or [30.0])), Path(folder),
-                      cache)
+    for i, (r, c, entry, limit, label, allowable, folder, *more) in enumerate(jobs):
+        got = _lookup("part", _part_inputs(r, c, entry, limit, label, allowable, *more), Path(folder), cache)
         if got is None:
             todo.append(i)
         else:

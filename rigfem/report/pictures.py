@@ -5,6 +5,7 @@ factor of safety), the reactions and the peaks over the crank cycle (matplotlib,
 from __future__ import annotations
 
 import io
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -12,10 +13,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from rigfem.fe.partcase import CaseResult
+from rigfem.fe.partcase import CaseResult, hole_forces
 from rigfem.files import whole_file
 from rigfem.mesh.partmesh import boundary_faces
-from rigfem.report.figures import band, stopped_text
+from rigfem.report.figures import PICTURES, band, stopped_text
 from rigfem.report.scale import (
     ABOVE_COLOUR,
     DISPLACEMENT_CMAP,
@@ -166,16 +167,16 @@ def band_lines(entry: dict, allowable: str) -> list[str]:
             f"of the peak (error estimate, not a bound)"]
 
 
-def _pin_loads(r: CaseResult, c: np.ndarray, fm, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
-    """(tip, force N, label) of each loaded hole: the applied nodal forces summed over the hole."""
-    F = r.solution.loads(c).reshape(-1, 3)
-    out = []
-    for g in dict.fromkeys(ld.group for ld in r.case.loads if ld.kind == "bearing" and ld.group):
-        nodes = np.unique(fm.surfaces[g]) if g in fm.surfaces else np.zeros(0, int)
-        f = F[nodes].sum(0)
-        if len(nodes) and np.linalg.norm(f) > 0:
-            out.append((x[nodes].mean(0), f, f"{g}: {np.linalg.norm(f):.0f} N"))
-    return out
+#: the longest line of a picture's legend (characters): the legend beside a rail's close-up ends inside the picture
+LEGEND_CHARS = 60
+
+
+def legend_text(inertia: bool, how: str) -> str:
+    """The legend of a part's picture: the arrows, the supports (``how``), the markers; lines wrapped at
+    :data:`LEGEND_CHARS` (a free body's support text is longer than the room beside a rail's close-up)."""
+    lines = ["arrows: pin loads on the holes (N)" + (" + the part's own inertia" if inertia else ""),
+             f"dark blocks: supports ({how})", "● markers: extreme values"]
+    return "\n".join(textwrap.fill(line, LEGEND_CHARS, subsequent_indent="    ") for line in lines)
 
 
 def _supports(r: CaseResult, fm) -> tuple[list[tuple[np.ndarray, str]], str]:
@@ -346,9 +347,11 @@ def _layout(shots, elongated: bool) -> list[tuple[int, int]]:
 
 
 def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label: str, allowable: str,
-                  folder: str | Path, zoom_mm: float = 30.0) -> dict:
-    """Three pictures of a part at its critical crank angle: utilisation of the allowable (von Mises) on
-    the report's one scale :data:`UTILISATION_SCALE_PCT`, displacement magnitude, factor of safety.
+                  folder: str | Path, zoom_mm: float = 30.0, kinds: tuple[str, ...] = PICTURES,
+                  stem: str | None = None) -> dict:
+    """The pictures ``kinds`` of a part at its critical crank angle: utilisation of the allowable (von
+    Mises) on the report's one scale :data:`UTILISATION_SCALE_PCT`, displacement magnitude, factor of safety;
+    files ``<stem>.png`` (von Mises) and ``<stem>_<kind>.png`` (``stem`` default: the part's name).
 
     Each states the part ``label``, its verdict, utilisation ± band, mode and crank angle, marks the
     extremes with values, draws the pin loads (N) and the supports.  Returns what was drawn: the file
@@ -373,7 +376,7 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
     nb = tets[(np.asarray(fm.elements) == hi).any(1)]
     normal = x[hi] - x[nb].reshape(-1, 3).mean(0)
     d, up, elongated = framing(x[:n], x[hi], normal / (np.linalg.norm(normal) or 1.0))
-    loads = _pin_loads(r, c, fm, x)
+    loads = [(x[nodes].mean(0), f, f"{g}: {np.linalg.norm(f):.0f} N") for g, nodes, f in hole_forces(r, c)]
     held, how = _supports(r, fm)
     inertia = any(ld.kind != "bearing" for ld in r.case.loads)
     deg = float(r.case.rows[r.row])
@@ -381,8 +384,7 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
             f"{r.mode} mode, crank angle {deg:.1f}°; deformation ×{scale:g}; mesh "
             f"{(entry.get('mesh') or {}).get('level') or '–'}, refining stopped: {stopped_text(entry)}",
             *band_lines(entry, allowable)]
-    legend = ("arrows: pin loads on the holes (N)" + (" + the part's own inertia" if inertia else "")
-              + f"\ndark blocks: supports ({how})\n● markers: extreme values")
+    legend = legend_text(inertia, how)
     box = (x[hi] - zoom_mm, x[hi] + zoom_mm)
     w_h = {True: [(1560, 300), (980, 0)], False: [(940, 590), (430, 420)]}[elongated]
     base = dict(points=x[:n], tets=tets, arrows=loads, supports=held)
@@ -417,9 +419,9 @@ def part_pictures(r: CaseResult, c: np.ndarray, entry: dict, limit: float, label
                                          ticks=[100.0 / t for t in FOS_TICKS], fmt=lambda t: f"{100.0 / t:.3g}",
                                          marks=[100.0])),
     }
-    files = {}
-    for key, (view, what, bar) in pics.items():
-        name = f"{r.case.name}.png" if key == "von_mises" else f"{r.case.name}_{key}.png"
+    files, stem = {}, stem or r.case.name
+    for key, (view, what, bar) in ((k, pics[k]) for k in kinds):
+        name = f"{stem}.png" if key == "von_mises" else f"{stem}_{key}.png"
         try:
             whole = render(view, w_h[0], d, up, shrink=elongated)
             size = w_h[1] if not elongated else (980, _TOP - _GAP * 2 - whole.image.shape[0] - _BOTTOM)

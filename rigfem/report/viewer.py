@@ -1,7 +1,8 @@
-"""Data of the report's offline 3-D view: each part's surface and its utilisation per crank angle.
+"""Data of the report's offline 3-D view: each part's surface and its utilisation per crank angle,
+its supports and the pin loads on its holes per crank angle.
 
-Read from the cycle animation the check wrote (``<part>_cycle.pvd`` and its compact VTU frames),
-so the view shows exactly the files in the folder.  Compact: float32 surface vertices, uint32
+Read from the cycle animation the check wrote (``<part>_cycle.pvd``, its compact VTU frames and
+``<part>_cycle_markers.json``), so the view shows exactly the files in the folder.  Compact: float32 surface vertices, uint32
 triangles and uint16 utilisation in 0.01 % steps, base64 in the page (``viewer.js`` draws it).
 """
 
@@ -51,7 +52,32 @@ def _part(pvd: Path, limit_mpa: float) -> dict | None:
     return {"name": pvd.stem.removesuffix("_cycle"), "angles": [t for t, _ in series],
             "vertices": int(used.size), "pos": _b64(first.points[used].astype("<f4")),
             "tri": _b64(tri.reshape(-1, 3).astype("<u4")), "util": _b64(np.round(util * 100).astype("<u2")),
-            "peak": [float(u.max()) for u in util], "governing": int(np.argmax(util.max(axis=1)))}
+            "peak": [float(u.max()) for u in util], "governing": int(np.argmax(util.max(axis=1))),
+            **_markers(_markers_file(pvd), used, len(series))}
+
+
+def _markers_file(pvd: Path) -> Path:
+    """The markers written beside an animation (rigfem.report.check): ``<part>_cycle_markers.json``."""
+    return pvd.with_name(f"{pvd.stem}_markers.json")
+
+
+def _markers(path: Path, used: np.ndarray, frames: int) -> dict:
+    """The view's supports and pin loads from the animation's markers file: ``held`` (per surface vertex
+    of the view, 0 or the number of its support in ``supports``), ``free_body``, and per frame each
+    loaded hole's ``name``, centre ``at`` (mm) and ``force`` (N); none when the file is absent (an
+    animation written before the markers were)."""
+    if not path.is_file():
+        return {"held": None, "supports": [], "free_body": False, "loads": [[] for _ in range(frames)]}
+    m = json.loads(path.read_text())
+    held = np.zeros(used.size, "<u1")
+    for k, s in enumerate(m["supports"], start=1):
+        v = np.asarray(s["vertices"], int)
+        i = np.searchsorted(used, v).clip(0, used.size - 1)
+        held[i[used[i] == v]] = k
+    return {"held": _b64(held), "supports": [f"{s['name']} ({s['kind']})" for s in m["supports"]],
+            "free_body": bool(m["free_body"]),
+            "loads": [[{"name": ld["hole"], "at": ld["at_mm"], "force": ld["force_N"]} for ld in f["loads"]]
+                      for f in m["frames"]]}
 
 
 def _cached_part(pvd: Path, limit_mpa: float, cache: Cache) -> dict | None:
@@ -60,7 +86,8 @@ def _cached_part(pvd: Path, limit_mpa: float, cache: Cache) -> dict | None:
     series = [pvd.parent / f for _, f in _DATASET.findall(pvd.read_text())]
     if not series or not all(f.is_file() for f in series):
         return None
-    inputs = {"files": [file_sha256(f) for f in [pvd, *series]], "limit_mpa": limit_mpa,
+    marks = [_markers_file(pvd)] if _markers_file(pvd).is_file() else []
+    inputs = {"files": [file_sha256(f) for f in [pvd, *series, *marks]], "limit_mpa": limit_mpa,
               "meshio": meshio.__version__}
     part, _ = cache.cached("viewer", inputs, lambda: _part(pvd, limit_mpa),
                            lambda part, tmp: (tmp / "part.json").write_text(json.dumps(part)),

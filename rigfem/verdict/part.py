@@ -80,8 +80,9 @@ class Target:
     """The refinement policy's judge (:class:`rigfem.fe.ladder.Judge`): a case is settled when a
     finer mesh cannot change what the report says of it — its band does not straddle the limit
     and its half-width ``peak·error_pct/100`` is within the preset's reporting target,
-    ``settings.target_pct`` % of the allowable (a part nothing loads is settled; a free body out
-    of balance is not a matter of mesh and is judged by the band alone)."""
+    ``settings.target_pct`` % of the allowable, and, where the preset has one (``fine``),
+    ``error_pct`` within ``settings.target_peak_pct`` % of the peak (a part nothing loads is
+    settled; a free body out of balance is not a matter of mesh and is judged by the band alone)."""
 
     settings: object  #: rigfem.settings.CheckSettings
 
@@ -91,7 +92,9 @@ class Target:
         v = half_ultimate(outcome.peak_mpa, s.material.sigma_u, err, s.limit_factor, loaded=outcome.loaded)
         if v.verdict == "not loaded":
             return True
-        return v.verdict != "undecided" and outcome.peak_mpa * err <= s.target_pct * v.limit_mpa
+        of_peak = getattr(s, "target_peak_pct", None)
+        return (v.verdict != "undecided" and outcome.peak_mpa * err <= s.target_pct * v.limit_mpa
+                and (of_peak is None or err <= of_peak))
 
 
 def _scope(settings) -> dict:
