@@ -552,3 +552,50 @@ def test_the_2013_models_toggle_ranges_hold_every_flagged_sample():
     assert all(np.isfinite(j.force_N).all() for j in h.joints.values())
     free = simulate(four_bar(*FINAL_CM), samples=36, model="original")
     assert free.singular_mask is None and free.meta["singular"] is None
+
+
+def test_a_change_point_four_bar_in_closed_form_flags_the_law_of_cosines_samples_and_keeps_numbers_finite():
+    """300/600/400/500 mm (s + l = p + q: the bars fold flat with the crank at 0°, where the closed
+    form's moment balance divides by zero).  Sampled every 1° in closed form: the flagged samples are
+    exactly those with sin μ < sin 5° (law of cosines); every force and the torque stay finite (the
+    change point's unbounded values are given as 0); away from the toggle the forces are Newton–Euler's.
+    A toggle-free four-bar flags none (no mask) and neither history carries the builder's toggle test."""
+    lengths = (300.0, 600.0, 400.0, 500.0)
+    h = solve(four_bar(*lengths), np.arange(0.0, 360.0, 1.0), speed_hz=1.7)
+    assert h.meta["solver"] == "closed form" and h.meta["speed_hz"] == 1.7 and "singular_fn" not in h.meta
+    law = np.sin(np.radians(law_of_cosines_mu(*lengths, h.crank_deg))) < np.sin(np.radians(5.0))
+    assert law[0] and np.array_equal(h.singular_mask, law)
+    assert all(np.isfinite(j.force_N).all() for j in h.joints.values()) and np.isfinite(h.torque_Nm).all()
+    assert all(np.array_equal(j.force_N[0], [0.0, 0.0]) for j in h.joints.values()) and h.torque_Nm[0] == 0.0
+    for t in (90.0, 180.0, 270.0):
+        F, T, _ = fourbar_newton_euler(*lengths, t, 1.7)
+        i = int(t)
+        for n, f in F.items():
+            assert np.allclose(h.joints[n].force_N[i], [f.real, f.imag], atol=1e-9), (n, t)
+        assert h.torque_Nm[i] == pytest.approx(T, abs=1e-9)
+    free = solve(four_bar(*FINAL_CM), np.arange(0.0, 360.0, 30.0), speed_hz=1.7)
+    assert free.singular_mask is None and free.meta["singular"] is None and "singular_fn" not in free.meta
+    between = free.evaluator(np.array([15.0]))  # re-solved at the history's own speed
+    F, T, _ = fourbar_newton_euler(*FINAL_CM, 15.0, 1.7)
+    assert between.torque_Nm[0] == pytest.approx(T, abs=1e-9) and between.meta["speed_hz"] == 1.7
+
+
+@pytest.mark.parametrize("general", [False, True])
+def test_a_slider_with_its_mass_off_the_slide_takes_the_moment_of_its_inertia_force(general):
+    """A massless slider-crank (300/840 mm, no offset) whose 2 kg slider has its centre of mass 50 mm
+    above the slide line: the slide holds the slider against the moment of its d'Alembert force about
+    the sliding point, M = r_c × m a_B = −m · 0.05 m · a_B,x (a_B from tests/newton_euler.py's closed
+    form), in closed form and through the general solver."""
+    lk = slider_crank(300.0, 840.0, 0.0, masses=None, body_masses={"slider": {"mass_kg": 2.0, "com_local_mm": (0.0, 50.0)}})
+    h = solve(lk, np.arange(0.0, 360.0, 30.0), general=general)
+    assert h.meta["solver"] == ("general" if general else "closed form")
+    for i, t in enumerate(h.crank_deg):
+        th, w2 = np.radians(t), 2 * np.pi
+        e2 = np.exp(1j * th)
+        e3 = np.exp(1j * np.arcsin(-0.3 * e2.imag / 0.84))
+        w3 = -(0.3 * w2 * e2.real) / (0.84 * e3.real)
+        aA = -0.3 * w2**2 * e2
+        a3 = -(aA.imag - w3**2 * 0.84 * e3.imag) / (0.84 * e3.real)
+        aB = aA + 0.84 * (1j * a3 - w3**2) * e3
+        assert abs(aB.imag) < 1e-9
+        assert h.joints["slide"].moment_Nm[i] == pytest.approx(-2.0 * 0.05 * aB.real, abs=1e-9), t

@@ -68,9 +68,11 @@ PACKAGES = {
                            "tests/test_mechanisms.py", "tests/test_loadcases.py", "tests/test_partial_turn.py",
                            "tests/test_physics_truths.py", "tests/test_load_cases_truths.py", "tests/test_dynamics_truths.py"],
                  # peaks' bracket search loops until the bracket is narrow (history._zoom_max): a mutant
-                 # that stops it shrinking loops for ever, and mutmut's default CPU budget (15 × 2 × the
-                 # tests' time + 1 s) let each of those run minutes; 2 × 2 × is still twice a survivor's
-                 "timeout_multiplier": 2.0},
+                 # that stops it shrinking loops for ever, and mutmut's CPU budget, 2 × multiplier × (the
+                 # tests' time + constant), at its defaults (15, 1 s) let each run minutes; 3 and 5 s give
+                 # a mutant at least 30 s (a forked pytest's start costs seconds: a budget of 5 s timed
+                 # out mutants that the tests kill or that survive) and six times its tests' time
+                 "timeout_multiplier": 3.0, "timeout_constant": 5.0},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": [f"rigfem/fe/{m}.py" for m in ("stress", "tensors", "solution")], "tests": FE_TESTS},
     "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")], "tests": FE_TESTS},
