@@ -66,7 +66,13 @@ PACKAGES = {
     "dynamics": {"mutate": ["rigfem/dynamics/*"],
                  "tests": ["tests/test_dynamics_closed.py", "tests/test_original.py", "tests/test_reactions.py",
                            "tests/test_mechanisms.py", "tests/test_loadcases.py", "tests/test_partial_turn.py",
-                           "tests/test_physics_truths.py", "tests/test_load_cases_truths.py", "tests/test_dynamics_truths.py"]},
+                           "tests/test_physics_truths.py", "tests/test_load_cases_truths.py", "tests/test_dynamics_truths.py"],
+                 # peaks' bracket search loops until the bracket is narrow (history._zoom_max): a mutant
+                 # that stops it shrinking loops for ever, and mutmut's CPU budget, 2 × multiplier × (the
+                 # tests' time + constant), at its defaults (15, 1 s) let each run minutes; 3 and 5 s give
+                 # a mutant at least 30 s (a forked pytest's start costs seconds: a budget of 5 s timed
+                 # out mutants that the tests kill or that survive) and six times its tests' time
+                 "timeout_multiplier": 3.0, "timeout_constant": 5.0},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": [f"rigfem/fe/{m}.py" for m in ("stress", "tensors", "solution")], "tests": FE_TESTS},
     "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")], "tests": FE_TESTS},
@@ -79,7 +85,8 @@ def mutmut_table(pkg: str) -> str:
     """The ``[tool.mutmut]`` table of a package's run (pyproject.toml's own, with the package's paths and tests)."""
     base = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mutmut"]
     cfg = {**base, "only_mutate": PACKAGES[pkg]["mutate"],
-           "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"]}
+           "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"],
+           **{k: v for k, v in PACKAGES[pkg].items() if k not in ("mutate", "tests")}}
     if pkg.startswith("fe"):
         # a mutant's pytest forks from a server that has only collected the tests: forked from the
         # main process, which has run them, it hangs in MKL/OpenMP (every fe/ mutant timed out); the
