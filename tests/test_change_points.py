@@ -105,3 +105,19 @@ def test_a_refused_change_point_rig_check_names_the_rule(tmp_path, capsys):
     scene.write_text('[linkage]\ntype = "four-bar"\nb2 = 480.0\nb3 = 480.0\nb4 = 480.0\nd = 480.0\n')
     assert main(["check", str(scene), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     assert "breaks the rig rule" in one_line(capsys.readouterr().err)
+
+
+def test_the_2013_model_sampled_at_a_change_point_reports_a_toggle(capsys):
+    """300/600/400/500 mm reaches its change point at 0° (d − b2 = b3 − b4): a sample there made the 2013
+    model's 9 × 9 system exactly singular, and `rigfem reactions ... --model original` ended in an internal
+    error (LinAlgError); the sample is a toggle, as the law of cosines and the rigid-body model say."""
+    from rigfem.dynamics import simulate
+    from rigfem.linkage import four_bar
+
+    for model in ("original", "rigid-body"):
+        h = simulate(four_bar(300, 600, 400, 500), samples=360, model=model)
+        assert any(lo <= 0.0 <= hi or lo <= 360.0 <= hi for lo, hi in h.meta["singular"]), (model, h.meta["singular"])
+        assert h.singular_mask[0] and np.all(np.isfinite(h.torque_Nm))
+    assert main(["reactions", "--four-bar", "300", "600", "400", "500", "--model", "original"]) == 0
+    out = capsys.readouterr()
+    assert "toggle" in out.out and "internal error" not in out.err

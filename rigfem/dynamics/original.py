@@ -152,7 +152,15 @@ def program_reactions(k: dict[str, np.ndarray], b2_mm: float, b3_mm: float, b4_m
     r4 = b4 * u4
     K[:, 8, 4], K[:, 8, 5] = -r4[:, 1], r4[:, 0]
     rhs[:, 8] = I4 * k["alpha4"]
-    x = np.linalg.solve(K, rhs[..., None])[..., 0]
+    try:
+        x = np.linalg.solve(K, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # a sample exactly at a change point: no finite reaction there (a toggle)
+        x = np.full((n, 9), np.nan)
+        for i in range(n):
+            try:
+                x[i] = np.linalg.solve(K[i], rhs[i])
+            except np.linalg.LinAlgError:
+                pass
     return dict(R12=x[:, 0:2], R23=x[:, 2:4], R34=x[:, 4:6], R14=x[:, 6:8], M2=x[:, 8],
                 mu_deg=np.degrees(k["mu"]), kin=k)
 
