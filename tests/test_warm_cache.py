@@ -176,3 +176,20 @@ def test_viewer_data_is_read_once_per_animation(warm, monkeypatch):
     m.point_data["von_mises"] = 2 * m.point_data["von_mises"]
     meshio.write(frame, m)  # another frame: read again
     assert viewer.viewer_data(d, files, 100.0) != first
+
+
+def test_the_3d_views_triangles_take_two_bytes_where_their_indices_fit(warm):
+    """The page carries each triangle's vertex indices in 2 bytes when the part has at most 65536 surface
+    vertices (every built-in part): the same triangles, half the bytes."""
+    import base64
+
+    from rigfem.report import viewer
+
+    root, _ = warm
+    d = root / "cold"
+    parts = viewer.viewer_data(d, [p.name for p in d.iterdir()], 100.0)
+    assert parts
+    for p in parts:
+        assert p["tri_bytes"] == 2 and p["vertices"] <= 2**16
+        tri = np.frombuffer(base64.b64decode(p["tri"]), "<u2")
+        assert tri.size % 3 == 0 and tri.max() == p["vertices"] - 1 and np.unique(tri).size == p["vertices"]

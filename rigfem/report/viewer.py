@@ -51,7 +51,9 @@ def _part(pvd: Path, limit_mpa: float) -> dict | None:
     util = np.array(util)
     return {"name": pvd.stem.removesuffix("_cycle"), "angles": [t for t, _ in series],
             "vertices": int(used.size), "pos": _b64(first.points[used].astype("<f4")),
-            "tri": _b64(tri.reshape(-1, 3).astype("<u4")), "util": _b64(np.round(util * 100).astype("<u2")),
+            # vertex indices in 2 bytes where they fit (most parts): the page carries half the triangles' bytes
+            "tri": _b64(tri.reshape(-1, 3).astype("<u2" if used.size <= 2**16 else "<u4")),
+            "tri_bytes": 2 if used.size <= 2**16 else 4, "util": _b64(np.round(util * 100).astype("<u2")),
             "peak": [float(u.max()) for u in util], "governing": int(np.argmax(util.max(axis=1))),
             **_markers(_markers_file(pvd), used, len(series))}
 

@@ -11,7 +11,8 @@
   let P = null, yaw = 0.6, pitch = -0.5, zoom = 1, timer = null;
   function load(k) {
     const d = parts[k];
-    const pos = new Float32Array(bytes(d.pos)), tri = new Uint32Array(bytes(d.tri));
+    const pos = new Float32Array(bytes(d.pos));
+    const tri = d.tri_bytes === 2 ? new Uint16Array(bytes(d.tri)) : new Uint32Array(bytes(d.tri));
     const util = new Uint16Array(bytes(d.util));
     const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     for (let i = 0; i < pos.length; i++) { lo[i % 3] = Math.min(lo[i % 3], pos[i]); hi[i % 3] = Math.max(hi[i % 3], pos[i]); }
