@@ -83,13 +83,34 @@ def test_explorer_maps_have_labels_a_colour_bar_and_little_grey(browser, tmp_pat
     assert len(grey) == 2 and max(grey) < 0.45, grey  # 0.58-0.61 uncropped
 
 
+COMMITTED = sorted(p.parent.name for p in (ROOT / "results").glob("*/report.html"))
+
+
 @pytest.mark.heavy  # over 10 s: the default run stays under 10 minutes
-def test_committed_reports(browser, tmp_path):
-    for name in ("final-cm", "slider-crank-300-840"):
-        folder = tmp_path / name
-        shutil.copytree(ROOT / "results" / name, folder)
-        write_html(__import__("json").loads((folder / "report.json").read_text()), folder)
-        _check_page(browser, folder / "report.html", tmp_path)
+@pytest.mark.parametrize("name", COMMITTED)
+def test_committed_report_as_committed(browser, name, tmp_path):
+    """The committed page itself (no field files beside it): it loads clean, its 3-D view (embedded)
+    draws, and the same report.json renders again with today's code."""
+    page = _check_page(browser, ROOT / "results" / name / "report.html", tmp_path)
+    assert page.eval("document.getElementById('v-canvas') !== null"), "the committed page lost its 3-D view"
+    lit = page.eval("(() => { const c = document.getElementById('v-canvas'), d = c.getContext('2d')"
+                    ".getImageData(0, 0, c.width, c.height).data; let n = 0;"
+                    " for (let i = 3; i < d.length; i += 4) if (d[i] > 0) n++; return n; })()")
+    assert lit > 1000, lit
+    folder = tmp_path / name
+    shutil.copytree(ROOT / "results" / name, folder)
+    write_html(__import__("json").loads((folder / "report.json").read_text()), folder)
+    _check_page(browser, folder / "report.html", tmp_path)
+
+
+@pytest.mark.heavy
+def test_committed_report_prints_to_pdf(tmp_path):
+    from rigfem.cli import main
+
+    assert main(["show", str(ROOT / "results" / "final-cm"), "--pdf", str(tmp_path / "r.pdf")]) == 0
+    pdf = (tmp_path / "r.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF-") and pdf.rstrip().endswith(b"%%EOF")
+    assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 12  # a page per part case at least
 
 
 def test_report_3d_view(browser, tmp_path):
