@@ -46,6 +46,18 @@ STUDY = (540.0, 840.0, 780.0, 1020.0)
 FINAL_CM = (480.0, 840.0, 780.0, 1020.0)
 
 
+
+def _origins_are_the_closed_form(hist, i: int, k: dict, t) -> None:
+    """Each body's frame origin and its acceleration at sample ``i`` are the closed-form four-bar's
+    (``k``: positions and accelerations in m, complex; the history in mm)."""
+    origin = {"crank": 0j, "coupler": k["A"], "rocker": k["O4"]}
+    acc = {"crank": 0j, "coupler": k["aA"], "rocker": 0j}
+    for name in origin:
+        body = hist.bodies[name]
+        assert np.allclose(body.origin_mm[i], [origin[name].real * 1000, origin[name].imag * 1000], atol=1e-6)
+        assert np.allclose(body.origin_acc_mm_s2[i], [acc[name].real * 1000, acc[name].imag * 1000],
+                           atol=1e-6 * (1 + abs(acc[name]) * 1000)), (name, t)
+
 def test_the_study_program_written_from_rig_md_prints_the_studys_figures():
     rows = [study_program(*STUDY, t) for t in np.linspace(0.0, 360.0, 5000)]  # the study's 5000 instants
     for j in ("O2", "A", "B", "O4"):
@@ -79,13 +91,7 @@ def test_the_original_model_is_the_study_program_at_every_angle(lengths, speed_h
                 assert np.exp(1j * body.angle_rad[i]) == pytest.approx(k["e"][b], abs=1e-12), (name, t)
                 assert body.omega_rad_s[i] == pytest.approx(k["w"][b], abs=1e-9), (name, t)
                 assert body.alpha_rad_s2[i] == pytest.approx(k["al"][b], abs=1e-9 * (1 + abs(k["al"][b]))), (name, t)
-            origin = {"crank": 0j, "coupler": k["A"], "rocker": k["O4"]}
-            acc = {"crank": 0j, "coupler": k["aA"], "rocker": 0j}
-            for name in origin:
-                body = hist.bodies[name]
-                assert np.allclose(body.origin_mm[i], [origin[name].real * 1000, origin[name].imag * 1000], atol=1e-6)
-                assert np.allclose(body.origin_acc_mm_s2[i], [acc[name].real * 1000, acc[name].imag * 1000],
-                                   atol=1e-6 * (1 + abs(acc[name]) * 1000)), (name, t)
+            _origins_are_the_closed_form(hist, i, k, t)
     rig = simulate(four_bar(*lengths), samples=8, speed_hz=speed_hz)
     for name in ("crank", "coupler", "rocker"):  # the bodies' mass data are the linkage's
         a, b = h.bodies[name], rig.bodies[name]
@@ -289,13 +295,7 @@ def test_imported_reactions_are_the_newton_euler_ones_where_the_linkage_moves(tm
             body = between.bodies[name]
             assert np.exp(1j * body.angle_rad[i]) == pytest.approx(k["e"][b], abs=1e-12), (name, t)
             assert (body.omega_rad_s[i], body.alpha_rad_s2[i]) == pytest.approx((k["w"][b], k["al"][b]), abs=1e-9)
-        origin = {"crank": 0j, "coupler": k["A"], "rocker": k["O4"]}
-        acc = {"crank": 0j, "coupler": k["aA"], "rocker": 0j}
-        for name in origin:
-            body = between.bodies[name]
-            assert np.allclose(body.origin_mm[i], [origin[name].real * 1000, origin[name].imag * 1000], atol=1e-6)
-            assert np.allclose(body.origin_acc_mm_s2[i], [acc[name].real * 1000, acc[name].imag * 1000],
-                               atol=1e-6 * (1 + abs(acc[name]) * 1000)), (name, t)
+        _origins_are_the_closed_form(between, i, k, t)
     for j in ("O2", "A", "B", "O4"):
         force, at = newton_euler_peak(fourbar_newton_euler, FINAL_CM, j)
         p = r.peaks[j]
