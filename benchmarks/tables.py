@@ -306,20 +306,32 @@ def bad_inputs(rec: dict) -> str:
 
 #: record name -> its table renderer (results/benchmarks/<name>.md)
 def perf_rows(rec: dict) -> list[str]:
-    """Issue 26's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals)."""
+    """Issue 41's table: row, goal, cold, warm, peak RSS, met (benchmarks/bench_perf.py's goals); where
+    the record has a baseline's series (``--baseline``), each figure reads "before → after"."""
     from bench_perf import status  # the one home of the goals (loads no FE code)
 
     def t(s: float | None) -> str:  # a tenth of a second under 100 s: a row near its goal reads so
         return "-" if s is None else hms(s) if s >= 100 else f"{s:.1f} s" if s >= 10 else f"{s:.2f} s"
 
+    before = {v["row"]: v for v in status(rec, "before: ")}
+
+    def fig(v: dict, key: str, fmt) -> str:
+        b = before[v["row"]].get(key)
+        return ("-" if v.get(key) is None else fmt(v[key])) if b is None else f"{fmt(b)} → {fmt(v.get(key))}"
+
+    def mib(x: float | None) -> str:
+        return "-" if x is None else f"{x:.0f} MiB"
+
     out = ["| work | goal | cold | warm | peak RSS | |", "|---|---|---:|---:|---:|---|"]
     for v in status(rec):
-        extra = (f"; ratio {v['ratio']:.2f}" if "ratio" in v else "") + (
-            f"; up to {v['dof']:,.0f} DOF, {rec['derived']['dof MiB per 1000 DOF']:.1f} MiB per 1000 DOF, "
-            f"R² {v['r2']:.3f}" if "dof" in v else "")
+        cells = [fig(v, "rss_mib", mib) if v["rss_mib"] is not None else "",
+                 f"folder {fig(v, 'folder_mb', lambda x: f'{x:.1f} MB')}" if "folder_mb" in v else "",
+                 f"ratio {fig(v, 'ratio', lambda x: f'{x:.2f}')}" if "ratio" in v else "",
+                 f"up to {v['dof']:,.0f} DOF, {rec['derived']['dof MiB per 1000 DOF']:.1f} MiB per 1000 DOF, "
+                 f"R² {v['r2']:.3f}" if "dof" in v else ""]
         met = {None: "not measured", True: "met", False: "**not met**"}[v["met"]]
-        rss = "-" if v["rss_mib"] is None else f"{v['rss_mib']:.0f} MiB"
-        out.append(f"| {v['work']} | {v['goal']} | {t(v['cold_s'])} | {t(v['warm_s'])} | {rss}{extra} | {met} |")
+        out.append(f"| {v['work']} | {v['goal']} | {fig(v, 'cold_s', t)} | {fig(v, 'warm_s', t)} | "
+                   f"{'; '.join(c for c in cells if c) or '-'} | {met} |")
     return out
 
 
@@ -327,21 +339,29 @@ def perf_note(rec: dict) -> str:
     """When and where each row was measured (rows are kept until re-measured)."""
     by = {}
     for series, p in rec["params"]["provenance"].items():
-        by.setdefault(f"{p['date'][:10]} at commit {p['commit'][:10]}", []).append(series)
-    return ("Medians of separate processes (cold: empty rigfem and numba caches; warm: the caches a first run "
-            "filled); peak RSS: the largest of the row's runs, whole process tree.  Measured "
+        by.setdefault(f"{p['date'][:10]} at commit {p['commit'][:10]}{' (dirty)' if p.get('dirty') else ''}",
+                      []).append(series)
+    base = rec["params"].get("baseline")
+    return ("Medians of separate processes (cold: empty rigfem and numba caches; warm: the caches the last cold run "
+            "filled); peak RSS: the largest of the row's cold runs, whole process tree"
+            + (f"; before → after: the code of {base['baseline']} ({base['commit'][:10]}) and of this commit, "
+               "measured interleaved in one run" if base else "")
+            + (f"; calibration (SuperLU of a 24³ 3-D Laplacian, 1 thread, before every row) median "
+               f"{rec['derived']['calibration median s']:.2f} s" if "calibration median s" in rec["derived"] else "")
+            + ".  Measured "
             + "; ".join(f"{w}: {', '.join(s)}" for w, s in by.items()) + f" on {rec['machine']['cores']} shared "
             "cores — results/benchmarks/perf.md.")
 
 
 def perf(rec: dict) -> str:
-    lines = head(rec, "Performance goals of issue 26: every row cold and warm, separate processes")
+    lines = head(rec, "Performance goals of issue 41: every row cold and warm, separate processes")
     lines += perf_rows(rec) + ["", perf_note(rec), "", "| series | runs | wall s | peak tree RSS MiB | "
                                                       "load average at the starts |", "|---|---:|---:|---:|---|"]
     for s, rows in rec["samples"].items():
         loads = ", ".join(f"{x['load_before'][0]:.1f}" for x in rows if "load_before" in x)
-        lines.append(f"| {s} | {len(rows)} | {rng(rec, s, fmt='.2f')} | {rng(rec, s, 'peak_tree_rss_mib', '.0f')} "
-                     f"| {loads} |")
+        wall = rng(rec, s, "seconds" if s == "calibration" else "wall_s", ".2f")
+        rss = "-" if s == "calibration" else rng(rec, s, "peak_tree_rss_mib", ".0f")
+        lines.append(f"| {s} | {len(rows)} | {wall} | {rss} | {loads} |")
     return "\n".join(lines) + "\n"
 
 

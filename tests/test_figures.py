@@ -130,9 +130,10 @@ def test_write_record_computes_the_summaries(tmp_path):
 def _fake_perf(tmp_path: Path, samples: dict) -> dict:
     """A tiny perf record written by the real path (record.write_record, bench_perf's derive and merge)."""
     bench_perf = importlib.import_module("bench_perf")
-    merged, prov = bench_perf.merge(samples, None)
-    path = record.write_record("perf", merged, bench_perf.derive(merged), {"provenance": prov}, command="fake",
-                               out=tmp_path)
+    base = {"commit": "ab" * 20, "dirty": False, "baseline": "v0"} if any("before: " in k for k in samples) else None
+    merged, prov = bench_perf.merge(samples, None, base)
+    path = record.write_record("perf", merged, bench_perf.derive(merged), {"provenance": prov, "baseline": base},
+                               command="fake", out=tmp_path)
     return json.loads(path.read_text())
 
 
@@ -144,21 +145,39 @@ def test_perf_table_says_met_from_the_data(tmp_path):
     """Each row is met / not met / not measured from the record and bench_perf.GOALS, never typed."""
     rec = _fake_perf(tmp_path, {"help cold": [_run(0.1), _run(0.2)], "help warm": [_run(0.1)],
                                 "parts cold": [_run(0.5)], "parts warm": [_run(0.1)],
-                                "check draft cold": [_run(40.0, 2000.0)], "check draft warm": [_run(2.5, 1200.0)],
+                                "check draft cold": [_run(9.0, 2000.0)], "check draft warm": [_run(2.5, 1200.0)],
+                                "check standard cold": [_run(14.0, 900.0, folder_mb=16.0)],
                                 "dof": [_run(1.0, 100.0 + 0.5 * n / 1000, dof=n) for n in (10_000, 100_000, 1_000_000)],
                                 "ccx": [_run(5.0, ratio=0.52, dof=167_529)]})
     assert publish.problems({"perf": rec}) == []
     rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in tables.perf_rows(rec)[2:]}
     assert rows["`rigfem --help`"].endswith("| met |") and "0.15 s" in rows["`rigfem --help`"]
     assert rows["`rigfem parts`"].endswith("| **not met** |")  # cold 0.5 s > 0.3 s although warm is fast
-    assert rows["`rigfem check final-cm --force --fidelity draft`"].endswith("| met |")  # the draft goal is warm only
-    assert rows["`rigfem check final-cm --force`, standard"].endswith("| not measured |")
+    assert rows["`rigfem check final-cm --fidelity draft`"].endswith("| met |")  # the draft goal is cold only
+    assert rows["`rigfem check final-cm`, standard"].endswith("| not measured |")  # no warm series
+    folder = rows["result folder of a standard check (final-cm)"]
+    assert "folder 16.0 MB" in folder and folder.endswith("| **not met** |")  # the standard cold run's folder
     assert "ratio 0.52" in rows[next(k for k in rows if "CalculiX" in k)] and "**not met**" in rows[
         next(k for k in rows if "CalculiX" in k)]
     dof = rows[next(k for k in rows if k.startswith("peak RSS"))]
     assert "up to 1,000,000 DOF, 0.5 MiB per 1000 DOF, R² 1.000" in dof and dof.endswith("| met |")
     block = publish.blocks({**publish.load(), "perf": rec})["performance"]
-    assert "| `rigfem --help` | < 0.3 s | 0.15 s | 0.10 s | 50 MiB | met |" in block and "perf.md" in block
+    assert "| `rigfem --help` | < 0.3 s (issue 26) | 0.15 s | 0.10 s | 50 MiB | met |" in block and "perf.md" in block
+
+
+def test_perf_table_shows_a_baseline_before_and_after(tmp_path):
+    """A record with a baseline's series reads "before → after" per figure; met is the after's alone."""
+    rec = _fake_perf(tmp_path, {"before: check standard cold": [_run(30.0, 1500.0, folder_mb=145.0)],
+                                "before: check standard warm": [_run(2.0)],
+                                "check standard cold": [_run(14.0, 900.0, folder_mb=12.0)],
+                                "check standard warm": [_run(0.8)], "calibration": [{"seconds": 2.0}]})
+    rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in tables.perf_rows(rec)[2:]}
+    std = rows["`rigfem check final-cm`, standard"]
+    assert "| 30.0 s → 14.0 s | 2.00 s → 0.80 s | 1500 MiB → 900 MiB |" in std and std.endswith("| met |")
+    assert "145.0 MB → 12.0 MB" in rows["result folder of a standard check (final-cm)"]
+    assert rec["derived"]["check standard cold after / before"] == pytest.approx(14 / 30)
+    assert rec["derived"]["check standard cold / calibration"] == pytest.approx(7.0)
+    assert "before → after: the code of v0" in tables.perf_note(rec) and "calibration" in tables.perf(rec)
 
 
 def test_every_cold_run_has_fresh_caches_of_its_own(monkeypatch):
@@ -167,16 +186,16 @@ def test_every_cold_run_has_fresh_caches_of_its_own(monkeypatch):
     bench_perf = importlib.import_module("bench_perf")
     seen = []
     monkeypatch.setattr(bench_perf, "_rigfem", lambda args, env, ok=(0,): seen.append(env["RIGFEM_CACHE"]) or _run(1.0))
-    assert len(bench_perf.row_synth(argparse.Namespace(repeats=3))["synthesize --rig cold"]) == 3
+    assert len(bench_perf.row_synth(argparse.Namespace(repeats=3), Path("."))["synthesize --rig cold"]) == 3
     assert len(set(seen)) == 3
     seen.clear()
-    cold, warm = bench_perf.cold_warm(lambda env, tmp: bench_perf._rigfem([], env), 2)
-    assert len(set(seen[:2])) == 2 and len(set(seen[2:])) == 1 and not set(seen[:2]) & set(seen[2:])
+    cold, warm = bench_perf.cold_warm(lambda env, tmp: bench_perf._rigfem([], env), Path("."), 2)
+    assert len(set(seen[:2])) == 2 and seen[2:] == [seen[1]] * 2  # warm: the last cold run's caches
 
 
 def test_perf_record_keeps_rows_not_remeasured(tmp_path):
     bench_perf = importlib.import_module("bench_perf")
     old = _fake_perf(tmp_path, {"help cold": [_run(0.1)], "parts cold": [_run(0.5)]})
-    merged, prov = bench_perf.merge({"parts cold": [_run(0.2)]}, old)
+    merged, prov = bench_perf.merge({"parts cold": [_run(0.2)]}, old, None)
     assert merged["help cold"] == old["samples"]["help cold"] and merged["parts cold"][0]["wall_s"] == 0.2
     assert set(prov) == {"help cold", "parts cold"}
