@@ -126,7 +126,7 @@ def row_check(a: argparse.Namespace, tree: Path) -> dict[str, list]:
     out = {}
     for fid in a.fidelity:
         out[f"check {fid} cold"], out[f"check {fid} warm"] = cold_warm(
-            lambda env, tmp: _check(fid, env, tmp), tree, a.repeats or 1)
+            lambda env, tmp: _check(fid, env, tmp), tree, a.repeats or 3)
     return out
 
 
@@ -139,7 +139,7 @@ def row_light(a: argparse.Namespace, tree: Path) -> dict[str, list]:
 
 
 def row_synth(a: argparse.Namespace, tree: Path) -> dict[str, list]:
-    cold, _ = cold_warm(lambda env, tmp: _rigfem(SYNTH, env, ok=(0, 1)), tree, a.repeats or 1, warm=False)
+    cold, _ = cold_warm(lambda env, tmp: _rigfem(SYNTH, env, ok=(0, 1)), tree, a.repeats or 3, warm=False)
     return {"synthesize --rig cold": cold}
 
 
@@ -291,7 +291,7 @@ def print_goals(rec: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", nargs="+", choices=ROWS, help=f"rows to measure (default all: {' '.join(ROWS)})")
-    ap.add_argument("--repeats", type=int, help="runs per series (default 3 for light, 1 for the long rows)")
+    ap.add_argument("--repeats", type=int, help="runs per series (default 3; 1 for the sweep, CalculiX and DOF rows)")
     ap.add_argument("--fidelity", nargs="+", default=["standard", "draft"], choices=["standard", "draft"])
     ap.add_argument("--dof-nx", type=int, nargs="+", default=list(DOF_NX), help="bar divisions of the DOF row")
     ap.add_argument("--baseline", metavar="REV", help=f"also measure the rows {', '.join(COMPARED)} with the code "
