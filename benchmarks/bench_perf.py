@@ -90,8 +90,18 @@ def _sample(r: dict) -> dict:
 
 
 def env_of(tmp: str | Path, tree: Path, **extra: str) -> dict:
-    """A cold run's environment (benchmarks/record.cold_env) running the code of ``tree``."""
-    return cold_env(tmp, PYTHONPATH=str(tree), **extra)
+    """A cold run's environment (benchmarks/record.cold_env) running the code of ``tree``: its
+    PYTHONPATH, and no current folder on the path (``python -m`` would put it first)."""
+    return cold_env(tmp, PYTHONPATH=str(tree), PYTHONSAFEPATH="1", **extra)
+
+
+def runs_code_of(tree: Path) -> None:
+    """Refuse to measure if ``python -m rigfem`` in :func:`env_of` would not import ``tree``'s rigfem."""
+    with tempfile.TemporaryDirectory(prefix="perf-") as tmp:
+        r = subprocess.run([sys.executable, "-c", "import rigfem; print(rigfem.__file__)"], env=env_of(tmp, tree),
+                           capture_output=True, text=True, check=True)
+    if not Path(r.stdout.strip()).resolve().is_relative_to(tree.resolve()):
+        raise SystemExit(f"the runs would import {r.stdout.strip()}, not the code of {tree}")
 
 
 def _rigfem(args: list[str], env: dict, ok: tuple[int, ...] = (0,)) -> dict:
@@ -321,6 +331,8 @@ def main(argv: list[str] | None = None) -> int:
                                  text=True, check=True).stdout.strip()
             base = {"commit": sha, "dirty": False, "baseline": a.baseline}
             tree = stack.enter_context(baseline_tree(sha))
+            runs_code_of(tree)
+        runs_code_of(ROOT)
         for row in a.rows or ROWS:
             samples.setdefault("calibration", []).append(calibration())
             if base and row in COMPARED:

@@ -24,8 +24,9 @@ class Browser:
         self._profile = tempfile.mkdtemp()
         script = f"exec 3<&{r1} 4>&{w2}; exec {CHROMIUM} --headless --no-sandbox --disable-gpu " \
                  f"--remote-debugging-pipe --user-data-dir={self._profile} --window-size=1400,1000 about:blank"
+        # TMPDIR inside the profile: Chromium's own scratch folders (org.chromium.Chromium.*) go with it
         self._proc = subprocess.Popen(["bash", "-c", script], pass_fds=(r1, w2), stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL)
+                                      stderr=subprocess.DEVNULL, env={**os.environ, "TMPDIR": self._profile})
         os.close(r1), os.close(w2)
         self._buf, self._id, self.events = b"", 0, []
 

@@ -187,3 +187,24 @@ def test_a_free_body_legend_stays_in_the_picture(tmp_path):
     box = t.get_window_extent(fig.canvas.get_renderer())
     plt.close(fig)
     assert box.x1 <= 1600 and box.y1 <= 300, box  # inside, and under the triad's lowest text (≈ 320 px up)
+
+
+def test_save_png_draws_the_pixels_savefig_would(tmp_path):
+    """save_png draws the figure once and encodes it once (RGB): the pixels of ``savefig`` at the same
+    dpi, to antialiasing rounding (a wrong dpi or a channel order mix-up fails)."""
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    from rigfem.report.pictures import save_png
+
+    fig = plt.figure(figsize=(4, 3))
+    fig.text(0.05, 0.9, "allowable σu/2 = 375 MPa", fontsize=14, color="#d32f2f")
+    ax = fig.add_axes([0.15, 0.15, 0.8, 0.6])
+    ax.plot([0, 1, 2], [0, 2, 1], color="#1565c0")
+    fig.savefig(tmp_path / "savefig.png", dpi=110)
+    save_png(fig, tmp_path / "ours.png", dpi=110)
+    plt.close(fig)
+    with Image.open(tmp_path / "savefig.png") as a, Image.open(tmp_path / "ours.png") as b:
+        assert b.mode == "RGB" and b.size == a.size == (440, 330)
+        diff = np.abs(np.asarray(a.convert("RGB"), int) - np.asarray(b, int))
+    assert diff.max() <= 1

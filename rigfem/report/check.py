@@ -169,6 +169,7 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
     jobs += [(r, r.coef[r.row], entry, limit, part_label(entry["name"], entry["part"]), allowable, d, 30.0,
               ("von_mises",), f"{r.case.name}_{r.mode}_mode") for r, entry in other]
     with started_part_pictures(jobs, cache) as wait:  # drawn in child processes while this one writes files
+        ctx.observer.stage("report: reactions and peaks pictures, field files")
         if output.pictures:
             reactions_plot(checked.reactions.history, d / "reactions.png", cache)
             first.append("reactions.png")
@@ -188,6 +189,7 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
             animation = _frames(d, r, limit, cache)
             if animation:
                 fields += [f"{stem}_{k:03d}.vtu" for k in range(len(r.frames))] + animation
+        ctx.observer.stage("report: the parts' pictures")
         for (r, entry), pics in zip(drawn + other, wait()):
             entry["pictures"] = pics
             of[id(r)][:0] = list(pics["files"].values())
@@ -207,6 +209,7 @@ def write_check(checked: Checked, report: dict, output: Output, ctx: Context) ->
         report = {**report, "parts": parts}
         report["files"] = ["report.json", "report.md", *pics, "report.html"]
         report["field_files"] = fields
+        ctx.observer.stage("report: report.json, report.md, report.html")
         write_json(report, d / "report.json")
         (d / "report.md").write_text(render_markdown(report), encoding="utf-8")
         write_html(report, d, ctx.cache)
