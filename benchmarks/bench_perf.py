@@ -25,6 +25,7 @@ import compileall
 import contextlib
 import datetime
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -91,8 +92,10 @@ def _sample(r: dict) -> dict:
 
 def env_of(tmp: str | Path, tree: Path, **extra: str) -> dict:
     """A cold run's environment (benchmarks/record.cold_env) running the code of ``tree``: its
-    PYTHONPATH, and no current folder on the path (``python -m`` would put it first)."""
-    return cold_env(tmp, PYTHONPATH=str(tree), PYTHONSAFEPATH="1", **extra)
+    PYTHONPATH (its benchmarks/ too, for its scripts' sibling imports), and no current folder on the
+    path (``python -m`` would put it first)."""
+    return cold_env(tmp, PYTHONPATH=os.pathsep.join((str(tree), str(tree / "benchmarks"))), PYTHONSAFEPATH="1",
+                    **extra)
 
 
 def runs_code_of(tree: Path) -> None:
@@ -278,10 +281,11 @@ def status(rec: dict, prefix: str = "") -> list[dict]:
 
 def merge(samples: dict[str, list], old: dict | None, baseline: dict | None) -> tuple[dict, dict]:
     """This run's series over the previous record's; provenance (date, commit, dirty) of each series.
-    A new baseline drops the old one's series (before/after come from one run)."""
+    Another baseline drops the old one's series (a record's before/after compare one baseline)."""
     now = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), **{
         k: v for k, v in zip(("commit", "dirty"), commit().values())}}
-    drop = (lambda k: k.startswith("before: ")) if baseline else (lambda k: False)
+    old_base = ((old or {}).get("params", {}).get("baseline") or {}).get("commit")
+    drop = (lambda k: k.startswith("before: ")) if baseline and baseline["commit"] != old_base else (lambda k: False)
     keep = {k: v for k, v in (old or {}).get("samples", {}).items() if k not in samples and not drop(k)}
     prov = {k: v for k, v in (old or {}).get("params", {}).get("provenance", {}).items() if k in keep}
     ours = {k: (now | baseline if k.startswith("before: ") and baseline else now) for k in samples}
@@ -339,8 +343,9 @@ def main(argv: list[str] | None = None) -> int:
                 samples.update({f"before: {k}": v for k, v in globals()[f"row_{row}"](a, tree).items()})
             samples.update(globals()[f"row_{row}"](a, ROOT))
             merged, prov = merge(samples, old, base)  # after every row: an interrupted run keeps what it measured
+            kept = base or (old or {}).get("params", {}).get("baseline")  # the baseline of the kept "before" series
             write_record("perf", merged, derive(merged), {"provenance": prov, "fidelity": a.fidelity,
-                                                          "repeats": a.repeats, "baseline": base, "goals": GOALS},
+                                                          "repeats": a.repeats, "baseline": kept, "goals": GOALS},
                          out=a.out)
             print(f"{row}: measured", file=sys.stderr, flush=True)
     rec = json.loads(path.read_text())

@@ -21,7 +21,8 @@ import sys
 from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
-from tables import LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med, perf_note, perf_rows
+from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med, perf_note,
+                    perf_rows, timeline_rows)
 
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
@@ -53,6 +54,7 @@ COMMANDS = {
     "fe_assembly": "python benchmarks/bench_fe.py",
     "cycle_vs_calculix": "python benchmarks/bench_cycle_calculix.py --fidelity draft --angles 12 --repeats 3",
     "stages": "python benchmarks/profile_stages.py --fidelity standard --chunk 64",
+    "timeline": "python benchmarks/profile_timeline.py",
     "kinematics": "python benchmarks/bench_kinematics.py", "dynamics": "python benchmarks/bench_dynamics.py",
     "le10": "python benchmarks/bench_le10.py --sizes 400 283 200 141 100",
     "sweep_grid_cost": "python benchmarks/sweep_grid_cost.py --every 40",
@@ -157,6 +159,19 @@ def _sweep(sw: dict) -> str:
             + f" (the runs measured, {sw['date'][:10]}) — results/benchmarks/sweep.md, results/sweep/")
 
 
+def _timeline(t: dict) -> str:
+    """The cold check's FE and report shares (benchmarks/profile_timeline.py)."""
+    from tables import timeline_group
+
+    r = t["samples"].get("check cold", [None])[0]
+    if r is None:
+        return "results/benchmarks/timeline.md"
+    fe = sum(s["seconds"] for s in r["stages"] if timeline_group(s["stage"]).startswith("FE"))
+    rep = sum(s["seconds"] for s in r["stages"] if s["stage"].startswith(("report", "verdict known")))
+    return (f"cold standard check {r['wall_s']:.0f} s: FE {fe:.0f} s, the report after the verdict {rep:.0f} s — "
+            "results/benchmarks/timeline.md")
+
+
 #: the figures tables (performance and verification pages): (record, figure, result from the record)
 ROWS = [
     ("check", "`rigfem check final-cm --force`, whole scene (6 parts × 2 modes, all outputs: VTU/PVD, PyVista pictures, "
@@ -173,6 +188,8 @@ ROWS = [
     ("stages", "where the time goes per stage (check cold/warm, a sweep chunk)",
      lambda st: f"pictures {st['samples']['check cold'][0].get('pictures', 0.0):.1f} s of the cold check's "
                 f"{st['samples']['check cold'][0]['total (profiled)']:.0f} s — results/benchmarks/stages.md"),
+    ("timeline", "a command's stages on a clock, children included (check cold and warm, draft, synthesize "
+     "--rig, sweep): where the wall time and the memory go", _timeline),
     ("kinematics", "closed-form kinematics, four-bar, full turn at 5000 angles",
      lambda k: f"**{k['derived']['total ms']:.1f} ms** (median of {k['params']['runs']}) — "
                "results/benchmarks/kinematics.md"),
@@ -340,9 +357,12 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
     c = recs.get("cache_kinds")
     cache = (f"Command: `{c['command']}` (results/benchmarks/cache_kinds.md):\n\n" + "\n".join(cache_rows(c))
              + "\n\n" + cache_note(c) + "\n") if c else _missing("cache_kinds") + ".\n"
+    t = recs.get("timeline")
+    where = (f"Command: `{t['command']}` (results/benchmarks/timeline.md, {t['date'][:10]}, commit "
+             f"{t['commit']['sha'][:10]}):\n\n" + "\n".join(timeline_rows(t)) + "\n") if t else _missing("timeline") + ".\n"
     return {"cache-kinds": cache, "perf-figures": "\n".join(figure_rows(recs, "performance")) + "\n",
             "verification-figures": "\n".join(figure_rows(recs, "verification")) + "\n",
-            "grid-cost": grid, "performance": perf, "preset-errors": presets}
+            "grid-cost": grid, "performance": perf, "preset-errors": presets, "timeline": where}
 
 
 def pages() -> list[Path]:

@@ -222,6 +222,55 @@ def stages(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def timeline_group(stage: str) -> str:
+    """A stage's group in the timeline tables: the per-part, per-chunk and per-candidate stages as one."""
+    import re
+
+    if stage.startswith("solving part"):
+        return "FE: mesh, solve and refine each part"
+    if stage.startswith("configurations, chunk") or stage.startswith("configurations,"):
+        return "configurations (chunks on Dask)"
+    if stage.startswith("stress verdict"):
+        return "stress verdicts of the candidates"
+    if stage.startswith("unit solutions"):
+        return "unit solutions"
+    return re.sub(r"\s*\(.*\)$", "", stage)
+
+
+def timeline_rows(rec: dict) -> list[str]:
+    """Per command of the record (benchmarks/profile_timeline.py): wall time, peak tree RSS, and its
+    stage groups in seconds (share of the wall time) and peak RSS, in the order they first ran."""
+    out = ["| command | wall | peak RSS | where the time goes (seconds, share, peak tree RSS) |", "|---|---:|---:|---|"]
+    for series, rows in rec["samples"].items():
+        r, groups = rows[0], {}
+        for st in r["stages"]:
+            g = groups.setdefault(timeline_group(st["stage"]), [0.0, 0.0])
+            g[0] += st["seconds"]
+            g[1] = max(g[1], st["peak_tree_rss_mib"])
+        cells = "; ".join(f"{name} {t:.1f} s ({100 * t / r['wall_s']:.0f} %, {m:.0f} MiB)"
+                          for name, (t, m) in groups.items() if t >= 0.05)
+        out.append(f"| {series} | {r['wall_s']:.1f} s | {r['peak_tree_rss_mib']:.0f} MiB | {cells} |")
+    return out
+
+
+def timeline(rec: dict) -> str:
+    lines = head(rec, "Where a command's time and memory go: its stages on a clock")
+    lines += ["Each command as a user runs it (`python -m rigfem ...`, its own progress observer), every stage "
+              "event time-stamped; a stage lasts until the next begins (what runs inside it in parallel shows as "
+              "its width, not as a sum); peak RSS: the whole process tree (mesher, solver and picture children "
+              "included) while the stage ran.  Cold: empty rigfem and numba caches; warm: the caches the cold run "
+              "filled.", "", *timeline_rows(rec), ""]
+    for series, rows in rec["samples"].items():
+        r = rows[0]
+        lines += [f"## {series}: {r['wall_s']:.1f} s, peak {r['peak_tree_rss_mib']:.0f} MiB", "",
+                  "| stage | starts at | seconds | share | peak tree RSS |", "|---|---:|---:|---:|---:|"]
+        lines += [f"| {st['stage']} | {st['start_s']:.1f} s | {st['seconds']:.2f} | "
+                  f"{100 * st['seconds'] / r['wall_s']:.0f} % | {st['peak_tree_rss_mib']:.0f} MiB |"
+                  for st in r["stages"]]
+        lines.append("")
+    return "\n".join(lines)
+
+
 def kinematics(rec: dict) -> str:
     p = rec["params"]
     lines = head(rec, "Closed-form kinematics benchmark")
@@ -499,4 +548,4 @@ RENDER: dict[str, Callable[[dict], str]] = {
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
     "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
     "bad_inputs": bad_inputs, "adaptive": adaptive,
-    "levers": levers, "pardiso": pardiso, "mesh": mesh, "cache_kinds": cache_kinds}
+    "levers": levers, "pardiso": pardiso, "mesh": mesh, "cache_kinds": cache_kinds, "timeline": timeline}

@@ -199,3 +199,22 @@ def test_perf_record_keeps_rows_not_remeasured(tmp_path):
     merged, prov = bench_perf.merge({"parts cold": [_run(0.2)]}, old, None)
     assert merged["help cold"] == old["samples"]["help cold"] and merged["parts cold"][0]["wall_s"] == 0.2
     assert set(prov) == {"help cold", "parts cold"}
+
+
+def test_the_timeline_groups_each_commands_stages_from_the_record(tmp_path):
+    """profile_timeline's record renders per command: its wall time, and each stage group's seconds and
+    share (the per-part FE stages as one group), in the order they first ran."""
+    stages = [{"stage": "imports (rigfem.cli)", "start_s": 0.0, "seconds": 1.0, "peak_tree_rss_mib": 100.0},
+              {"stage": "solving part plate_A (coarse)", "start_s": 1.0, "seconds": 4.0, "peak_tree_rss_mib": 800.0},
+              {"stage": "solving part post_B (draft) · 4 of 12 cases done", "start_s": 5.0, "seconds": 5.0,
+               "peak_tree_rss_mib": 900.0},
+              {"stage": "report: the parts' pictures", "start_s": 10.0, "seconds": 10.0, "peak_tree_rss_mib": 1500.0}]
+    path = record.write_record("timeline", {"check cold": [_run(20.0, 1500.0, stages=stages)]}, {}, command="fake",
+                               out=tmp_path)
+    rec = json.loads(path.read_text())
+    row = tables.timeline_rows(rec)[2]
+    assert row.startswith("| check cold | 20.0 s | 1500 MiB |")
+    assert ("imports 1.0 s (5 %, 100 MiB); FE: mesh, solve and refine each part 9.0 s (45 %, 900 MiB); "
+            "report: the parts' pictures 10.0 s (50 %, 1500 MiB)") in row
+    assert "cold standard check 20 s: FE 9 s, the report after the verdict 10 s" in publish._timeline(rec)
+    assert "| solving part post_B (draft) · 4 of 12 cases done | 5.0 s | 5.00 | 25 % | 900 MiB |" in tables.timeline(rec)
