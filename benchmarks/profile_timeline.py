@@ -2,6 +2,7 @@
 
     python benchmarks/profile_timeline.py                       # check final-cm standard, sweep, synthesize --rig
     python benchmarks/profile_timeline.py --only check --state warm
+    python benchmarks/profile_timeline.py --baseline 450ffeb       # the check also with 450ffeb's code
 
 Each command runs as a user runs it (``python -m rigfem ...``, the command line's own observer),
 with the observer's stage events time-stamped and the peak RSS of the whole process tree (the
@@ -15,13 +16,15 @@ Writes results/benchmarks/timeline.json (``python benchmarks/publish.py`` writes
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from bench_perf import ONE_THREAD, SYNTH
-from record import OUT, ROOT, cold_env, commit, timed_process, write_record
+from bench_perf import ONE_THREAD, SYNTH, baseline_tree, env_of, runs_code_of
+from record import OUT, ROOT, commit, timed_process, write_record
 
 #: command -> argv after ``rigfem`` (the out folder is added)
 COMMANDS = {"check": ["check", "final-cm", "--quiet"], "check draft": ["check", "final-cm", "--fidelity", "draft",
@@ -86,26 +89,49 @@ def timeline(argv: list[str], env: dict) -> dict:
             "load_before": r["load_before"], "stages": stages}
 
 
+def run_all(names: list[str], states: list[str], tree: Path, prefix: str, samples: dict) -> None:
+    """Each command of ``names`` with the code of ``tree``: cold, then warm on the caches it filled
+    (if asked), its samples named ``prefix + command + state``."""
+    for name in names:
+        with tempfile.TemporaryDirectory(prefix="timeline-") as tmp:
+            env = env_of(tmp, tree, **(ONE_THREAD if name == "sweep" else {}))
+            for k, state in enumerate(s for s in ("cold", "warm") if s in states or s == "cold"):
+                out = [] if name == "synthesize --rig" else ["--out", str(Path(tmp) / f"out-{k}")]
+                run = timeline([*COMMANDS[name], *out], env)
+                if state in states:
+                    samples[f"{prefix}{name} {state}"] = [run]
+                    print(f"{prefix}{name} {state}: {run['wall_s']:.1f} s, {run['peak_tree_rss_mib']:.0f} MiB",
+                          flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", nargs="+", choices=list(COMMANDS), default=list(COMMANDS))
     ap.add_argument("--state", nargs="+", choices=["cold", "warm"], default=["cold", "warm"])
+    ap.add_argument("--baseline", metavar="REV", help="also run the commands of --baseline-only with the code of REV "
+                                                      "(series 'before: ...'), each right before this checkout's")
+    ap.add_argument("--baseline-only", nargs="+", choices=list(COMMANDS), default=["check"],
+                    help="the commands --baseline runs (default: check)")
     ap.add_argument("--allow-dirty", action="store_true", help="write a record from a modified work tree")
     ap.add_argument("--out", type=Path, default=OUT, help="record folder (default results/benchmarks)")
     a = ap.parse_args(argv)
     if commit()["dirty"] and not a.allow_dirty:
         raise SystemExit("the work tree has uncommitted changes: commit them, or pass --allow-dirty")
     samples: dict[str, list] = {}
-    for name in a.only:
-        with tempfile.TemporaryDirectory(prefix="timeline-") as tmp:
-            env = cold_env(tmp, PYTHONPATH=str(ROOT), PYTHONSAFEPATH="1", **(ONE_THREAD if name == "sweep" else {}))
-            for k, state in enumerate(s for s in ("cold", "warm") if s in a.state or s == "cold"):
-                out = ["--out", str(Path(tmp) / f"out-{k}")]
-                run = timeline([*COMMANDS[name], *out] if name != "synthesize --rig" else COMMANDS[name], env)
-                if state in a.state:
-                    samples[f"{name} {state}"] = [run]
-                    print(f"{name} {state}: {run['wall_s']:.1f} s, {run['peak_tree_rss_mib']:.0f} MiB", flush=True)
-    print(f"wrote {write_record('timeline', samples, {}, {'commands': {k: COMMANDS[k] for k in a.only}}, out=a.out)}")
+    base = None
+    with contextlib.ExitStack() as stack:
+        if a.baseline:
+            sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", a.baseline], capture_output=True, text=True,
+                                 check=True).stdout.strip()
+            tree, base = stack.enter_context(baseline_tree(sha)), {"commit": sha, "baseline": a.baseline}
+            runs_code_of(tree)
+        runs_code_of(ROOT)
+        for name in a.only:
+            if base and name in a.baseline_only:
+                run_all([name], a.state, tree, "before: ", samples)
+            run_all([name], a.state, ROOT, "", samples)
+    params = {"commands": {k: COMMANDS[k] for k in a.only}, "baseline": base}
+    print(f"wrote {write_record('timeline', samples, {}, params, out=a.out)}")
     return 0
 
 
