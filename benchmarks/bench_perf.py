@@ -287,7 +287,9 @@ def merge(samples: dict[str, list], old: dict | None, baseline: dict | None) -> 
     old_base = ((old or {}).get("params", {}).get("baseline") or {}).get("commit")
     drop = (lambda k: k.startswith("before: ")) if baseline and baseline["commit"] != old_base else (lambda k: False)
     keep = {k: v for k, v in (old or {}).get("samples", {}).items() if k not in samples and not drop(k)}
-    prov = {k: v for k, v in (old or {}).get("params", {}).get("provenance", {}).items() if k in keep}
+    whole = {"date": old["date"], "commit": old["commit"]["sha"], "dirty": old["commit"]["dirty"]} if old else {}
+    said = (old or {}).get("params", {}).get("provenance", {})
+    prov = {k: said.get(k, whole) for k in keep}  # a series without its own: the old record's date and commit
     ours = {k: (now | baseline if k.startswith("before: ") and baseline else now) for k in samples}
     return {**keep, **samples}, {**prov, **ours}
 

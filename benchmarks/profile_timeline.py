@@ -23,7 +23,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench_perf import ONE_THREAD, SYNTH, baseline_tree, env_of, runs_code_of
+from bench_perf import ONE_THREAD, SYNTH, baseline_tree, env_of, merge, runs_code_of
 from record import OUT, ROOT, commit, timed_process, write_record
 
 #: command -> argv after ``rigfem`` (the out folder is added)
@@ -35,7 +35,8 @@ COMMANDS = {"check": ["check", "final-cm", "--quiet"], "check draft": ["check", 
 PROBE = r"""
 import json, sys, threading, time
 t0 = time.perf_counter()
-events, peak = [[0.0, "start (Python up)", 0.0]], [0.0]
+BEFORE = "before the first stage: imports, arguments, the command's first work"
+events, peak = [[0.0, "start", 0.0]], [0.0]
 def rss():
     import psutil
     root = psutil.Process()
@@ -55,7 +56,7 @@ def mark(text):
     events.append([time.perf_counter() - t0, text, peak[0]])
     peak[0] = 0.0
 import rigfem.cli.progress as progress
-mark("imports (rigfem.cli)")
+mark(BEFORE)
 base = progress._Progress
 class Timed(base):
     def stage(self, text):
@@ -123,15 +124,19 @@ def main(argv: list[str] | None = None) -> int:
         if a.baseline:
             sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", a.baseline], capture_output=True, text=True,
                                  check=True).stdout.strip()
-            tree, base = stack.enter_context(baseline_tree(sha)), {"commit": sha, "baseline": a.baseline}
+            tree, base = stack.enter_context(baseline_tree(sha)), {"commit": sha, "dirty": False, "baseline": a.baseline}
             runs_code_of(tree)
         runs_code_of(ROOT)
         for name in a.only:
             if base and name in a.baseline_only:
                 run_all([name], a.state, tree, "before: ", samples)
             run_all([name], a.state, ROOT, "", samples)
-    params = {"commands": {k: COMMANDS[k] for k in a.only}, "baseline": base}
-    print(f"wrote {write_record('timeline', samples, {}, params, out=a.out)}")
+    path = a.out / "timeline.json"
+    old = json.loads(path.read_text()) if path.is_file() else None
+    merged, prov = merge(samples, old, base)  # the commands not run again keep their series
+    params = {"commands": {k: COMMANDS[k] for k in a.only}, "provenance": prov,
+              "baseline": base or (old or {}).get("params", {}).get("baseline")}
+    print(f"wrote {write_record('timeline', merged, {}, params, out=a.out)}")
     return 0
 
 

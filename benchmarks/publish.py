@@ -22,7 +22,7 @@ from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
 from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med, perf_note,
-                    perf_rows, timeline_rows)
+                    perf_rows, timeline_note, timeline_rows)
 
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
@@ -359,7 +359,8 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
              + "\n\n" + cache_note(c) + "\n") if c else _missing("cache_kinds") + ".\n"
     t = recs.get("timeline")
     where = (f"Command: `{t['command']}` (results/benchmarks/timeline.md, {t['date'][:10]}, commit "
-             f"{t['commit']['sha'][:10]}):\n\n" + "\n".join(timeline_rows(t)) + "\n") if t else _missing("timeline") + ".\n"
+             f"{t['commit']['sha'][:10]}):\n\n" + "\n".join(timeline_rows(t)) + "\n\n" + timeline_note(t) + "\n") if t \
+        else _missing("timeline") + ".\n"
     return {"cache-kinds": cache, "perf-figures": "\n".join(figure_rows(recs, "performance")) + "\n",
             "verification-figures": "\n".join(figure_rows(recs, "verification")) + "\n",
             "grid-cost": grid, "performance": perf, "preset-errors": presets, "timeline": where}

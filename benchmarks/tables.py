@@ -222,6 +222,10 @@ def stages(rec: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: profile_timeline's name of the time from its probe's start to the command's first stage event
+BEFORE_FIRST_STAGE = "before the first stage: imports, arguments, the command's first work"
+
+
 def timeline_group(stage: str) -> str:
     """A stage's group in the timeline tables: the per-part, per-chunk and per-candidate stages as one."""
     import re
@@ -234,6 +238,8 @@ def timeline_group(stage: str) -> str:
         return "stress verdicts of the candidates"
     if stage.startswith("unit solutions"):
         return "unit solutions"
+    if stage in ("imports (rigfem.cli)", "start (Python up)"):  # the probe's first records' names for these two
+        return {"start (Python up)": "start", "imports (rigfem.cli)": BEFORE_FIRST_STAGE}[stage]
     return re.sub(r"\s*\(.*\)$", "", stage)
 
 
@@ -253,13 +259,22 @@ def timeline_rows(rec: dict) -> list[str]:
     return out
 
 
+def timeline_note(rec: dict) -> str:
+    """When and at which commit each series was measured ("before: ..." series: the baseline's code)."""
+    by: dict[str, list[str]] = {}
+    for series, p in rec["params"].get("provenance", {}).items():
+        by.setdefault(f"{p['date'][:16].replace('T', ' ')} UTC at commit {p['commit'][:10]}"
+                      f"{' (dirty)' if p.get('dirty') else ''}", []).append(series)
+    return "Measured " + "; ".join(f"{w}: {', '.join(s)}" for w, s in by.items()) + "." if by else ""
+
+
 def timeline(rec: dict) -> str:
     lines = head(rec, "Where a command's time and memory go: its stages on a clock")
     lines += ["Each command as a user runs it (`python -m rigfem ...`, its own progress observer), every stage "
               "event time-stamped; a stage lasts until the next begins (what runs inside it in parallel shows as "
               "its width, not as a sum); peak RSS: the whole process tree (mesher, solver and picture children "
               "included) while the stage ran.  Cold: empty rigfem and numba caches; warm: the caches the cold run "
-              "filled.", "", *timeline_rows(rec), ""]
+              "filled.", "", *timeline_rows(rec), "", timeline_note(rec), ""]
     for series, rows in rec["samples"].items():
         r = rows[0]
         lines += [f"## {series}: {r['wall_s']:.1f} s, peak {r['peak_tree_rss_mib']:.0f} MiB", "",

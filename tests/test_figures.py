@@ -214,7 +214,8 @@ def test_the_timeline_groups_each_commands_stages_from_the_record(tmp_path):
     rec = json.loads(path.read_text())
     row = tables.timeline_rows(rec)[2]
     assert row.startswith("| check cold | 20.0 s | 1500 MiB |")
-    assert ("imports 1.0 s (5 %, 100 MiB); FE: mesh, solve and refine each part 9.0 s (45 %, 900 MiB); "
+    assert ("before the first stage: imports, arguments, the command's first work 1.0 s (5 %, 100 MiB); "
+            "FE: mesh, solve and refine each part 9.0 s (45 %, 900 MiB); "
             "report: the parts' pictures 10.0 s (50 %, 1500 MiB)") in row
     assert "cold standard check 20 s: FE 9 s, the report after the verdict 10 s" in publish._timeline(rec)
     assert "| solving part post_B (draft) · 4 of 12 cases done | 5.0 s | 5.00 | 25 % | 900 MiB |" in tables.timeline(rec)

@@ -6,18 +6,18 @@ MPa, Voigt xx, yy, zz, xy, yz, xz), ``von_mises`` (MPa) and ``safety_factor`` =
 allowable / von Mises, capped at ``SAFETY_CAP`` where the stress is (near) zero so
 no inf is written.
 
-The files are written by meshio as VTK XML, binary and zlib-compressed (ParaView, VTK and
-meshio read them).  Every array is float32 — node coordinates too (mm: 7 significant digits,
-below 1e-4 mm on a metre-long part) — and connectivity int32: same arrays, same names, a few times
-smaller than uncompressed float64 files (results/benchmarks/folder_size.json).  What is left is
-mostly the float32 fields themselves: zlib takes little off them.
+The files are written by VTK's own XML writer (the library ParaView reads them with; meshio reads
+them too): appended raw binary data (no base64, which adds a third), zlib-compressed at level 1
+(the float32 fields barely compress: a higher level costs time for little), every array float32 —
+node coordinates too (mm: 7 significant digits, below 1e-4 mm on a metre-long part) — and
+connectivity Int32: same arrays, same names, a few times smaller than uncompressed float64 files
+(results/benchmarks/folder_size.json).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 from rigfem.fe.solution import Solution
@@ -26,15 +26,48 @@ from rigfem.tensors import von_mises
 SAFETY_CAP = 100.0
 
 
+#: VTK's cell type of each cell kind written (the node order is VTK's, which is C3D10's for tetra10)
+VTK_CELL = {"tetra": 10, "tetra10": 24}
+
+
 def write_unstructured(path: str | Path, points: np.ndarray, cell_type: str, cells: np.ndarray,
                        point_data: dict[str, np.ndarray]) -> Path:
-    """Write one cell kind's unstructured grid with its point data as a zlib-compressed binary VTU
-    (meshio); arrays keep the dtype they come in: the caller chooses the precision."""
+    """Write one cell kind's unstructured grid with its point data as VTK XML (VTK's writer: appended
+    raw binary, zlib level 1, Int32 connectivity); arrays keep the dtype they come in: the caller
+    chooses the precision.  Arrays are listed in ``point_data``'s order (ParaView's list)."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkUnstructuredGrid
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    mesh = meshio.Mesh(np.asarray(points), [(cell_type, np.asarray(cells).astype(np.int32))],
-                       point_data=dict(point_data))
-    mesh.write(path, file_format="vtu", binary=True, compression="zlib")
+    cells = np.asarray(cells, dtype=np.int64)
+    keep = []  # the NumPy arrays VTK's arrays point into stay alive until the file is written
+    pts = vtkPoints()
+    keep.append(np.ascontiguousarray(points))
+    pts.SetData(numpy_to_vtk(keep[-1]))
+    conn = vtkCellArray()
+    keep += [np.arange(0, cells.size + 1, cells.shape[1], dtype=np.int64), np.ascontiguousarray(cells.ravel())]
+    conn.SetData(numpy_to_vtk(keep[-2]), numpy_to_vtk(keep[-1]))
+    grid = vtkUnstructuredGrid()
+    grid.SetPoints(pts)
+    grid.SetCells(VTK_CELL[cell_type], conn)
+    for name, values in point_data.items():
+        keep.append(np.ascontiguousarray(values))
+        arr = numpy_to_vtk(keep[-1])
+        arr.SetName(name)
+        grid.GetPointData().AddArray(arr)
+    w = vtkXMLUnstructuredGridWriter()
+    w.SetFileName(str(path))
+    w.SetInputData(grid)
+    w.SetDataModeToAppended()
+    w.EncodeAppendedDataOff()
+    w.SetCompressorTypeToZLib()
+    w.SetCompressionLevel(1)
+    w.SetIdTypeToInt32()
+    if not w.Write():
+        raise OSError(f"VTK could not write {path}")
     return path
 
 
