@@ -153,8 +153,8 @@ def test_perf_table_says_met_from_the_data(tmp_path):
     rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in tables.perf_rows(rec)[2:]}
     assert rows["`rigfem --help`"].endswith("| met |") and "0.15 s" in rows["`rigfem --help`"]
     assert rows["`rigfem parts`"].endswith("| **not met** |")  # cold 0.5 s > 0.3 s although warm is fast
-    assert rows["`rigfem check final-cm --fidelity draft`"].endswith("| met |")  # the draft goal is cold only
-    assert rows["`rigfem check final-cm`, standard"].endswith("| not measured |")  # no warm series
+    assert rows["`rigfem check final-cm --force --fidelity draft`"].endswith("| met |")  # the draft goal is cold only
+    assert rows["`rigfem check final-cm --force`, standard"].endswith("| not measured |")  # no warm series
     folder = rows["result folder of a standard check (final-cm)"]
     assert "folder 16.0 MB" in folder and folder.endswith("| **not met** |")  # the standard cold run's folder
     assert "ratio 0.52" in rows[next(k for k in rows if "CalculiX" in k)] and "**not met**" in rows[
@@ -172,7 +172,7 @@ def test_perf_table_shows_a_baseline_before_and_after(tmp_path):
                                 "check standard cold": [_run(14.0, 900.0, folder_mb=12.0)],
                                 "check standard warm": [_run(0.8)], "calibration": [{"seconds": 2.0}]})
     rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in tables.perf_rows(rec)[2:]}
-    std = rows["`rigfem check final-cm`, standard"]
+    std = rows["`rigfem check final-cm --force`, standard"]
     assert "| 30.0 s → 14.0 s | 2.00 s → 0.80 s | 1500 MiB → 900 MiB |" in std and std.endswith("| met |")
     assert "145.0 MB → 12.0 MB" in rows["result folder of a standard check (final-cm)"]
     assert rec["derived"]["check standard cold after / before"] == pytest.approx(14 / 30)

@@ -82,4 +82,5 @@ def test_check_names_its_stages(monkeypatch, capsys, tmp_path):
     assert main(["check", "final-cm", "--out", str(tmp_path / "o"), *argv]) == 0
     stages = re.findall(r"^rigfem check: (.+?)(?: · .*)? … \d+ s$", capsys.readouterr().err, re.M)
     assert [s for i, s in enumerate(stages) if s not in stages[:i] and s != "running"] == [
-        "dynamics", "solving part plate_A (coarse)", "report"]  # the ladder's first level
+        "dynamics", "solving part plate_A (coarse)", "report", "report: reactions and peaks pictures, field files",
+        "report: the parts' pictures", "report: report.json, report.md, report.html"]  # the ladder's first level

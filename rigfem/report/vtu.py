@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rigfem.errors import ComputeError
 from rigfem.fe.solution import Solution
 from rigfem.tensors import von_mises
 
@@ -59,7 +60,7 @@ def write_unstructured(path: str | Path, points: np.ndarray, cell_type: str, cel
         arr.SetName(name)
         grid.GetPointData().AddArray(arr)
     w = vtkXMLUnstructuredGridWriter()
-    w.SetFileName(str(path))
+    w.WriteToOutputStringOn()  # the file is written by Python: a full disk is an OSError naming it
     w.SetInputData(grid)
     w.SetDataModeToAppended()
     w.EncodeAppendedDataOff()
@@ -67,7 +68,9 @@ def write_unstructured(path: str | Path, points: np.ndarray, cell_type: str, cel
     w.SetCompressionLevel(1)
     w.SetIdTypeToInt32()
     if not w.Write():
-        raise OSError(f"VTK could not write {path}")
+        raise ComputeError(f"VTK could not encode {path.name}")
+    data = w.GetOutputString()  # VTK's wrapper: bytes, or str where the bytes happen to be valid UTF-8
+    path.write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
     return path
 
 
