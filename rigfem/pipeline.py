@@ -19,6 +19,7 @@ the same :func:`rigfem.verdict.part.judge`.
 ('pass', '1 of 6 parts (not crank_rail, coupler_rail, rocker_rail, plate_B, post_B), original mode only', [('plate_A', 'original')])
 >>> (out / "report.json").is_file()
 True
+>>> import shutil; shutil.rmtree(out.parent)  # the example's folder, not left behind
 """
 
 from __future__ import annotations
