@@ -6,8 +6,8 @@ MPa, Voigt xx, yy, zz, xy, yz, xz), ``von_mises`` (MPa) and ``safety_factor`` =
 allowable / von Mises, capped at ``SAFETY_CAP`` where the stress is (near) zero so
 no inf is written.
 
-The files are written by VTK's own XML writer (the library ParaView reads them with; meshio reads
-them too): appended raw binary data (no base64, which adds a third), zlib-compressed at level 1
+The files are written by VTK's own XML writer, through PyVista (the library ParaView reads them
+with; meshio reads them too): appended raw binary data (no base64, which adds a third), zlib-compressed at level 1
 (the float32 fields barely compress: a higher level costs time for little), every array float32 —
 node coordinates too (mm: 7 significant digits, below 1e-4 mm on a metre-long part) — and
 connectivity Int32: same arrays, same names, a few times smaller than uncompressed float64 files
@@ -36,30 +36,14 @@ def write_unstructured(path: str | Path, points: np.ndarray, cell_type: str, cel
     """Write one cell kind's unstructured grid with its point data as VTK XML (VTK's writer: appended
     raw binary, zlib level 1, Int32 connectivity); arrays keep the dtype they come in: the caller
     chooses the precision.  Arrays are listed in ``point_data``'s order (ParaView's list)."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkCommonCore import vtkPoints
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkUnstructuredGrid
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+    import pyvista as pv
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    cells = np.asarray(cells, dtype=np.int64)
-    keep = []  # the NumPy arrays VTK's arrays point into stay alive until the file is written
-    pts = vtkPoints()
-    keep.append(np.ascontiguousarray(points))
-    pts.SetData(numpy_to_vtk(keep[-1]))
-    conn = vtkCellArray()
-    keep += [np.arange(0, cells.size + 1, cells.shape[1], dtype=np.int64), np.ascontiguousarray(cells.ravel())]
-    conn.SetData(numpy_to_vtk(keep[-2]), numpy_to_vtk(keep[-1]))
-    grid = vtkUnstructuredGrid()
-    grid.SetPoints(pts)
-    grid.SetCells(VTK_CELL[cell_type], conn)
+    grid = pv.UnstructuredGrid({VTK_CELL[cell_type]: np.asarray(cells, dtype=np.int64)}, np.asarray(points))
     for name, values in point_data.items():
-        keep.append(np.ascontiguousarray(values))
-        arr = numpy_to_vtk(keep[-1])
-        arr.SetName(name)
-        grid.GetPointData().AddArray(arr)
-    w = vtkXMLUnstructuredGridWriter()
+        grid.point_data[name] = np.asarray(values)
+    w = pv.XMLUnstructuredGridWriter(path, grid).writer  # PyVista's handle on VTK's own writer
     w.WriteToOutputStringOn()  # the file is written by Python: a full disk is an OSError naming it
     w.SetInputData(grid)
     w.SetDataModeToAppended()
