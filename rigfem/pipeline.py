@@ -29,6 +29,7 @@ from pathlib import Path
 
 from rigfem.context import Context, default_context
 from rigfem.dynamics import cycle, imported
+from rigfem.dynamics.history import Reactions
 from rigfem.fe.executor import Plan, solve_cases
 from rigfem.io.reactions_csv import read_csv
 from rigfem.job import Checked, Job, Request, read_job
@@ -39,13 +40,12 @@ from rigfem.report.folder import Output, check_writable, folder_lock, read_repor
 from rigfem.settings import REFERENCE_SCENE
 from rigfem.verdict.part import Target, judge
 
-__all__ = ["Request", "Output", "Context", "check", "solve_job", "run_check", "read_report"]
+__all__ = ["Request", "Output", "Context", "check", "load_cases", "solve_job", "run_check", "read_report"]
 
 
-def solve_job(job: Job, ctx: Context) -> Checked:
-    """Every stage from a read job to its verdicts: motion, reactions (the dynamics, or the job's
-    reactions CSV), part cases (none at a toggle, where the reactions are unbounded), FE (each part
-    refined until its verdict is decided), verdicts."""
+def load_cases(job: Job, ctx: Context) -> tuple[Reactions, list]:
+    """The stages from a read job to its part cases: motion, reactions (the dynamics, or the job's
+    reactions CSV) and part cases (none at a toggle, where the reactions are unbounded)."""
     motion, options = linkage_state(job.linkage, job.crank_deg, job.scene.speed_hz), job.dynamics
     if options.reactions_csv:
         ctx.observer.stage("reactions from the CSV")
@@ -55,7 +55,13 @@ def solve_job(job: Job, ctx: Context) -> Checked:
     else:
         ctx.observer.stage("dynamics")
         reactions = cycle.react(job.linkage, motion, options)
-    cases = [] if reactions.singular else part_cases(reactions.history, reactions.peaks, job.settings)
+    return reactions, [] if reactions.singular else part_cases(reactions.history, reactions.peaks, job.settings)
+
+
+def solve_job(job: Job, ctx: Context) -> Checked:
+    """Every stage from a read job to its verdicts: :func:`load_cases`, FE (each part refined until
+    its verdict is decided), verdicts."""
+    reactions, cases = load_cases(job, ctx)
     results = solve_cases(cases, job.settings, Plan(Target(job.settings), job.frames), ctx) if cases else []
     verdicts = judge([r.outcome for r in results], job.settings, job.rule_violations, reactions.singular)
     return Checked(job, reactions, tuple(results), verdicts)

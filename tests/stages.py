@@ -2,12 +2,10 @@
 
 from rigfem.cache import from_environment
 from rigfem.context import Context
-from rigfem.dynamics.cycle import react
 from rigfem.fe.executor import Plan, solve_cases
 from rigfem.fe.partcase import solve_group
 from rigfem.job import Request, read_job
-from rigfem.linkage.state import linkage_state
-from rigfem.loads.cases import part_cases
+from rigfem.pipeline import load_cases
 from rigfem.report.entries import part_entry
 from rigfem.verdict.part import Target, judge
 
@@ -22,10 +20,10 @@ def solved(scene: str = "final-cm", overrides: dict | None = None, whole: bool =
     solution (any combination can be asked of it), else what a check keeps; ``solve`` the FE stage's
     part solver (a test's recording one)."""
     job = job_of(scene, overrides)
-    reactions = react(job.linkage, linkage_state(job.linkage, job.crank_deg, job.scene.speed_hz), job.dynamics)
-    cases = part_cases(reactions.history, reactions.peaks, job.settings)
+    ctx = Context(from_environment())
+    reactions, cases = load_cases(job, ctx)
     plan = Plan(Target(job.settings), None if whole else job.frames, solve)
-    return job, reactions, solve_cases(cases, job.settings, plan, Context(from_environment()))
+    return job, reactions, solve_cases(cases, job.settings, plan, ctx)
 
 
 def recording(levels: list):
