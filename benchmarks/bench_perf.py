@@ -127,12 +127,17 @@ def cold_warm(run, tree: Path, repeats: int, warm: bool = True) -> tuple[list, l
     return cold, hot
 
 
+#: the result folder's parts (benchmarks/bench_folder_size.measure), its profile
+FOLDER_KINDS = ("vtu_critical", "vtu_frames", "png", "html", "json", "md", "pvd", "other")
+
+
 def _check(fidelity: str, env: dict, tmp: str) -> dict:
     """One ``rigfem check final-cm`` process (exit 0 or 1); its result folder measured."""
     out = Path(tmp) / f"out-{len(list(Path(tmp).glob('out-*')))}"
     r = _rigfem(["check", "final-cm", "--fidelity", fidelity, "--out", str(out), "--quiet"], env, ok=(0, 1))
     size = measure(out)
-    return r | {"folder_mb": size["total_bytes"] / 1e6, "folder_files": size["files"]}
+    return r | {"folder_mb": size["total_bytes"] / 1e6, "folder_files": size["files"],
+                "folder_kinds_mb": {k: size[f"{k}_bytes"] / 1e6 for k in FOLDER_KINDS}}
 
 
 def row_check(a: argparse.Namespace, tree: Path) -> dict[str, list]:
@@ -164,6 +169,10 @@ def row_sweep(a: argparse.Namespace, tree: Path) -> dict[str, list]:
     return {"sweep cold": cold, "sweep warm": warm}
 
 
+#: rigfem's FE steps on the CalculiX row's mesh (benchmarks/bench_calculix.py), its profile
+CCX_STEPS = ("assembly", "supports_loads", "factorise", "solve", "stress", "fe_total")
+
+
 def row_ccx(a: argparse.Namespace, tree: Path) -> dict[str, list]:
     """The tree's benchmarks/bench_calculix.py in its own process, its record written to a scratch folder."""
     with tempfile.TemporaryDirectory(prefix="perf-") as tmp:
@@ -173,8 +182,10 @@ def row_ccx(a: argparse.Namespace, tree: Path) -> dict[str, list]:
         if r["exit"]:
             raise SystemExit(f"bench_calculix.py exited {r['exit']}: {r['stderr_tail']}")
         rec = json.loads((Path(tmp) / "calculix_vs_rigfem.json").read_text())
+    steps = {k: rec["summary"]["rigfem"][k]["median"] for k in CCX_STEPS}
     return {"ccx": [_sample(r) | {"ratio": rec["derived"]["FE wall ratio rigfem / ccx"],
-                                  "dof": rec["params"]["mesh"]["dof"]}]}
+                                  "dof": rec["params"]["mesh"]["dof"], "rigfem_steps_s": steps,
+                                  "ccx_s": rec["summary"]["ccx"]["wall"]["median"]}]}
 
 
 def row_dof(a: argparse.Namespace, tree: Path) -> dict[str, list]:

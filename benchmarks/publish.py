@@ -21,8 +21,8 @@ import sys
 from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
-from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med, perf_note,
-                    perf_rows, timeline_note, timeline_rows)
+from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, ccx_profile, folder_profile, grid_note, grid_rows, hms,
+                    le10_outliers, med, perf_note, perf_rows, timeline_note, timeline_rows)
 
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
@@ -62,6 +62,7 @@ COMMANDS = {
     "band_coverage": "python benchmarks/band_coverage.py", "perf": "python benchmarks/bench_perf.py",
     "bad_inputs": "python benchmarks/bad_inputs.py",
     "cache_kinds": "python benchmarks/bench_cache.py --repeats 3",
+    "same_results": "python benchmarks/bench_same_results.py --baseline 450ffeb",
     "pardiso": "python benchmarks/bench_pardiso.py --repeats 3",
     "mesh": "python benchmarks/bench_mesh.py --repeats 3",
     "adaptive": "python benchmarks/bench_adaptive.py --fidelity standard draft",
@@ -190,6 +191,12 @@ ROWS = [
                 f"{st['samples']['check cold'][0]['total (profiled)']:.0f} s — results/benchmarks/stages.md"),
     ("timeline", "a command's stages on a clock, children included (check cold and warm, draft, synthesize "
      "--rig, sweep): where the wall time and the memory go", _timeline),
+    ("same_results", "the reference scenes' verdicts and peaks with the code before issue 41's work and after it, the "
+     "same meshes, 1 thread",
+     lambda r: f"largest peak difference **{r['derived']['largest peak difference before -> after']:.1e}** "
+               f"(run to run {r['derived']['largest peak difference run to run'] or 0:.1e}); verdicts and meshes the "
+               f"same: {'yes' if r['derived']['verdicts and meshes the same'] else '**no**'}, "
+               f"{r['derived']['part cases compared']} part cases, {r['date'][:10]} — results/benchmarks/same_results.md"),
     ("kinematics", "closed-form kinematics, four-bar, full turn at 5000 angles",
      lambda k: f"**{k['derived']['total ms']:.1f} ms** (median of {k['params']['runs']}) — "
                "results/benchmarks/kinematics.md"),
@@ -350,7 +357,8 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
             + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
     p = recs.get("perf")
     perf = (f"Command: `{COMMANDS['perf']}` (this record: `{p['command']}`):\n\n" + "\n".join(perf_rows(p)) + "\n\n"
-            + perf_note(p) + "\n") if p else _missing("perf") + ".\n"
+            + perf_note(p) + "\n" + "".join(f"\n{x}\n" for x in (folder_profile(p), ccx_profile(p)) if x)) \
+        if p else _missing("perf") + ".\n"
     conv = recs.get("convergence")
     presets = ("Commands: `rigfem convergence PART` for each part (results/convergence/PART.json):\n\n"
                + "\n".join(preset_rows(conv)) + "\n") if conv else "not measured yet: run `rigfem convergence PART`.\n"

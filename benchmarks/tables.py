@@ -417,9 +417,40 @@ def perf_note(rec: dict) -> str:
             "cores — results/benchmarks/perf.md.")
 
 
+def folder_profile(rec: dict) -> str:
+    """What the standard check's result folder holds, by kind (the first cold run of each side)."""
+    names = {"vtu_critical": "VTU at the critical angles", "vtu_frames": "VTU animation frames", "png": "PNG",
+             "html": "HTML", "json": "JSON", "md": "Markdown", "pvd": "PVD", "other": "other"}
+    out = []
+    for series in ("check standard cold", "before: check standard cold"):
+        x = (rec["samples"].get(series) or [{}])[0]
+        if "folder_kinds_mb" in x:
+            out.append(f"{'before' if series.startswith('before') else 'after'}: "
+                       + ", ".join(f"{names[k]} {v:.1f} MB" for k, v in x["folder_kinds_mb"].items() if v >= 0.05)
+                       + f" of {x['folder_mb']:.1f} MB")
+    return "The result folder by kind: " + "; ".join(reversed(out)) + "." if out else ""
+
+
+def ccx_profile(rec: dict) -> str:
+    """Where rigfem's FE time goes on the CalculiX row's mesh (after, and before where measured)."""
+    names = {"assembly": "assembly", "supports_loads": "supports and loads", "factorise": "factorisation",
+             "solve": "solve", "stress": "stress recovery"}
+    out = []
+    for series in ("ccx", "before: ccx"):
+        x = (rec["samples"].get(series) or [{}])[0]
+        if "rigfem_steps_s" in x:
+            st = x["rigfem_steps_s"]
+            out.append(f"{'before' if series.startswith('before') else 'after'}: "
+                       + ", ".join(f"{n} {st[k]:.2f} s" for k, n in names.items())
+                       + f" of rigfem's {st['fe_total']:.2f} s; CalculiX {x['ccx_s']:.2f} s")
+    return ("The CalculiX row, rigfem's FE by step (one run, the same mesh): " + "; ".join(reversed(out)) + "."
+            if out else "")
+
+
 def perf(rec: dict) -> str:
     lines = head(rec, "Performance goals of issue 41: every row cold and warm, separate processes")
-    lines += perf_rows(rec) + ["", perf_note(rec), "", "| series | runs | wall s | peak tree RSS MiB | "
+    lines += perf_rows(rec) + ["", perf_note(rec), *(x for f in (folder_profile, ccx_profile) for x in ("", f(rec)) if f(rec)),
+                               "", "| series | runs | wall s | peak tree RSS MiB | "
                                                       "load average at the starts |", "|---|---:|---:|---:|---|"]
     for s, rows in rec["samples"].items():
         loads = ", ".join(f"{x['load_before'][0]:.1f}" for x in rows if "load_before" in x)
@@ -553,6 +584,35 @@ def cache_note(rec: dict) -> str:
             "before any is dropped).")
 
 
+def same_results(rec: dict) -> str:
+    """The reference scenes' figures with the baseline's code and this commit's (bench_same_results.py)."""
+    p, d = rec["params"], rec["derived"]
+    lines = head(rec, f"The reference scenes' verdicts and peaks: the code of {p['baseline']['rev']} and of this commit")
+    lines += [f"Each scene checked as tests/test_reference_scenes.py checks it, {p['repeats']} times per side, each "
+              f"run its own process with empty caches and {p['threads']} MKL/OpenMP thread; the first run of each "
+              "side compared with the other side's, and with the side's own repeats (run to run).  Largest "
+              "relative difference over the scene's part cases; same: verdict, mesh level, FE nodes and tets of "
+              "every part case.", "",
+              "| scene | part cases | peak | error estimate | utilisation | largest displacement | crank angle of "
+              "the peak | same verdicts and meshes | peak, run to run (before; after) |", "|---|---:|---:|---:|---:|"
+              "---:|---:|---|---|"]
+
+    def runs(x: list) -> str:
+        return ", ".join(f"{c['rel']['peak_mpa']:.1e}" for c in x) or "-"
+
+    for scene, (r,) in rec["samples"].items():
+        c = r["before -> after"]
+        same = "yes" if not c["different"] and not c["missing"] else "**no**: " + "; ".join(c["different"] + c["missing"])
+        lines.append(f"| {scene} | {len(c['cases'])} | {c['rel']['peak_mpa']:.1e} | {c['rel']['error_pct']:.1e} | "
+                     f"{c['rel']['utilisation_pct']:.1e} | {c['rel']['max_displacement_mm']:.1e} | "
+                     f"{c['rel']['crank_deg']:.1e} | {same} | {runs(r['before, run to run'])}; "
+                     f"{runs(r['after, run to run'])} |")
+    lines += ["", f"Largest peak difference, before → after: {d['largest peak difference before -> after']:.1e}; run "
+              f"to run: {d['largest peak difference run to run'] or 0:.1e}; verdicts and meshes the same: "
+              f"{'yes' if d['verdicts and meshes the same'] else '**no**'} ({d['part cases compared']} part cases)."]
+    return "\n".join(lines) + "\n"
+
+
 def cache_kinds(rec: dict) -> str:
     return (f"# What each kind of cache entry saves\n\nCommand: `{rec['command']}`\n\n"
             + "\n".join(cache_rows(rec)) + "\n\n" + cache_note(rec) + "\n")
@@ -563,4 +623,5 @@ RENDER: dict[str, Callable[[dict], str]] = {
     "calculix_vs_rigfem": calculix_vs_rigfem, "le10": le10, "stages": stages, "kinematics": kinematics,
     "dynamics": dynamics, "fe_assembly": fe_assembly, "malloc_trim": malloc_trim, "perf": perf,
     "bad_inputs": bad_inputs, "adaptive": adaptive,
-    "levers": levers, "pardiso": pardiso, "mesh": mesh, "cache_kinds": cache_kinds, "timeline": timeline}
+    "levers": levers, "pardiso": pardiso, "mesh": mesh, "cache_kinds": cache_kinds, "timeline": timeline,
+    "same_results": same_results}

@@ -180,6 +180,20 @@ def test_perf_table_shows_a_baseline_before_and_after(tmp_path):
     assert "before → after: the code of v0" in tables.perf_note(rec) and "calibration" in tables.perf(rec)
 
 
+
+def test_perf_table_profiles_the_folder_and_the_calculix_row(tmp_path):
+    """The folder row's bytes by kind and the CalculiX row's FE steps come from the same runs as the rows."""
+    kinds = {"vtu_critical": 20.0, "vtu_frames": 25.0, "png": 5.0, "html": 2.0, "json": 0.05, "md": 0.02,
+             "pvd": 0.0, "other": 0.0}
+    steps = {"assembly": 1.5, "supports_loads": 2.0, "factorise": 5.0, "solve": 0.5, "stress": 0.3, "fe_total": 9.3}
+    rec = _fake_perf(tmp_path, {"check standard cold": [_run(60.0, 900.0, folder_mb=52.07, folder_kinds_mb=kinds)],
+                                "ccx": [_run(50.0, ratio=0.44, dof=167_553, rigfem_steps_s=steps, ccx_s=21.1)]})
+    assert tables.folder_profile(rec) == ("The result folder by kind: after: VTU at the critical angles 20.0 MB, VTU "
+                                          "animation frames 25.0 MB, PNG 5.0 MB, HTML 2.0 MB, JSON 0.1 MB of 52.1 MB.")
+    assert ("factorisation 5.00 s, solve 0.50 s, stress recovery 0.30 s of rigfem's 9.30 s; CalculiX 21.10 s"
+            in tables.ccx_profile(rec))
+    assert tables.folder_profile(rec) in tables.perf(rec) and tables.ccx_profile(rec) in tables.perf(rec)
+
 def test_every_cold_run_has_fresh_caches_of_its_own(monkeypatch):
     """A cold series never reuses a cache an earlier run of it filled (a second run would be warm);
     the warm runs share the one their first run filled."""
@@ -219,3 +233,23 @@ def test_the_timeline_groups_each_commands_stages_from_the_record(tmp_path):
             "report: the parts' pictures 10.0 s (50 %, 1500 MiB)") in row
     assert "cold standard check 20 s: FE 9 s, the report after the verdict 10 s" in publish._timeline(rec)
     assert "| solving part post_B (draft) · 4 of 12 cases done | 5.0 s | 5.00 | 25 % | 900 MiB |" in tables.timeline(rec)
+
+
+def test_same_results_compares_peaks_verdicts_and_meshes():
+    """benchmarks/bench_same_results.py: a peak moved by 1e-6 is measured as 1e-6, a changed verdict or
+    mesh and a missing part case are named; identical reports differ by 0."""
+    from bench_same_results import compare
+
+    part = {"name": "crank_rail", "mode": "cycle", "peak_mpa": 100.0, "error_pct": 5.0, "utilisation_pct": 26.7,
+            "max_displacement_mm": 0.1, "crank_deg": 30.0, "verdict": "pass",
+            "mesh": {"level": "coarse", "fe_nodes": 1000, "tets": 400}}
+    old = {"parts": [part, {**part, "name": "plate_A", "mesh": dict(part["mesh"])}]}
+    assert compare(old, old)["rel"]["peak_mpa"] == 0.0 and not compare(old, old)["different"]
+    moved = copy.deepcopy(old)
+    moved["parts"][1]["peak_mpa"] *= 1 + 1e-6
+    moved["parts"][0]["verdict"] = "fail"
+    moved["parts"][0]["mesh"]["fe_nodes"] = 1001
+    c = compare(old, moved)
+    assert c["rel"]["peak_mpa"] == pytest.approx(1e-6, rel=1e-5) and c["worst_peak_case"] == "plate_A cycle"
+    assert c["different"] == ["crank_rail cycle: verdict pass -> fail", "crank_rail cycle: mesh.fe_nodes 1000 -> 1001"]
+    assert compare(old, {"parts": old["parts"][:1]})["missing"] == ["plate_A cycle"]
