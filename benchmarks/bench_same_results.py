@@ -58,14 +58,15 @@ def rel(a: float, b: float) -> float:
 
 
 def compare(old: dict, new: dict) -> dict:
-    """Per part case: the largest relative difference of each figure, and whether the verdict and the
-    mesh are the same."""
+    """The largest relative difference of each figure over the part cases, the cases whose verdict or
+    mesh differ, and the cases whose figures are bit for bit the same."""
     a, b = part_figures(old), part_figures(new)
     out = {"cases": sorted(a.keys() | b.keys()), "missing": sorted(a.keys() ^ b.keys())}
     both = sorted(a.keys() & b.keys())
     out["rel"] = {f: max((rel(a[c][f], b[c][f]) for c in both), default=0.0) for f in FIGURES}
     out["worst_peak_case"] = max(both, key=lambda c: rel(a[c]["peak_mpa"], b[c]["peak_mpa"]), default=None)
     out["different"] = [f"{c}: {f} {a[c][f]} -> {b[c][f]}" for c in both for f in SAME if a[c][f] != b[c][f]]
+    out["bit for bit"] = [c for c in both if all(a[c][f] == b[c][f] for f in FIGURES)]
     return out
 
 

@@ -594,8 +594,8 @@ def same_results(rec: dict) -> str:
               "relative difference over the scene's part cases; same: verdict, mesh level, FE nodes and tets of "
               "every part case.", "",
               "| scene | part cases | peak | error estimate | utilisation | largest displacement | crank angle of "
-              "the peak | same verdicts and meshes | peak, run to run (before; after) |", "|---|---:|---:|---:|---:|"
-              "---:|---:|---|---|"]
+              "the peak | same verdicts and meshes | bit for bit the same | peak, run to run (before; after) |",
+              "|---|---:|---:|---:|---:|---:|---:|---|---|---|"]
 
     def runs(x: list) -> str:
         return ", ".join(f"{c['rel']['peak_mpa']:.1e}" for c in x) or "-"
@@ -605,7 +605,8 @@ def same_results(rec: dict) -> str:
         same = "yes" if not c["different"] and not c["missing"] else "**no**: " + "; ".join(c["different"] + c["missing"])
         lines.append(f"| {scene} | {len(c['cases'])} | {c['rel']['peak_mpa']:.1e} | {c['rel']['error_pct']:.1e} | "
                      f"{c['rel']['utilisation_pct']:.1e} | {c['rel']['max_displacement_mm']:.1e} | "
-                     f"{c['rel']['crank_deg']:.1e} | {same} | {runs(r['before, run to run'])}; "
+                     f"{c['rel']['crank_deg']:.1e} | {same} | {', '.join(c.get('bit for bit', [])) or 'none'} | "
+                     f"{runs(r['before, run to run'])}; "
                      f"{runs(r['after, run to run'])} |")
     lines += ["", f"Largest peak difference, before → after: {d['largest peak difference before -> after']:.1e}; run "
               f"to run: {d['largest peak difference run to run'] or 0:.1e}; verdicts and meshes the same: "

@@ -253,3 +253,5 @@ def test_same_results_compares_peaks_verdicts_and_meshes():
     assert c["rel"]["peak_mpa"] == pytest.approx(1e-6, rel=1e-5) and c["worst_peak_case"] == "plate_A cycle"
     assert c["different"] == ["crank_rail cycle: verdict pass -> fail", "crank_rail cycle: mesh.fe_nodes 1000 -> 1001"]
     assert compare(old, {"parts": old["parts"][:1]})["missing"] == ["plate_A cycle"]
+    assert compare(old, old)["bit for bit"] == ["crank_rail cycle", "plate_A cycle"]
+    assert c["bit for bit"] == ["crank_rail cycle"]  # its verdict and mesh changed, not its figures
