@@ -20,10 +20,11 @@ import json
 import time
 from pathlib import Path
 
-from rigfem.check import load_check_scene
-from rigfem.dynamics import peaks, simulate
-from rigfem.fe import solve_cases
-from rigfem.loads import part_cases
+from rigfem.cache import from_environment
+from rigfem.context import Context
+from rigfem.fe import Plan, solve_cases
+from rigfem.job import Request, read_job
+from rigfem.pipeline import load_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = "final-cm"
@@ -32,13 +33,13 @@ SAMPLES = (36, 72, 180, 360, 720, 3600)
 
 def cycle_stress(part: str) -> list[dict]:
     """Cycle-mode peak von Mises vs samples on the draft mesh (reference: 3600 samples)."""
-    out = {}
+    ctx, out = Context(from_environment()), {}
     for n in SAMPLES:
-        cs = load_check_scene(SCENE, {"parts": [part], "modes": ["cycle"], "fidelity": "draft",
-                                      "samples": n})
-        h = simulate(cs.linkage, samples=n, speed_hz=cs.scene.speed_hz)
+        job = read_job(Request(SCENE, {"parts": [part], "modes": ["cycle"], "fidelity": "draft",
+                                       "samples": n}), ctx.cache)
+        _, cases = load_cases(job, ctx)
         t = time.perf_counter()
-        r = solve_cases(part_cases(h, peaks(h), cs.settings), cs.settings)[0]
+        r = solve_cases(cases, job.settings, Plan(frames=None), ctx)[0]
         out[n] = (float(r.vm_rows.max()), time.perf_counter() - t, r.seconds.get("superpose", 0.0))
     ref = out[3600][0]
     return [{"part": part, "samples": n, "peak_mpa": v, "rel_err": v / ref - 1, "fe_seconds": s,
@@ -50,13 +51,13 @@ def directions(part: str) -> list[dict]:
     from rigfem.settings import FIDELITY
     from rigfem.verification import StepSpec, run_step, scene_cases
 
-    settings, by = scene_cases(SCENE, [part], {"modes": ["cycle"]})
+    job, by = scene_cases(Request(SCENE, {"parts": [part], "modes": ["cycle"]}), from_environment())
     rows = []
     for preset in ("draft",):
         f = FIDELITY[preset]
         for n in (8, 12, 24, 48):
             spec = StepSpec(f"{preset}/{n}", "d", 2, f.size_mm, f.local_size_mm, n)
-            r = run_step(by[part](n), settings, spec, isolate=False)
+            r = run_step(by[part](n), job.settings, spec, isolate=False)
             rows.append({"part": part, "mesh": preset, "directions": n,
                          "peak_mpa": r["modes"]["cycle"]["peak_mpa"], "seconds": r["seconds"],
                          "cpu_seconds": r["cpu_seconds"]})

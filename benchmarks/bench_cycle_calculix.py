@@ -17,8 +17,8 @@ Writes results/benchmarks/cycle_vs_calculix.json (``python benchmarks/publish.py
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
-import shutil
 import sys
 import tempfile
 import time
@@ -43,26 +43,28 @@ def _run(a: argparse.Namespace) -> int:
     """Both codes on the same mesh and angles; the record."""
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    from rigfem.check import load_check_scene
-    from rigfem.dynamics import peaks, simulate
-    from rigfem.fe import mesh_case, solve_cases, supports_of
-from rigfem.tensors import von_mises
+    from rigfem.cache import from_environment
+    from rigfem.context import Context
+    from rigfem.fe import Plan, mesh_case, solve_cases, supports_of
     from rigfem.io import export_model, run_ccx
-    from rigfem.loads import part_cases
+    from rigfem.job import Request, read_job
+    from rigfem.pipeline import load_cases
+    from rigfem.tensors import von_mises
 
+    ctx = Context(from_environment())
+    solving = Context(ctx.cache.without("solutions", "sweeps"))  # meshes cached, every solve and sweep done
     samples: dict[str, list] = {}
     params = {"part": a.part, "fidelity": a.fidelity, "angles": a.angles, "repeats": a.repeats, "threads": 1}
     for n in a.angles:
-        cs = load_check_scene("final-cm", {"fidelity": a.fidelity, "parts": [a.part], "modes": ["cycle"]})
+        job = read_job(Request("final-cm", {"fidelity": a.fidelity, "parts": [a.part], "modes": ["cycle"]}), ctx.cache)
         # N angles straight from the dynamics (a scene's [check].samples starts at 36: N ccx steps must run here)
-        h = simulate(cs.linkage, samples=n, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
-        cases = part_cases(h, peaks(h), cs.settings)
-        mesh_case(cases[0][1], cs.settings)  # the same mesh for both codes
+        job = dataclasses.replace(job, dynamics=dataclasses.replace(job.dynamics, samples=n))
+        _, cases = load_cases(job, ctx)
+        mesh_case(cases[0][1], job.settings, ctx.cache)  # the same mesh for both codes
         rig = samples.setdefault(f"rigfem, {n} angles", [])
         for _ in range(a.repeats):
-            shutil.rmtree(Path(os.environ["RIGFEM_CACHE"]) / "solutions", ignore_errors=True)  # solve every time
             t0 = time.perf_counter()
-            res = solve_cases(cases, cs.settings)[0]
+            res = solve_cases(cases, job.settings, Plan(frames=None), solving)[0]
             rig.append({"wall_s": time.perf_counter() - t0})
         sol, model = res.solution, res.solution.model
         rows = len(res.case.rows)

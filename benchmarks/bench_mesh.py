@@ -24,20 +24,21 @@ from record import write_record
 
 CHILD = """
 import json, sys
-from rigfem.check import load_check_scene
-from rigfem.dynamics.cycle import cycle_history
-from rigfem.dynamics.history import peaks
+from rigfem.cache import from_environment
+from rigfem.context import Context
 from rigfem.fe.partcase import group_job, part_geometries
-from rigfem.loads.cases import part_cases
+from rigfem.job import Request, read_job
 from rigfem.mesh import mesher
+from rigfem.pipeline import load_cases
 precision, scene, fidelity = sys.argv[1], sys.argv[2], sys.argv[3]
 if precision != "rigfem":
     mesher.LC_INTEGRATION_PRECISION = float(precision)
-cs = load_check_scene(scene, {"fidelity": fidelity})
-h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
+ctx = Context(from_environment())
+job = read_job(Request(scene, {"fidelity": fidelity}), ctx.cache)
+_, cases = load_cases(job, ctx)
 out = []
-for group in part_geometries(part_cases(h, peaks(h), cs.settings)).values():
-    for level, s in cs.settings.levels():
+for group in part_geometries(cases).values():
+    for level, s in job.settings.levels():
         part, ms = group_job(group, s)
         pm = mesher._mesh(part, ms, float("inf"), "bench")
         out.append({"part": f"{part.name} ({group[0][1].name})", "level": level, "tets": len(pm.tets),

@@ -30,19 +30,19 @@ CHILD = """
 import json, sys, time
 import numpy as np
 import pypardiso
-from rigfem.check import load_check_scene
-from rigfem.dynamics.cycle import cycle_history
-from rigfem.dynamics.history import peaks
 import scipy.sparse as sp
+from rigfem.cache import from_environment
+from rigfem.context import Context
 from rigfem.fe.model import build_model, free_block, supported_stiffness
 from rigfem.fe.partcase import mesh_case, supports_of
-from rigfem.loads.cases import part_cases
+from rigfem.job import Request, read_job
+from rigfem.pipeline import load_cases
 iparm, level, nrhs = json.loads(sys.argv[1]), sys.argv[2], int(sys.argv[3])
-cs = load_check_scene("final-cm", {"parts": ["coupler_rail"], "modes": ["original"]})
-h = cycle_history(cs.linkage, cs.motion, cs.crank_deg, cs.scene.speed_hz, cs.mass_model)
-(_, case), = part_cases(h, peaks(h), cs.settings)
-s = dict(cs.settings.levels())[level]
-model = build_model(mesh_case(case, s), s.material, s.order)
+ctx = Context(from_environment())
+job = read_job(Request("final-cm", {"parts": ["coupler_rail"], "modes": ["original"]}), ctx.cache)
+_, ((_, case),) = load_cases(job, ctx)
+s = dict(job.settings.levels())[level]
+model = build_model(mesh_case(case, s, ctx.cache), s.material, s.order, ctx.cache)
 # the supported stiffness rigfem.fe.model.StaticProblem gives a direct solver, and its upper triangle
 K, fixed, _ = supported_stiffness(model, supports_of(case))
 A = free_block(K, fixed)

@@ -22,13 +22,14 @@ from pathlib import Path
 
 import gmsh
 
-from rigfem.check import load_check_scene
-from rigfem.dynamics import peaks, simulate
-from rigfem.fe import solve_cases
-from rigfem.loads import part_cases
+from rigfem.cache import from_environment
+from rigfem.context import Context
+from rigfem.fe import Plan, solve_cases
+from rigfem.job import Request, read_job
 from rigfem.mesh import gmsh_session, mass_kg
+from rigfem.pipeline import load_cases
 from rigfem.rig import load_part
-from rigfem.verdict import verdict_of
+from rigfem.verdict import judge
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "rail_profile"
 SCENE = "final-cm"
@@ -92,9 +93,9 @@ def section_hand(part) -> tuple[float, float]:
 
 def study(fidelity: str) -> tuple[list[dict], list[str], object]:
     """Every variant of the crank rail's original-mode case at one fidelity preset."""
-    cs = load_check_scene(SCENE, {"parts": ["crank_rail"], "modes": ["original"], "fidelity": fidelity})
-    h = simulate(cs.linkage, samples=cs.samples, speed_hz=cs.scene.speed_hz, model=cs.mass_model)
-    (mode, base), = part_cases(h, peaks(h), cs.settings)
+    ctx = Context(from_environment())
+    job = read_job(Request(SCENE, {"parts": ["crank_rail"], "modes": ["original"], "fidelity": fidelity}), ctx.cache)
+    _, ((mode, base),) = load_cases(job, ctx)
     rows = []
     for name, (dims, what) in VARIANTS.items():
         rail = load_part("rail_size25", dims)  # 1000 mm: linear mass as in `rigfem parts`
@@ -104,19 +105,19 @@ def study(fidelity: str) -> tuple[list[dict], list[str], object]:
         assert math.isclose(sec["I_z_mm4"], iz_hand, rel_tol=1e-6), (name, sec, iz_hand)
         case = dataclasses.replace(base, params={**base.params, **dims})
         t = time.perf_counter()
-        res, = solve_cases([(mode, case)], cs.settings)
+        res, = solve_cases([(mode, case)], job.settings, Plan(frames=None), ctx)
         rows.append({"variant": name, "what": what, "dims": dims, **sec,
                      "kg_per_m": mass_kg(rail) / rail["length"] * 1000,
                      "peak_mpa": res.peak.value, "surface": res.peak.surface,
                      "xyz": [round(c, 2) for c in res.peak.xyz], "zz_error": res.peak.zz_error,
-                     "utilisation_pct": verdict_of(res, cs.settings)["utilisation_pct"],
+                     "utilisation_pct": judge([res.outcome], job.settings).parts[0].verdict.utilisation_pct,
                      "nodes": len(res.mesh.points), "seconds": time.perf_counter() - t})
         print(f"{fidelity} {name}: {rows[-1]['kg_per_m']:.3f} kg/m, peak {res.peak.value:.1f} MPa at "
               f"{res.peak.surface} {rows[-1]['xyz']}, {rows[-1]['seconds']:.1f} s", flush=True)
     for r in rows:
         r["peak_ratio"] = r["peak_mpa"] / rows[0]["peak_mpa"]
         r["bending_ratio_z"] = rows[0]["I_z_mm4"] / r["I_z_mm4"]  # same outer fibre y = W/2
-    return rows, base.notes, cs.settings
+    return rows, base.notes, job.settings
 
 
 def main() -> None:
