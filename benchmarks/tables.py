@@ -605,7 +605,7 @@ def same_results(rec: dict) -> str:
         same = "yes" if not c["different"] and not c["missing"] else "**no**: " + "; ".join(c["different"] + c["missing"])
         lines.append(f"| {scene} | {len(c['cases'])} | {c['rel']['peak_mpa']:.1e} | {c['rel']['error_pct']:.1e} | "
                      f"{c['rel']['utilisation_pct']:.1e} | {c['rel']['max_displacement_mm']:.1e} | "
-                     f"{c['rel']['crank_deg']:.1e} | {same} | {', '.join(c.get('bit for bit', [])) or 'none'} | "
+                     f"{c['rel']['crank_deg']:.1e} | {same} | {(', '.join(c['bit for bit']) or 'none') if 'bit for bit' in c else '-'} | "
                      f"{runs(r['before, run to run'])}; "
                      f"{runs(r['after, run to run'])} |")
     lines += ["", f"Largest peak difference, before → after: {d['largest peak difference before -> after']:.1e}; run "
