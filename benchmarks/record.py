@@ -52,10 +52,13 @@ def _read(path: str) -> str:
 
 
 def commit() -> dict:
-    """git HEAD of the repository and whether the work tree differs from it."""
+    """git HEAD of the repository and whether its tracked files outside results/ differ from it: a
+    record measures the code, and a benchmark that writes its record as it goes (bench_perf.py, after
+    every row) must not call its own output a modified tree."""
     def git(*args: str) -> str:
         return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True).stdout.strip()
-    return {"sha": git("rev-parse", "HEAD"), "dirty": bool(git("status", "--porcelain", "--untracked-files=no"))}
+    return {"sha": git("rev-parse", "HEAD"),
+            "dirty": bool(git("status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)results"))}
 
 
 def command_line() -> str:

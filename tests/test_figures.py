@@ -255,3 +255,21 @@ def test_same_results_compares_peaks_verdicts_and_meshes():
     assert compare(old, {"parts": old["parts"][:1]})["missing"] == ["plate_A cycle"]
     assert compare(old, old)["bit for bit"] == ["crank_rail cycle", "plate_A cycle"]
     assert c["bit for bit"] == ["crank_rail cycle"]  # its verdict and mesh changed, not its figures
+
+
+def test_a_records_own_output_does_not_make_the_tree_dirty(tmp_path, monkeypatch):
+    """bench_perf.py writes its record after every row: results/ changing is not a modified tree,
+    a tracked code file changing is."""
+    import subprocess
+
+    record = importlib.import_module("record")
+    (tmp_path / "results").mkdir()
+    for f in ("code.py", "results/perf.json"):
+        (tmp_path / f).write_text("0\n")
+    for args in (["init", "-q"], ["add", "."], ["-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "x"]):
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True)
+    monkeypatch.setattr(record, "ROOT", tmp_path)
+    (tmp_path / "results/perf.json").write_text("1\n")
+    assert record.commit()["dirty"] is False
+    (tmp_path / "code.py").write_text("1\n")
+    assert record.commit()["dirty"] is True
