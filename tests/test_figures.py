@@ -238,7 +238,7 @@ def test_the_timeline_groups_each_commands_stages_from_the_record(tmp_path):
 def test_same_results_compares_peaks_verdicts_and_meshes():
     """benchmarks/bench_same_results.py: a peak moved by 1e-6 is measured as 1e-6, a changed verdict or
     mesh and a missing part case are named; identical reports differ by 0."""
-    from bench_same_results import compare
+    compare = importlib.import_module("bench_same_results").compare
 
     part = {"name": "crank_rail", "mode": "cycle", "peak_mpa": 100.0, "error_pct": 5.0, "utilisation_pct": 26.7,
             "max_displacement_mm": 0.1, "crank_deg": 30.0, "verdict": "pass",
