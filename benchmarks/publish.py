@@ -21,8 +21,8 @@ import sys
 from pathlib import Path
 
 from record import OUT, REQUIRED, ROOT, summarise
-from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, ccx_profile, folder_profile, grid_note, grid_rows, hms,
-                    le10_outliers, med, perf_note, perf_rows, timeline_note, timeline_rows)
+from tables import (LE10_TARGET, RENDER, cache_note, cache_rows, grid_note, grid_rows, hms, le10_outliers, med,
+                    perf_note, perf_rows, profiles, timeline_note, timeline_rows)
 
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
@@ -357,8 +357,7 @@ def blocks(recs: dict[str, dict]) -> dict[str, str]:
             + "\n".join(grid_rows(g)) + "\n\n" + grid_note(g) + "\n") if g else _missing("sweep_grid_cost") + ".\n"
     p = recs.get("perf")
     perf = (f"Command: `{COMMANDS['perf']}` (this record: `{p['command']}`):\n\n" + "\n".join(perf_rows(p)) + "\n\n"
-            + perf_note(p) + "\n" + "".join(f"\n{x}\n" for x in (folder_profile(p), ccx_profile(p)) if x)) \
-        if p else _missing("perf") + ".\n"
+            + perf_note(p) + "\n" + "".join(f"\n{x}\n" for x in profiles(p))) if p else _missing("perf") + ".\n"
     conv = recs.get("convergence")
     presets = ("Commands: `rigfem convergence PART` for each part (results/convergence/PART.json):\n\n"
                + "\n".join(preset_rows(conv)) + "\n") if conv else "not measured yet: run `rigfem convergence PART`.\n"

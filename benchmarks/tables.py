@@ -417,39 +417,31 @@ def perf_note(rec: dict) -> str:
             "cores — results/benchmarks/perf.md.")
 
 
-def folder_profile(rec: dict) -> str:
-    """What the standard check's result folder holds, by kind (the first cold run of each side)."""
-    names = {"vtu_critical": "VTU at the critical angles", "vtu_frames": "VTU animation frames", "png": "PNG",
+def _sides(rec: dict, series: str, key: str, text) -> str:
+    """``text(sample)`` of the first run of the baseline's ``series`` and of this commit's, where they hold ``key``."""
+    out = [f"{side}: {text(x)}" for side, name in (("before", f"before: {series}"), ("after", series))
+           if key in (x := (rec["samples"].get(name) or [{}])[0])]
+    return "; ".join(out)
+
+
+def profiles(rec: dict) -> list[str]:
+    """The profiles of the folder row (bytes by kind) and of the CalculiX row (rigfem's FE by step)."""
+    kinds = {"vtu_critical": "VTU at the critical angles", "vtu_frames": "VTU animation frames", "png": "PNG",
              "html": "HTML", "json": "JSON", "md": "Markdown", "pvd": "PVD", "other": "other"}
-    out = []
-    for series in ("check standard cold", "before: check standard cold"):
-        x = (rec["samples"].get(series) or [{}])[0]
-        if "folder_kinds_mb" in x:
-            out.append(f"{'before' if series.startswith('before') else 'after'}: "
-                       + ", ".join(f"{names[k]} {v:.1f} MB" for k, v in x["folder_kinds_mb"].items() if v >= 0.05)
-                       + f" of {x['folder_mb']:.1f} MB")
-    return "The result folder by kind: " + "; ".join(reversed(out)) + "." if out else ""
-
-
-def ccx_profile(rec: dict) -> str:
-    """Where rigfem's FE time goes on the CalculiX row's mesh (after, and before where measured)."""
-    names = {"assembly": "assembly", "supports_loads": "supports and loads", "factorise": "factorisation",
+    steps = {"assembly": "assembly", "supports_loads": "supports and loads", "factorise": "factorisation",
              "solve": "solve", "stress": "stress recovery"}
-    out = []
-    for series in ("ccx", "before: ccx"):
-        x = (rec["samples"].get(series) or [{}])[0]
-        if "rigfem_steps_s" in x:
-            st = x["rigfem_steps_s"]
-            out.append(f"{'before' if series.startswith('before') else 'after'}: "
-                       + ", ".join(f"{n} {st[k]:.2f} s" for k, n in names.items())
-                       + f" of rigfem's {st['fe_total']:.2f} s; CalculiX {x['ccx_s']:.2f} s")
-    return ("The CalculiX row, rigfem's FE by step (one run, the same mesh): " + "; ".join(reversed(out)) + "."
-            if out else "")
+    folder = _sides(rec, "check standard cold", "folder_kinds_mb", lambda x: ", ".join(
+        f"{kinds[k]} {v:.1f} MB" for k, v in x["folder_kinds_mb"].items() if v >= 0.05) + f" of {x['folder_mb']:.1f} MB")
+    ccx = _sides(rec, "ccx", "rigfem_steps_s", lambda x: ", ".join(
+        f"{n} {x['rigfem_steps_s'][k]:.2f} s" for k, n in steps.items())
+        + f" of rigfem's {x['rigfem_steps_s']['fe_total']:.2f} s; CalculiX {x['ccx_s']:.2f} s")
+    return ([f"The result folder by kind: {folder}."] if folder else []) + \
+        ([f"The CalculiX row, rigfem's FE by step (one run, the same mesh): {ccx}."] if ccx else [])
 
 
 def perf(rec: dict) -> str:
     lines = head(rec, "Performance goals of issue 41: every row cold and warm, separate processes")
-    lines += perf_rows(rec) + ["", perf_note(rec), *(x for f in (folder_profile, ccx_profile) for x in ("", f(rec)) if f(rec)),
+    lines += perf_rows(rec) + ["", perf_note(rec), *(x for p in profiles(rec) for x in ("", p)),
                                "", "| series | runs | wall s | peak tree RSS MiB | "
                                                       "load average at the starts |", "|---|---:|---:|---:|---|"]
     for s, rows in rec["samples"].items():
