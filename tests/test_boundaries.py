@@ -65,10 +65,10 @@ VALUE_TYPES = {
 #: * mesh: unknown refine groups of a custom part are known once gmsh has read it, a mesh's quality
 #:   or empty groups once it is meshed; check_estimate/check_cost hold a job against the machine
 #:   (--allow-large); face_owners/quadratic refuse a hand-made PartMesh's surfaces and edges;
-#: * rig.layout coupling (and sweep.configs' probe of it), sweep.bases: a rail too short for a
+#: * rig.layout coupling (an off-grid length's nearest coupling can miss the rail's last hole), sweep.bases: a rail too short for a
 #:   joint, no runnable reference configuration; dynamics.cycle.simulate: a config dict's linkage
 #:   type (rigfem.scene could build it, but dynamics may not import scene);
-#: * verification.le10: solve_le10's unit_mm and a mesh without a node at D.
+#: * verification.le10: solve_le10's unit_mm (a script's own number: the unit of its mesh).
 #: (The FE's supports, loads, mesh and solver name are judged once by rigfem.fe.inputs.)
 PENDING = {
     "rigfem.design.rig_design:snap_function": 1,
@@ -87,9 +87,7 @@ PENDING = {
     "rigfem.mesh.partmesh:quadratic.lookup": 1,
     "rigfem.rig.layout:RailLayout.coupling": 1,
     "rigfem.sweep.bases:_reference_cases": 1,
-    "rigfem.sweep.configs:rail_lengths": 1,
     "rigfem.sweep.cost:check_cost": 1,
-    "rigfem.verification.le10:node_at": 1,
     "rigfem.verification.le10:solve_le10": 1,
 }
 

@@ -28,20 +28,27 @@ class RailLayout:
         """The pivot joint: the first position whose coupling screws both land on holes."""
         return float(self.hole_x[0] + self.screw_spacing / 2)
 
+    def _holes(self, distance_mm: float) -> tuple[int, int]:
+        x = self.pivot_x + distance_mm
+        lo = int(round((x - self.screw_spacing / 2 - self.hole_x[0]) / self.pitch))
+        return lo, lo + int(round(self.screw_spacing / self.pitch))
+
+    def fits(self, distance_mm: float) -> bool:
+        """Whether a coupling ``distance_mm`` from the pivot lands both its screws on holes."""
+        lo, hi = self._holes(distance_mm)
+        return lo >= 0 and hi < len(self.hole_x)
+
     def coupling(self, distance_mm: float, bar: str) -> tuple[int, int]:
         """Hole indices of the two screws of the coupling ``distance_mm`` from the pivot.
 
         The joint is placed on the nearest position whose screws land on holes.
         """
-        x = self.pivot_x + distance_mm
-        lo = int(round((x - self.screw_spacing / 2 - self.hole_x[0]) / self.pitch))
-        hi = lo + int(round(self.screw_spacing / self.pitch))
-        if lo < 0 or hi >= len(self.hole_x):
+        if not self.fits(distance_mm):
             most = self.hole_x[-1] - self.screw_spacing / 2 - self.pivot_x
             raise InputError(f"{bar}: a joint {distance_mm:g} mm from the pivot does not fit on a "
                              f"{self.hole_x[-1] + self.hole_x[0]:g} mm rail; allowed 0..{most:g} mm "
                              f"(choose a longer rail)")
-        return lo, hi
+        return self._holes(distance_mm)
 
 
 @functools.lru_cache(maxsize=256)

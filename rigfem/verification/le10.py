@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rigfem.errors import ComputeError, InputError, check_range
+from rigfem.errors import ComputeError, check_range
 from rigfem.material import Material
 
 if TYPE_CHECKING:
@@ -132,11 +132,12 @@ def le10_mesh(size: float, layers: int | None = None) -> PartMesh:
 
 
 def node_at(points: np.ndarray, xyz_mm, unit_mm: float = 1.0) -> int:
-    """Index of the mesh node at ``xyz_mm``; InputError if no node is there."""
+    """Index of the mesh node at ``xyz_mm``; ComputeError if no node is there (:func:`le10_mesh`
+    puts one at every point the benchmark reads, so a missing node is a fault of the mesh)."""
     target = np.asarray(xyz_mm, float) / unit_mm
     k = int(np.argmin(np.linalg.norm(points - target, axis=1)))
     if np.linalg.norm(points[k] - target) > 1e-6 * OUTER[0] / unit_mm:
-        raise InputError(f"LE10: no mesh node at {tuple(xyz_mm)} mm")
+        raise ComputeError(f"LE10: no mesh node at {tuple(xyz_mm)} mm")
     return k
 
 
