@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from fe_shapes import bar_with_holes, box
 
+from rigfem.errors import ComputeError
 from rigfem.fe import Fixed, FreeBody, ShaftInHole, SurfaceForce, build_model, fe_mesh, solve
 from rigfem.fe.assembly import NODE_BARY, points_at, shape_values, tet_quadrature, tri_quadrature, volume
 from rigfem.fe.supports import shaft_springs, surface_quadrature
@@ -100,6 +101,11 @@ def test_the_peak_sweep_is_the_brute_force_maximum(chunk):
     assert vals[4] == 0.0
     assert np.allclose(peak_von_mises(C, S, von_mises(S), chunk)[0], vals)
     assert np.array_equal(peak_von_mises(np.zeros((2, 5)), S)[0], [0.0, 0.0])
+    one = np.zeros_like(C)
+    one[:, 2] = C[:, 2]  # a single load case in use
+    assert np.allclose(peak_von_mises(one, S, chunk=chunk)[0], von_mises(np.tensordot(one, S, 1)).max(1), rtol=1e-12)
+    few = S[:, :10]  # fewer nodes than the 16 the bound starts from
+    assert np.allclose(peak_von_mises(C, few, chunk=chunk)[0], von_mises(np.tensordot(C, few, 1)).max(1), rtol=1e-12)
 
 
 @pytest.fixture  # per test: mutation testing credits the mesh to every test that builds it
@@ -141,16 +147,24 @@ def test_a_solution_kept_to_its_combinations_answers_the_same(holed):
     sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0)), SurfaceForce("xmax", (50.0, 0, 0)),
                                          SurfaceForce("xmax", (0, 0, 10.0))])
     C = np.array([[1.0, 0.5, 0.0], [0.0, 2.0, 1.0]])
-    kept = sol.kept(C)
+    brute = [sol.von_mises(c).max() for c in C]
+    assert np.allclose(sol.peak_sweep(C)[0], brute, rtol=1e-12)  # the unit fields' von Mises, computed now,
+    kept = sol.kept(C)  # are not the kept cases': a kept solution computes its own
     assert kept.cases == 3
+    funcs = ("displacement", "stress", "loads", "reaction", "von_mises", "principal")
     for c in C:
-        for f in ("displacement", "stress", "loads", "reaction", "von_mises", "principal"):
+        for f in funcs:
             assert np.allclose(getattr(kept, f)(c), getattr(sol, f)(c), rtol=1e-12, atol=1e-12), f
         assert kept.peak(c) == sol.peak(c)
-    assert np.allclose(kept.peak_sweep(C)[0], sol.peak_sweep(C)[0])
+    assert np.allclose(kept.peak_sweep(C)[0], brute, rtol=1e-12)
     assert np.array_equal(kept.equilibrium_error, sol.equilibrium_error)
-    again = kept.kept(C[:1])
-    assert np.allclose(again.stress(C[0]), sol.stress(C[0]))
+    again = kept.kept(C[:1])  # a kept solution kept again: its cases copied, not recombined
+    for f in funcs:
+        assert np.allclose(getattr(again, f)(C[0]), getattr(sol, f)(C[0]), rtol=1e-12, atol=1e-12), f
+    assert np.allclose(again.peak_sweep(C[:1])[0], brute[:1], rtol=1e-12)
+    for bad in (np.ones((1, 2)), np.array([[np.nan, 1.0, 0.0]])):  # wrong length, not finite: no numbers
+        with pytest.raises(ComputeError, match="combination matrix"):
+            sol.peak_sweep(bad)
     with pytest.raises(ValueError, match="kept"):
         kept.stress(np.array([1.0, 0.0, 0.0]))
     R = sol.support_reactions["Fixed(xmin)"]  # statics: the clamp carries every load
@@ -170,6 +184,25 @@ def test_boundary_nodes_of_a_box_are_those_on_its_faces():
     assert set(sol.surfaces_of(corner)) == {"xmax", "ymax", "zmax"}
     inner = np.flatnonzero(~on_face)
     assert len(inner) and sol.surfaces_of(int(inner[0])) == ()
+
+
+def test_boundary_nodes_of_a_meshed_bar_are_those_on_its_walls():
+    """An unstructured gmsh mesh (every face orientation of a tet occurs): the corner nodes
+    rigfem counts as boundary are exactly those on the bar's walls or its holes' bores, and a
+    mid-edge node only where both its corners are."""
+    from rigfem.fe.assembly import TET_EDGES
+
+    length, width, thick, radius, xs = 60.0, 20.0, 10.0, 4.0, [20.0, 40.0]
+    model = build_model(bar_with_holes(length, width, thick, radius, xs, 5.0), STEEL, 2)
+    sol = solve(model, [FreeBody()], [SurfaceForce("xmax", (1.0, 0, 0)), SurfaceForce("xmin", (-1.0, 0, 0))])
+    x, el, nv = model.mesh.nodes, model.mesh.elements, model.mesh.n_vertices
+    wall = (np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], length) | np.isclose(np.abs(x[:, 1]), width / 2)
+            | np.isclose(x[:, 2], 0.0) | np.isclose(x[:, 2], thick)
+            | np.any([np.isclose(np.hypot(x[:, 0] - c, x[:, 1]), radius, rtol=1e-6) for c in xs], axis=0))
+    b = sol._boundary_nodes()
+    assert {n for n in b if n < nv} == set(np.flatnonzero(wall[:nv]).tolist())
+    both = {int(el[e, 4 + a]) for a, (i, j) in enumerate(TET_EDGES) for e in np.flatnonzero(wall[el[:, i]] & wall[el[:, j]])}
+    assert {n for n in b if n >= nv} == both
 
 
 def test_principal_stresses_of_stacked_fields():

@@ -2,6 +2,7 @@
 
     python tools/mutation_testing.py verdict loads dynamics fe        # run, then write the record
     python tools/mutation_testing.py --report                         # the record again from the last runs
+    python tools/mutation_testing.py fe-stress --retest               # its survivors again, against new tests
 
 Each package is mutated in a scratch copy of this work tree (``--workdir``, default
 ``/tmp/rigfem-mutmut/<package>``): the copy's pyproject.toml gets the package's ``[tool.mutmut]``
@@ -106,13 +107,31 @@ def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> di
     return _mutmut(d, children)
 
 
-def _mutmut(d: Path, children: int) -> dict:
+def retest_package(pkg: str, work: Path, children: int) -> dict:
+    """Run the mutants a finished run did not kill again, against this tree's tests (new tests
+    written to kill them); the mutated files must be this tree's, else the mutants are not its."""
+    import glob
+
+    d = work / pkg
+    if not (d / "mutants").is_dir():
+        raise SystemExit(f"--retest {pkg}: no finished run in {d}; run it first")
+    for pattern in PACKAGES[pkg]["mutate"]:
+        for f in glob.glob(pattern, root_dir=ROOT):
+            if (ROOT / f).read_bytes() != (d / f).read_bytes():
+                raise SystemExit(f"--retest {pkg}: {f} changed since the run in {d}; run the package afresh")
+    shutil.rmtree(d / "tests")
+    shutil.copytree(ROOT / "tests", d / "tests", ignore=shutil.ignore_patterns("__pycache__"))
+    names = sorted(name for name, (status, _) in results(d).items() if status != "killed")
+    return _mutmut(d, children, names)
+
+
+def _mutmut(d: Path, children: int, names: list[str] = ()) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env.update(RIGFEM_CACHE=NO_CACHE, NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
                **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"))
     t0 = time.time()
     with open(d / "mutmut.log", "a") as log:
-        rc = subprocess.run(["nice", "-n", "10", "mutmut", "run", "--max-children", str(children)],
+        rc = subprocess.run(["nice", "-n", "10", "mutmut", "run", "--max-children", str(children), *names],
                             cwd=d, env=env, stdout=log, stderr=subprocess.STDOUT).returncode
     spent = d / "seconds.txt"  # an interrupted run's time counts too
     seconds = time.time() - t0 + (float(spent.read_text()) if spent.exists() else 0.0)
@@ -274,7 +293,9 @@ def markdown(rec: dict) -> str:
         lines.append(f"| {pkg} | {', '.join(p['mutate'])} | {p['total']} | {c.get('killed', 0)} | {c.get('survived', 0)} | "
                      f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {p['text_mutants']} | {p['equivalent']} | "
                      f"{p['score_mutmut_pct']} % | **{p['score_physics_pct']} %** | {p['date'][:10]}, "
-                     f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}` |")
+                     f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}`"
+                     + (f" (the survivors of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
+                        f"{p['first_run']['commit']['sha'][:10]})" if p.get("first_run") else "") + " |")
     for pkg, p in rec["packages"].items():
         open_ = [m for m in p["not_killed"] if m["fate"] != "text"]
         lines += ["", f"## {pkg}: mutants not killed, but for message text ({len(open_)})", "",
@@ -293,6 +314,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-children", type=int, default=1)
     ap.add_argument("--report", action="store_true", help="rewrite the record from the last runs in --workdir")
     ap.add_argument("--resume", action="store_true", help="continue an interrupted run in --workdir (its copy as it is)")
+    ap.add_argument("--retest", action="store_true",
+                    help="run the mutants a finished run in --workdir did not kill again, against this tree's tests")
     a = ap.parse_args(argv)
     pkgs = a.packages or list(PACKAGES)
     if set(pkgs) - set(PACKAGES):
@@ -300,7 +323,11 @@ def main(argv: list[str] | None = None) -> int:
     recs = {}
     for pkg in pkgs:
         meta = {}
-        if not a.report:
+        if a.retest:
+            prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
+            meta = retest_package(pkg, a.workdir, a.max_children)  # seconds.txt adds the run's time
+            meta["first_run"] = {"date": prev.get("date"), "commit": prev.get("commit"), "command": prev.get("command")}
+        elif not a.report:
             meta = run_package(pkg, a.workdir, a.max_children, a.resume)
         else:
             prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
