@@ -12,7 +12,7 @@ drift from the CLI: commands are taken from the pages' indented and fenced code 
 - The commands too long for the default test run are listed in :data:`LONG` by name with the
   reason, and run with the cheap override given there; none is skipped silently.
 - Every other command (``python benchmarks/…``, ``mkdocs …``, ``bash tests/run.sh``) is one the test
-  suite runs elsewhere (:data:`ELSEWHERE`) or a benchmark whose options exist in its script.
+  suite runs elsewhere (:data:`ELSEWHERE`) or a benchmark or tool script whose options exist in it.
 """
 
 from __future__ import annotations
@@ -117,7 +117,7 @@ def _others(text: str) -> list[str]:
     """A page's other commands: code lines of other programs, and inline `python benchmarks/…` spans."""
     progs = ("python ", "pip ", "bash ", "mkdocs ", "dask ", "pytest ")
     out = [line.split("  #")[0].strip() for _, line in _block_lines(text) if line.startswith(progs)]
-    return out + re.findall(r"`(python (?:benchmarks|examples)/[^`]*)`", text)
+    return out + re.findall(r"`(python (?:benchmarks|examples|tools)/[^`]*)`", text)
 
 
 def _split(cmd: str) -> tuple[list[str], set[int]]:
@@ -255,7 +255,7 @@ def test_every_other_command_is_run_elsewhere(pc):
     page, cmd = pc
     if any(re.fullmatch(rx, cmd) for rx in ELSEWHERE):
         return
-    m = re.fullmatch(r"python (benchmarks|examples)/(\w+)\.py(.*)", cmd)
+    m = re.fullmatch(r"python (benchmarks|examples|tools)/(\w+)\.py(.*)", cmd)
     assert m, f"{page} shows `{cmd}`: no test runs it (add it to ELSEWHERE with the test that does)"
     script = ROOT / m[1] / f"{m[2]}.py"
     assert script.is_file(), f"{page}: `{cmd}` names {script.relative_to(ROOT)}, which does not exist"
