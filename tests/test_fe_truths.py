@@ -205,6 +205,28 @@ def test_boundary_nodes_of_a_meshed_bar_are_those_on_its_walls():
     assert {n for n in b if n >= nv} == both
 
 
+def test_resultants_are_the_sum_of_forces_and_of_their_moments():
+    """Σ f and Σ x × f about the origin, by hand, of k = 3 load vectors: over every DOF, over a
+    support's DOFs in any order, and over single components (a DOF list need not hold whole nodes)."""
+    model = build_model(box(30.0, 20.0, 10.0, 3, 2, 2), STEEL, 2)
+    sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0)), SurfaceForce("ymax", (50.0, 0, 10.0)),
+                                         SurfaceForce("zmax", (0, 0, -30.0))])
+    x = model.mesh.nodes
+
+    def by_hand(dofs, vec):
+        f = np.zeros((len(x), 3, vec.shape[1]))
+        f.reshape(-1, vec.shape[1])[dofs] = vec[dofs]
+        fc = f.transpose(2, 0, 1)  # (k, n, 3)
+        return np.hstack([fc.sum(1), np.cross(x, fc).sum(1)])
+
+    every = np.arange(3 * len(x))
+    for dofs in (every, np.random.default_rng(5).permutation(every), sol.support_dofs["Fixed(xmin)"][::-1],
+                 every[1::3]):
+        for vec in (sol.F, sol.reactions):
+            assert np.allclose(sol.resultants(dofs, vec), by_hand(dofs, vec), rtol=1e-12, atol=1e-9)
+    assert np.allclose(sol.resultants(every, sol.F)[:, :3], [[0, 100.0, 0], [50.0, 0, 10.0], [0, 0, -30.0]])
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
