@@ -227,6 +227,40 @@ def test_resultants_are_the_sum_of_forces_and_of_their_moments():
     assert np.allclose(sol.resultants(every, sol.F)[:, :3], [[0, 100.0, 0], [50.0, 0, 10.0], [0, 0, -30.0]])
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_a_nodes_patch_is_the_elements_around_it(order):
+    """The ZZ patch of every node (the last ones too) by brute force: the elements holding it."""
+    from rigfem.fe.stress import patch
+
+    fm = fe_mesh(box(20.0, 10.0, 10.0, 2, 1, 1), order)
+    for node in range(len(fm.nodes)):
+        elems, nodes, local = patch(fm, node)
+        assert np.array_equal(elems, np.flatnonzero((fm.elements == node).any(1))), node
+        assert np.array_equal(nodes, np.unique(fm.elements[elems])) and np.array_equal(nodes[local], fm.elements[elems])
+
+
+def test_a_peak_names_where_it_is():
+    """The peak's surface: a named surface it lies on, else "(unnamed boundary)" on the part's skin,
+    else "(interior)" (a box whose y and z faces are not named; the peak placed at chosen nodes)."""
+    import dataclasses
+
+    whole = box(30.0, 20.0, 20.0, 3, 2, 2)
+    part = dataclasses.replace(whole, surfaces={k: whole.surfaces[k] for k in ("xmin", "xmax")})
+    model = build_model(part, STEEL, 2)
+    sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0))])
+    x = model.mesh.nodes
+
+    def at(p):
+        return int(np.flatnonzero(np.all(np.isclose(x, p), 1))[0])
+
+    for p, surface, surfaces in (((10.0, 10.0, 10.0), "(interior)", ()), ((10.0, 20.0, 10.0), "(unnamed boundary)", ()),
+                                 ((30.0, 10.0, 10.0), "xmax", ("xmax",)), ((5.0, 10.0, 10.0), "(interior)", ())):
+        s = sol.nodal_stress.copy()
+        s[0, at(p)] = [1e4, 0, 0, 0, 0, 0]
+        pk = dataclasses.replace(sol, nodal_stress=s).peak()
+        assert (pk.node, pk.surface, pk.surfaces) == (at(p), surface, surfaces), p
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
