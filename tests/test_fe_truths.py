@@ -261,6 +261,40 @@ def test_a_peak_names_where_it_is():
         assert (pk.node, pk.surface, pk.surfaces) == (at(p), surface, surfaces), p
 
 
+def test_a_node_on_a_hole_and_a_face_names_the_hole_first(holed):
+    """Where a bore meets a named face, the hole comes first (the peak's surface is the hole, as the
+    report locates a pin's stress), even when the face's name sorts before it."""
+    import dataclasses
+
+    from rigfem.mesh.partmesh import boundary_faces
+
+    part, _ = holed
+    faces = boundary_faces(part.tets)
+    bottom = faces[np.all(np.isclose(part.points[faces, 2], 0.0), 1)]
+    model = build_model(dataclasses.replace(part, surfaces={**part.surfaces, "a_bottom": bottom}), STEEL, 2)
+    sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0))])
+    x, c = model.mesh.nodes, part.holes["h0"].center
+    rim = np.flatnonzero(np.isclose(np.hypot(x[:, 0] - c[0], x[:, 1] - c[1]), part.holes["h0"].radius, rtol=1e-6)
+                         & np.isclose(x[:, 2], 0.0))
+    assert len(rim) and all(sol.surfaces_of(int(n)) == ("h0", "a_bottom") for n in rim)
+
+
+def test_the_zz_estimate_is_free_of_scale_and_zero_without_stress(holed):
+    """The estimate is a ratio of stresses, so loads a million times smaller (a peak under 1 MPa)
+    give the same figure; an unstressed patch has none (0, not a division by zero)."""
+    from rigfem.fe.stress import zz_error
+
+    part, _ = holed
+    model = build_model(part, STEEL, 2)
+    sol = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0))])
+    fm, u, s = model.mesh, sol.U[:, 0], sol.nodal_stress[0]
+    n = sol.peak().node
+    e = zz_error(fm, STEEL.E, STEEL.nu, u, n, s)
+    assert 0 < e < 1 and s[n].any()
+    assert zz_error(fm, STEEL.E, STEEL.nu, 1e-6 * u, n, 1e-6 * s) == pytest.approx(e, rel=1e-9)
+    assert zz_error(fm, STEEL.E, STEEL.nu, 0 * u, n, 0 * s) == 0.0
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
