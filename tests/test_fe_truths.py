@@ -295,6 +295,19 @@ def test_the_zz_estimate_is_free_of_scale_and_zero_without_stress(holed):
     assert zz_error(fm, STEEL.E, STEEL.nu, 0 * u, n, 0 * s) == 0.0
 
 
+def test_a_combination_scales_and_is_checked():
+    """Linearity: the combination c of one load case is c times it (not the case itself), and a
+    combination of the wrong length or not finite gives no numbers."""
+    model = build_model(box(30.0, 20.0, 10.0, 3, 2, 2), STEEL, 1)
+    one = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0))])
+    for f in ("stress", "displacement", "loads", "reaction"):
+        assert np.allclose(getattr(one, f)(np.array([-2.5])), -2.5 * getattr(one, f)(), rtol=1e-12, atol=1e-12), f
+    two = solve(model, [Fixed("xmin")], [SurfaceForce("xmax", (0, 100.0, 0)), SurfaceForce("xmax", (0, 0, 10.0))])
+    for bad in (np.ones(3), np.array([np.nan, 1.0]), np.array([1.0, np.inf])):
+        with pytest.raises(ComputeError, match="combination coefficients"):
+            two.stress(bad)
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
