@@ -308,6 +308,19 @@ def test_a_combination_scales_and_is_checked():
             two.stress(bad)
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_nodal_stress_in_batches_is_the_same(order):
+    """Batching the elements (chunk) and the load columns (mem) only splits the sums: the same nodal
+    stresses as one batch, for a mesh whose last batch is partial."""
+    from rigfem.fe.stress import nodal_stress
+
+    fm = fe_mesh(box(20.0, 10.0, 10.0, 4, 2, 2, jitter=0.2), order)
+    U = np.random.default_rng(2).normal(0, 1e-3, (fm.ndof, 3))
+    whole = nodal_stress(fm, STEEL.E, STEEL.nu, U)
+    assert len(fm.elements) % 7 and np.abs(whole).max() > 0
+    assert np.allclose(nodal_stress(fm, STEEL.E, STEEL.nu, U, chunk=7, mem=1.0), whole, rtol=1e-12, atol=1e-9)
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
