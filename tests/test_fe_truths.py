@@ -321,6 +321,22 @@ def test_nodal_stress_in_batches_is_the_same(order):
     assert np.allclose(nodal_stress(fm, STEEL.E, STEEL.nu, U, chunk=7, mem=1.0), whole, rtol=1e-12, atol=1e-9)
 
 
+def test_element_node_stress_is_the_linear_fit_through_the_stiffness_points(holed):
+    """On curved P2 elements (a bore's wall) the element's nodal stresses are the linear field
+    through its four stiffness quadrature points' stresses (as CalculiX extrapolates C3D10), not a
+    fit through another rule's points."""
+    from rigfem.fe.stress import element_node_stress, quadrature_stress
+
+    _, fm = holed
+    U = np.random.default_rng(4).normal(0, 1e-3, (fm.ndof, 2))
+    S, _ = quadrature_stress(fm, STEEL.E, STEEL.nu, U)
+    L, _ = tet_quadrature(2)
+    assert S.shape[1] == len(L) == 4
+    through = NODE_BARY @ np.linalg.inv(L)  # (10, 4): the linear field through the 4 points, at the nodes
+    assert np.allclose(element_node_stress(fm, STEEL.E, STEEL.nu, U), np.einsum("aq,mqkc->makc", through, S),
+                       rtol=1e-10, atol=1e-6)
+
+
 def test_principal_stresses_of_stacked_fields():
     """(..., 6) in, (..., 3) out: a (cases, nodes, 6) stack gives each tensor's own eigenvalues."""
     rng = np.random.default_rng(11)
