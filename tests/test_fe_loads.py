@@ -68,6 +68,44 @@ def test_torque_and_bolt_circle_resultants(bar):
     assert np.allclose(f0[on_h0].sum(0), [0, -2500 / 80, 0], atol=1e-9)
 
 
+def test_a_torque_is_a_uniform_shear_along_the_bore(bar):
+    """Not just its resultant: the work of the torque's nodal forces on the twist u = ζ² a × (x − c)
+    (ζ = axial distance / depth from mid-depth) is that of the uniform shear τ = T / (2π R² h),
+    ∫ ζ² τ R dA = T / 12 (a shear concentrated towards mid-depth gives less), and every nodal force
+    points along the tangent in the torque's sense."""
+    part, fm = bar
+    h = part.holes["h1"]
+    c, a = np.asarray(h.center), np.asarray(h.axis)
+    f = load_vector(fm, part.holes, RHO, Torque("h1", 2500.0)).reshape(-1, 3)
+    d = fm.nodes - c
+    u = ((d @ a) / h.depth)[:, None] ** 2 * np.cross(a, d)
+    assert (f * u).sum() == pytest.approx(2500.0 / 12, rel=1e-3)
+    on = np.linalg.norm(f, axis=1) > 0  # the bore's nodes: each force along the tangent, in T's sense
+    r = d[on] - np.outer(d[on] @ a, a)
+    tangent = np.einsum("ij,ij->i", f[on], np.cross(a, r / np.linalg.norm(r, axis=1, keepdims=True)))
+    radial = np.einsum("ij,ij->i", f[on], r / np.linalg.norm(r, axis=1, keepdims=True))
+    assert tangent.min() > 0 and np.abs(radial).sum() < 0.02 * tangent.sum()
+
+
+@pytest.mark.parametrize("turn", [[2, 0, 1], [1, 2, 0]])  # the bores' axis along x, along y
+def test_a_torque_about_a_bore_along_any_axis(bar, turn):
+    """The same bar turned (a cyclic permutation of the axes, a rotation): the torque's resultant is
+    T about the bore's axis and no force, whichever axis the bore has."""
+    import dataclasses
+
+    from rigfem.mesh.partmesh import Hole
+
+    part, _ = bar
+    turned = dataclasses.replace(part, points=part.points[:, turn],
+                                 curved_points=part.curved_points[:, turn] if len(part.curved_points) else part.curved_points,
+                                 holes={k: Hole(h.center[turn], h.axis[turn], h.radius, h.depth) for k, h in part.holes.items()})
+    fm = fe_mesh(turned, 2)
+    hole = turned.holes["h1"]
+    force, moment = resultant(fm, load_vector(fm, turned.holes, RHO, Torque("h1", 2500.0)), hole.center)
+    assert np.allclose(force, 0, atol=1e-11 * 2500)
+    assert moment == pytest.approx(2500.0 * hole.axis, abs=1e-9 * 2500)
+
+
 def test_surface_force_and_pressure_resultants():
     fm = fe_mesh(box(3, 2, 1, 3, 2, 2), 2)
     force, _ = resultant(fm, load_vector(fm, {}, RHO, SurfaceForce("xmax", (1, 2, 3))), 0)
