@@ -17,6 +17,7 @@ from rigfem.fe import (
     Traction,
     build_model,
     fe_mesh,
+    load_matrix,
     load_vector,
     solve,
 )
@@ -157,3 +158,17 @@ def test_gravity_and_inertia_match_rigid_body_dynamics():
     assert np.allclose(force, -m * (a0 + np.cross(al, r) + np.cross(om, np.cross(om, r))), rtol=1e-12)
     Iz = m * (a**2 + b**2) / 12
     assert moment[2] == pytest.approx(-Iz * al[2], rel=1e-12)
+    # the same closed forms through a model's load matrix, which combines 12 body-force basis
+    # vectors built once per mesh and density (rigfem.fe.forces.body_basis) instead of integrating
+    steel = get_material("rig_steel")
+    model = build_model(box(a, b, h, 6, 2, 2, jitter=0.2), steel, 2)
+    ms = steel.density * a * b * h
+    F = load_matrix(model, [Gravity(g), Inertia(tuple(a0), tuple(al), tuple(om), tuple(o))])
+    force, _ = resultant(model.mesh, F[:, 0], 0)
+    assert np.allclose(force, ms * g, rtol=1e-12)
+    force, moment = resultant(model.mesh, F[:, 1], G)
+    assert np.allclose(force, -ms * (a0 + np.cross(al, r) + np.cross(om, np.cross(om, r))), rtol=1e-12)
+    assert moment[2] == pytest.approx(-ms * (a**2 + b**2) / 12 * al[2], rel=1e-12)
+    from rigfem.fe.forces import body_basis
+
+    assert np.allclose(body_basis(model.mesh, 2 * steel.density)[0], 2 * body_basis(model.mesh, steel.density)[0])
