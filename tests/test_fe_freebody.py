@@ -55,3 +55,25 @@ def test_bar_with_inertia_balanced_by_joint_forces(model):
 def test_unbalanced_loads_show_up_as_reactions(model):
     sol = solve(model, [FreeBody()], [BearingLoad("h1", (10.0, 0, 0))])
     assert sol.support_reactions["FreeBody(3-2-1)"][0, 0] == pytest.approx(-10.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("turn", [[0, 1, 2], [1, 2, 0], [2, 0, 1]])  # the bar along x, y, z
+def test_the_free_body_support_is_a_3_2_1_on_far_apart_nodes(turn):
+    """The free body's six DOFs: all three at the node A farthest from the centroid, two at the node B
+    farthest from A (across AB's main direction), one at the node C farthest from the line AB (along
+    C's motion under a rotation about AB) — they hold every rigid motion, and nothing else."""
+    from rigfem.fe.supports import three_two_one
+
+    x = bar_with_holes(200, 25, 10, 5, [20, 180], size=12).points[:, turn] + [3.0, -7.0, 11.0]
+    dofs = three_two_one(x)
+    nodes, comps = dofs // 3, dofs % 3
+    A, B, C = nodes[0], nodes[3], nodes[5]
+    assert list(nodes) == [A, A, A, B, B, C] and list(comps[:3]) == [0, 1, 2] and len({A, B, C}) == 3
+    assert np.linalg.norm(x[A] - x.mean(0)) == pytest.approx(np.linalg.norm(x - x.mean(0), axis=1).max())
+    assert np.linalg.norm(x[B] - x[A]) == pytest.approx(np.linalg.norm(x - x[A], axis=1).max())
+    ab = (x[B] - x[A]) / np.linalg.norm(x[B] - x[A])
+    off = np.linalg.norm(np.cross(x - x[A], ab), axis=1)
+    assert off[C] == pytest.approx(off.max())
+    assert np.argmax(np.abs(ab)) == turn.index(0) and np.argmax(np.abs(ab)) not in comps[3:5]
+    assert comps[5] == np.argmax(np.abs(np.cross(ab, x[C] - x[A])))
+    assert np.linalg.matrix_rank(rigid_modes(x)[dofs]) == 6

@@ -136,6 +136,13 @@ def test_a_shaft_in_a_hole_resists_rigid_motions_as_its_foundation(holed):
     soft = shaft_springs(fm, hole, ShaftInHole("h0", k_radial=2.0, k_tangential=0.0, k_axial=0.0), E)
     U = np.tile([1.0, 0.0, 0.0], len(fm.nodes))
     assert (soft @ U).reshape(-1, 3).sum(0)[0] == pytest.approx(2.0 * np.pi * r * h, rel=2e-3)
+    # moduli given are the moduli used: no tangential or axial spring when they are 0
+    assert np.abs(soft @ np.tile([0.0, 0.0, 1.0], len(fm.nodes))).max() == pytest.approx(0.0, abs=1e-9)
+    spin = np.stack([-(fm.nodes[:, 1] - c[1]), fm.nodes[:, 0] - c[0], 0 * fm.nodes[:, 0]], 1).ravel()
+    assert np.abs(soft @ spin).max() < 1e-6 * np.abs(soft @ U).max() * r
+    stiff = shaft_springs(fm, hole, ShaftInHole("h0", k_radial=2.0, k_tangential=0.5, k_axial=0.25), E)
+    assert (stiff @ np.tile([0.0, 0.0, 1.0], len(fm.nodes))).reshape(-1, 3).sum(0)[2] == pytest.approx(
+        0.25 * 2 * np.pi * r * h, rel=2e-3)
     pts, w, N, tri = surface_quadrature(fm, "h0", 4)
     assert w.sum() == pytest.approx(2 * np.pi * r * h, rel=1e-4)  # curved P2 wall: its true area
     assert np.allclose(np.hypot(*(pts[..., :2] - c[:2]).transpose(2, 0, 1)), r, atol=1e-3)
