@@ -148,6 +148,22 @@ def test_a_shaft_in_a_hole_resists_rigid_motions_as_its_foundation(holed):
     assert np.allclose(np.hypot(*(pts[..., :2] - c[:2]).transpose(2, 0, 1)), r, atol=1e-3)
 
 
+def test_a_one_sided_shaft_bears_on_the_half_it_faces(holed):
+    """ShaftInHole(direction=d): radial springs only where the wall's normal has n·d > 0 (a shaft
+    pressed one way), so a translation along d meets k_r ∫ cos²θ over half the wall, k_r π r h / 2,
+    and the other half's nodes carry nothing (no tangential or axial springs here)."""
+    part, fm = holed
+    hole = part.holes["h0"]
+    r, h, c = hole.radius, 8.0, np.asarray(hole.center, float)
+    for d in ((1.0, 0.0, 0.0), (0.0, -2.0, 0.0), (0.6, 0.8, 0.5)):  # any length; a part along the axis is ignored
+        K = shaft_springs(fm, hole, ShaftInHole("h0", k_radial=2.0, k_tangential=0.0, k_axial=0.0, direction=d), STEEL.E)
+        u = np.array(d[:2] + (0.0,)) / np.linalg.norm(d[:2])
+        f = (K @ np.tile(u, len(fm.nodes))).reshape(-1, 3)
+        assert f.sum(0) @ u == pytest.approx(2.0 * np.pi * r * h / 2, rel=2e-2), d
+        behind = (fm.nodes - c) @ u < -0.3 * r
+        assert np.abs(f[behind]).max() < 1e-12 * np.abs(f).max(), d
+
+
 def test_a_solution_kept_to_its_combinations_answers_the_same(holed):
     part, _ = holed
     model = build_model(part, STEEL, 2)
