@@ -2,7 +2,7 @@
 
     python tools/mutation_testing.py verdict loads dynamics fe        # run, then write the record
     python tools/mutation_testing.py --report                         # the record again from the last runs
-    python tools/mutation_testing.py fe-stress --retest               # its survivors again, against new tests
+    python tools/mutation_testing.py fe-stress --retest               # its record's survivors again, against new tests
 
 Each package is mutated in a scratch copy of this work tree (``--workdir``, default
 ``/tmp/rigfem-mutmut/<package>``): the copy's pyproject.toml gets the package's ``[tool.mutmut]``
@@ -96,33 +96,45 @@ def mutmut_table(pkg: str) -> str:
     return "[tool.mutmut]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())
 
 
-def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> dict:
-    d = work / pkg
-    if resume and (d / "mutants").is_dir():  # mutmut keeps the results it has: it runs the rest
-        return _mutmut(d, children)
+def _prepare(pkg: str, d: Path) -> None:
+    """A scratch copy of the work tree at ``d`` whose pyproject.toml holds the package's mutmut table."""
     scratch_copy(d)
     text = (d / "pyproject.toml").read_text()
     text = re.sub(r"\n\[tool\.mutmut\]\n(?:(?!\n\[).)*", "\n", text, flags=re.S)  # the package's table instead
     (d / "pyproject.toml").write_text(text.rstrip("\n") + "\n\n" + mutmut_table(pkg))
+
+
+def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> dict:
+    d = work / pkg
+    if resume and (d / "mutants").is_dir():  # mutmut keeps the results it has: it runs the rest
+        return _mutmut(d, children)
+    _prepare(pkg, d)
     return _mutmut(d, children)
 
 
-def retest_package(pkg: str, work: Path, children: int) -> dict:
-    """Run the mutants a finished run did not kill again, against this tree's tests (new tests
-    written to kill them); the mutated files must be this tree's, else the mutants are not its."""
+def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
+    """Run the mutants the package's record did not kill again, in a fresh copy, against this
+    tree's tests (new tests written to kill them); (the run's time, the record it started from).
+    mutmut names a mutant by its function and number, so the names are the record's only while the
+    mutated files are as they were at the record's commit: refused otherwise."""
     import glob
 
+    prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg) if (OUT / "mutmut.json").exists() else None
+    if not prev:
+        raise SystemExit(f"--retest {pkg}: {OUT / 'mutmut.json'} has no record of {pkg}; run it first")
+    files = sorted(f for pattern in PACKAGES[pkg]["mutate"] for f in glob.glob(pattern, root_dir=ROOT))
+    diff = subprocess.run(["git", "-C", str(ROOT), "diff", "--name-only", prev["commit"]["sha"], "--", *files],
+                          capture_output=True, text=True)
+    if prev["commit"]["dirty"] or diff.returncode or diff.stdout.strip():
+        raise SystemExit(f"--retest {pkg}: the mutated files are not those of the record "
+                         f"({prev['commit']['sha'][:10]}{', dirty' if prev['commit']['dirty'] else ''}): "
+                         f"run the package afresh")
+    if not prev["not_killed"]:
+        raise SystemExit(f"--retest {pkg}: its record has no mutant left to kill")
     d = work / pkg
-    if not (d / "mutants").is_dir():
-        raise SystemExit(f"--retest {pkg}: no finished run in {d}; run it first")
-    for pattern in PACKAGES[pkg]["mutate"]:
-        for f in glob.glob(pattern, root_dir=ROOT):
-            if (ROOT / f).read_bytes() != (d / f).read_bytes():
-                raise SystemExit(f"--retest {pkg}: {f} changed since the run in {d}; run the package afresh")
-    shutil.rmtree(d / "tests")
-    shutil.copytree(ROOT / "tests", d / "tests", ignore=shutil.ignore_patterns("__pycache__"))
-    names = sorted(name for name, (status, _) in results(d).items() if status != "killed")
-    return _mutmut(d, children, names)
+    _prepare(pkg, d)
+    (d / "seconds.txt").unlink(missing_ok=True)
+    return _mutmut(d, children, [m["mutant"] for m in prev["not_killed"]]), prev
 
 
 def _mutmut(d: Path, children: int, names: list[str] = ()) -> dict:
@@ -224,12 +236,23 @@ def equivalent_edit(patch: str) -> str:
     return ""
 
 
-def summarise(pkg: str, d: Path, meta: dict) -> dict:
+def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
+    """The record of a package's run in ``d``; with ``prior`` (the record a ``--retest`` re-ran the
+    survivors of), its killed mutants stay killed and the re-run decides the rest."""
     fates = tomllib.loads(FATES.read_text()) if FATES.exists() else {}
     res = results(d)
     counts: dict[str, int] = {}
+    if prior is not None:
+        again = {m["mutant"] for m in prior["not_killed"]}
+        res = {k: v for k, v in res.items() if k in again}
+        if set(res) != again:
+            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {sorted(again - set(res))[:3]}…")
+        counts = dict(prior["counts"])
+        for m in prior["not_killed"]:
+            counts[m["status"]] -= 1
     for s, _ in res.values():
         counts[s] = counts.get(s, 0) + 1
+    counts = {k: v for k, v in counts.items() if v}
     not_killed = []
     for name, (status, patch) in sorted(res.items()):
         if status == "killed":
@@ -242,7 +265,7 @@ def summarise(pkg: str, d: Path, meta: dict) -> dict:
         why = why or infra
         not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
     text = sum(1 for m in not_killed if m["fate"] in ("text", "not numerical"))
-    total = len(res)
+    total = sum(counts.values())
     killed = counts.get("killed", 0) + counts.get("timeout", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
     physics_total = total - text - equivalent
@@ -315,7 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", action="store_true", help="rewrite the record from the last runs in --workdir")
     ap.add_argument("--resume", action="store_true", help="continue an interrupted run in --workdir (its copy as it is)")
     ap.add_argument("--retest", action="store_true",
-                    help="run the mutants a finished run in --workdir did not kill again, against this tree's tests")
+                    help="run the mutants the package's record did not kill again (a fresh copy), against this tree's tests")
     a = ap.parse_args(argv)
     pkgs = a.packages or list(PACKAGES)
     if set(pkgs) - set(PACKAGES):
@@ -323,16 +346,17 @@ def main(argv: list[str] | None = None) -> int:
     recs = {}
     for pkg in pkgs:
         meta = {}
+        prior = None
         if a.retest:
-            prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
-            meta = retest_package(pkg, a.workdir, a.max_children)  # seconds.txt adds the run's time
-            meta["first_run"] = {"date": prev.get("date"), "commit": prev.get("commit"), "command": prev.get("command")}
+            meta, prior = retest_package(pkg, a.workdir, a.max_children)
+            first = prior.get("first_run") or {k: prior[k] for k in ("date", "commit", "command")}
+            meta = {"seconds": round(prior["seconds"] + meta["seconds"], 1), "first_run": first}
         elif not a.report:
             meta = run_package(pkg, a.workdir, a.max_children, a.resume)
         else:
             prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
             meta = {"seconds": prev.get("seconds")}
-        recs[pkg] = summarise(pkg, a.workdir / pkg, meta)
+        recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)
         p = recs[pkg]
         print(f"{pkg}: {p['total']} mutants, {p['counts']}, mutmut score {p['score_mutmut_pct']} %, "
               f"physics score {p['score_physics_pct']} %", flush=True)
