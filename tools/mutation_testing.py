@@ -181,12 +181,16 @@ def results(d: Path) -> dict[str, tuple[str, str]]:
 
 
 def _tokens(line: str) -> list[tuple[int, str]]:
-    try:
-        toks = list(tokenize.generate_tokens(io.StringIO(line.strip() + "\n").readline))
-    except (tokenize.TokenError, IndentationError, SyntaxError):
-        return [(-1, line)]
-    return [(t.type, t.string) for t in toks if t.type not in (tokenize.NEWLINE, tokenize.NL, tokenize.ENDMARKER,
-                                                                 tokenize.INDENT, tokenize.DEDENT)]
+    """The tokens of one line of a diff; a continuation line that closes brackets opened on an
+    earlier line (a message's second half) is read with those brackets opened first."""
+    for opened in ("", "(", "(("):
+        try:
+            toks = list(tokenize.generate_tokens(io.StringIO(opened + line.strip() + "\n").readline))
+        except (tokenize.TokenError, IndentationError, SyntaxError):
+            continue
+        return [(t.type, t.string) for t in toks[len(opened):]
+                if t.type not in (tokenize.NEWLINE, tokenize.NL, tokenize.ENDMARKER, tokenize.INDENT, tokenize.DEDENT)]
+    return [(-1, line)]
 
 
 #: where a string literal is only text a person reads: an exception, a note or reason, a warning, the
