@@ -108,10 +108,15 @@ def test_the_peak_sweep_is_the_brute_force_maximum(chunk):
     assert np.allclose(peak_von_mises(C, few, chunk=chunk)[0], von_mises(np.tensordot(C, few, 1)).max(1), rtol=1e-12)
 
 
-@pytest.fixture  # per test: mutation testing credits the mesh to every test that builds it
-def holed():
-    part = bar_with_holes(60.0, 30.0, 8.0, 5.0, [30.0], size=4.0, h_hole=1.0)
-    return part, fe_mesh(part, 2)
+@pytest.fixture(scope="module")
+def holed_part():
+    """The gmsh mesh of a bar with a bore, made once (meshing is not the fe package's code)."""
+    return bar_with_holes(60.0, 30.0, 8.0, 5.0, [30.0], size=4.0, h_hole=1.0)
+
+
+@pytest.fixture  # per test: mutation testing credits the FE mesh (rigfem.fe) to every test that builds it
+def holed(holed_part):
+    return holed_part, fe_mesh(holed_part, 2)
 
 
 def test_a_shaft_in_a_hole_resists_rigid_motions_as_its_foundation(holed):
