@@ -63,6 +63,7 @@ def test_straddling_band_is_refined(tmp_path):
     assert "why it stopped" in (tmp_path / "o" / "report.md").read_text()
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_warm_check_starts_where_the_ladder_stopped(tmp_path, monkeypatch, caplog):
     """The second check of a part that climbed coarse → draft loads the draft level only (the stored
     ladder outcome), reports the same ladder and peak; a damaged record is discarded and climbed again."""

@@ -85,6 +85,7 @@ def test_committed_record_sets_the_factors_and_every_preset_covers_95_percent():
     assert rec["coverage"]["P1@standard"]["coverage_raw_pct"] < 95.0  # why P1 has its own factor
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_p1_reports_say_linear_tetrahedra_under_predict_bending(tmp_path):
     from rigfem.pipeline import Output, Request, run_check
 

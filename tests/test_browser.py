@@ -114,6 +114,7 @@ def test_committed_report_prints_to_pdf(tmp_path):
     assert len(re.findall(rb"/Type\s*/Page\b", pdf)) >= 12  # a page per part case at least
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_report_3d_view(browser, tmp_path):
     out = tmp_path / "final-cm"
     run_check(Request("final-cm", {"fidelity": "draft", "parts": ["plate_A"], "frames": 3}), Output(out))
@@ -142,6 +143,7 @@ def test_report_3d_view(browser, tmp_path):
     assert page.errors() == []
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_fresh_report_first_screen_print_layout_and_pdf(browser, tmp_path):
     """A fresh folder: the conclusion and the governing row on the first screen; in print (A4) no
     table wider than the page, a page per part, the 3-D view left out; ``rigfem show --pdf`` renders."""

@@ -45,6 +45,7 @@ def test_verify_without_ccx_names_the_package(capsys, tmp_path, monkeypatch):
 
 
 @pytest.mark.tool("ccx")
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_export_inp_is_the_same_model(tmp_path):
     """The deck written by ``rigfem check --export-inp`` reproduces rigfem's peak in ccx."""
     from rigfem.pipeline import read_report

@@ -17,6 +17,7 @@ def results():
     return solved("final-cm", FAST)[2]
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_pictures_drawn_in_child_processes_are_the_ones_drawn_here(results, tmp_path, monkeypatch):
     """A cold report's part pictures are drawn in two children from a copy of each result that
     holds only its critical combination: the same files, byte for byte, and the same result as

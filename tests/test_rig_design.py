@@ -119,6 +119,7 @@ def test_the_motion_fit_uses_the_linkages_own_jacobian(monkeypatch):
         assert a["error_mm"] == pytest.approx(b["error_mm"], rel=1e-5, abs=1e-6)
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_stress_verdicts_are_the_sweeps_on_the_candidates_branch():
     from test_sweep import CHECK  # the coarse sweep meshes of the default tests
 

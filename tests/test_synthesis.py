@@ -104,6 +104,7 @@ def _kinematics_points(r, branch):
     return np.array(r["O2"]) + m.points["P"]["position_mm"] @ R.T
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_three_position_analytic_and_optimised():
     from rigfem.linkage import check_three_position, optimise_three_position, three_position
 

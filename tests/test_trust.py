@@ -110,6 +110,7 @@ def test_scene_nothing_loads_is_refused(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.heavy  # over 8 s: the default run stays under 10 minutes (CI's heavy stage runs it)
 def test_unloaded_part_among_loaded_ones_is_not_a_pass(tmp_path, monkeypatch, capsys):
     """A part whose every load is zero is reported "not loaded"; the overall verdict is not PASS."""
     import rigfem.pipeline
