@@ -359,6 +359,9 @@ def main(argv: list[str] | None = None) -> int:
             meta = run_package(pkg, a.workdir, a.max_children, a.resume)
         else:
             prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
+            if prev.get("first_run"):  # its folder holds only the re-run mutants: the others would read as unrun
+                raise SystemExit(f"--report {pkg}: its record is a --retest's, whose folder holds only the "
+                                 f"mutants it re-ran; run --retest again instead")
             meta = {"seconds": prev.get("seconds")}
         recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)
         p = recs[pkg]
