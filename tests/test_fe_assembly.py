@@ -152,3 +152,21 @@ def test_once_the_kernels_are_loaded_no_compile_child_is_started(tmp_path, monke
     assembly.start_compiling(empty)
     assembly.compiled(empty)
     assert started == []
+
+
+def test_the_warm_up_assembles_one_p1_and_one_p2_tetrahedron(monkeypatch):
+    """The compile child (:func:`compile_kernels`) assembles a real unit tetrahedron at both orders,
+    so numba compiles every signature a part's assembly uses, and marks itself the child, so that it
+    starts no compile child of its own."""
+    from rigfem.fe import assembly
+    from rigfem.fe.assembly import volume
+
+    seen, real = [], assembly.stiffness
+    monkeypatch.setattr(assembly, "_COMPILING", False)
+    monkeypatch.setattr(assembly, "_compiler", False)  # this process starts no compile child
+    monkeypatch.setattr(assembly, "stiffness",
+                        lambda fm, E, nu: seen.append((fm.order, len(fm.nodes), volume(fm))) or real(fm, E, nu))
+    assembly.compile_kernels()
+    assert assembly._COMPILING is True
+    assert [(order, n) for order, n, _ in seen] == [(1, 4), (2, 10)]
+    assert [v for *_, v in seen] == pytest.approx([1 / 6, 1 / 6], rel=1e-12)
