@@ -170,3 +170,27 @@ def test_the_warm_up_assembles_one_p1_and_one_p2_tetrahedron(monkeypatch):
     assert assembly._COMPILING is True
     assert [(order, n) for order, n, _ in seen] == [(1, 4), (2, 10)]
     assert [v for *_, v in seen] == pytest.approx([1 / 6, 1 / 6], rel=1e-12)
+
+
+def test_a_compile_child_starts_no_child_of_its_own(tmp_path, monkeypatch):
+    """The compile child is marked twice, by :data:`_COMPILING` in its code and by its environment,
+    so that no single slip starts a chain of children (each waiting for the next, until the
+    memory is full)."""
+    import subprocess
+
+    from rigfem.cache import Cache
+    from rigfem.fe import assembly
+
+    started = []
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(k.get("env", {})) or object())
+    monkeypatch.setattr(assembly, "_COMPILING", False)
+    empty = Cache(tmp_path / "empty", 10**9)
+    for child in (True, False):
+        monkeypatch.setattr(assembly, "_compiler", None)
+        if child:
+            monkeypatch.setenv(assembly._CHILD_ENV, "1")
+        else:
+            monkeypatch.delenv(assembly._CHILD_ENV)
+        assembly.start_compiling(empty)
+        assert len(started) == (0 if child else 1)
+    assert started[0].get(assembly._CHILD_ENV)  # and the child it starts carries the mark

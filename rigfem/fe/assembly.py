@@ -279,6 +279,9 @@ def _scatter(dofs: np.ndarray, data: np.ndarray, n: int) -> sp.csr_matrix:
 
 #: True in the child process that compiles the kernels (:func:`compile_kernels`)
 _COMPILING = False
+#: set in the child's environment too: a second guard, so that no single slip lets a child start
+#: another (a chain of processes that fills the memory)
+_CHILD_ENV = "RIGFEM_KERNELS_CHILD"
 #: the child compiling the kernels and the cache that records it ran (:func:`start_compiling`);
 #: False once waited for (or not startable)
 _compiler = None
@@ -298,14 +301,18 @@ def start_compiling(cache: Cache) -> None:
     (:func:`compile_kernels`); a caller that knows it will assemble starts it early, so that the
     compile overlaps the meshing."""
     global _compiler
+    import os
     import subprocess
     import sys
 
+    if os.environ.get(_CHILD_ENV):
+        return
     if _COMPILING or _compiler is not None or cache.folder is None or cache.has("kernels", _marker()):
         return
     try:
         child = subprocess.Popen([sys.executable, "-c", "from rigfem.fe.assembly import compile_kernels; "
-                                  "compile_kernels()"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                  "compile_kernels()"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                 env={**os.environ, _CHILD_ENV: "1"})
         _compiler = (child, cache)
     except OSError:
         _compiler = False  # compiled here instead, on first use
