@@ -194,3 +194,84 @@ def test_a_compile_child_starts_no_child_of_its_own(tmp_path, monkeypatch):
         assembly.start_compiling(empty)
         assert len(started) == (0 if child else 1)
     assert started[0].get(assembly._CHILD_ENV)  # and the child it starts carries the mark
+
+
+def _no_compiler_yet(monkeypatch):
+    """rigfem.fe.assembly as in a process that has started no compile child and is none."""
+    from rigfem.fe import assembly
+
+    monkeypatch.setattr(assembly, "_COMPILING", False)
+    monkeypatch.setattr(assembly, "_compiler", None)
+    monkeypatch.delenv(assembly._CHILD_ENV, raising=False)
+    return assembly
+
+
+def test_the_compile_child_runs_once_per_cache(tmp_path, monkeypatch):
+    """Waiting for the kernels with no child started starts one with the cache given; it runs the
+    kernels' compile to the end (exit 0) and, waited for, marks that cache, so that the next
+    process with the same cache starts none."""
+    import subprocess
+
+    from rigfem.cache import Cache
+
+    assembly = _no_compiler_yet(monkeypatch)
+    started, popen = [], subprocess.Popen
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(popen(*a, **k)) or started[-1])
+    cache = Cache(tmp_path / "cache", 10**9)
+    assembly.compiled(cache)
+    assert len(started) == 1 and started[0].returncode == 0
+    assert cache.has("kernels", assembly._marker())
+    monkeypatch.setattr(assembly, "_compiler", None)  # the next process
+    assembly.start_compiling(cache)
+    assert len(started) == 1
+
+
+def test_a_compile_child_that_cannot_start_or_hangs_leaves_the_compile_here(tmp_path, monkeypatch):
+    """No child can start (it is tried once), or it hangs (it is killed): nothing is raised and
+    nothing marked, this process compiles; an interrupt while waiting is not swallowed."""
+    import subprocess
+
+    from rigfem.cache import Cache
+
+    assembly = _no_compiler_yet(monkeypatch)
+    cache, tries = Cache(tmp_path / "cache", 10**9), []
+
+    def refuse(*a, **k):
+        tries.append(a)
+        raise OSError("no more processes")
+
+    monkeypatch.setattr(subprocess, "Popen", refuse)
+    assembly.start_compiling(cache)  # started early, as the check does
+    assembly.compiled(cache)
+    assert len(tries) == 1 and not cache.has("kernels", assembly._marker())
+
+    class Hung:
+        killed = False
+
+        def wait(self, timeout=None):
+            if timeout is not None:
+                raise subprocess.TimeoutExpired("compile", timeout)
+
+        def kill(self):
+            type(self).killed = True
+
+    class Interrupted(Hung):
+        def wait(self, timeout=None):
+            if timeout is not None:
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(assembly, "_compiler", (Hung(), cache))
+    assembly.compiled(cache)
+    assert Hung.killed and not cache.has("kernels", assembly._marker())
+    monkeypatch.setattr(assembly, "_compiler", (Interrupted(), cache))
+    with pytest.raises(KeyboardInterrupt):
+        assembly.compiled(cache)
+
+
+def test_volume_over_more_elements_than_one_chunk():
+    """The volume sums its chunks of 65536 elements: a jittered box of 82944 tetrahedra."""
+    from rigfem.fe.assembly import volume
+
+    fm = fe_mesh(box(2.0, 3.0, 5.0, 24, 24, 24, jitter=0.2), 1)
+    assert len(fm.elements) > 65536
+    assert volume(fm) == pytest.approx(30.0, rel=1e-12)
