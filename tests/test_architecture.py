@@ -239,3 +239,23 @@ def test_studies_aliases_warn_and_resolve():
             "print(kt_plate_hole(0.2) > 2)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "rigfem.studies.SweepParams moved to rigfem.sweep.configs.SweepParams" in out and out.endswith("True\n")
+
+
+def test_the_pipeline_stages_take_at_most_four_parameters():
+    """Every rigfem function that rigfem/pipeline.py composes takes at most four parameters (the
+    previous product, its settings, the context and one more): a stage needing more wants a type."""
+    import inspect
+
+    import rigfem.pipeline as pipeline
+
+    tree = ast.parse(pathlib.Path(pipeline.__file__).read_text())
+    called = {ast.unparse(n.func) for n in ast.walk(tree) if isinstance(n, ast.Call)}
+    stages = {}
+    for name in called:
+        obj = pipeline
+        for part in name.split("."):
+            obj = getattr(obj, part, None)
+        if inspect.isfunction(obj) and obj.__module__.startswith("rigfem."):
+            stages[f"{obj.__module__}.{obj.__qualname__}"] = len(inspect.signature(obj).parameters)
+    assert len(stages) >= 8, stages  # read_job, linkage_state, the two react, part_cases, solve_cases, judge, ...
+    assert {k: n for k, n in stages.items() if n > 4} == {}

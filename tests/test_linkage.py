@@ -312,3 +312,18 @@ def test_joint_direction_convention():
     assert np.allclose(h2.joints["O4"].force_N, -h.joints["O4"].force_N, atol=1e-9)
     assert np.allclose(h2.joints["O4"].position_mm, [REF[3], 0.0])
     assert np.allclose(h2.torque_Nm, h.torque_Nm, atol=1e-9)
+
+
+def test_solve_keeps_its_general_solver_options_as_deprecated_keywords():
+    """``solve(..., tol_mm=, check_closure=)`` still runs (the general solver gets them) with a
+    DeprecationWarning; a misspelt keyword is a TypeError, as before."""
+    lk, deg = four_bar(*REF), crank_angles(72)
+    with pytest.warns(DeprecationWarning, match="tol_mm"):
+        old = solve(lk, deg, tol_mm=1e-9, general=True)
+    new = solve(lk, deg, general=True)
+    assert np.allclose(old.torque_Nm, new.torque_Nm, rtol=1e-12, atol=0)
+    with pytest.warns(DeprecationWarning, match="check_closure"):
+        unchecked = solve(lk, deg, check_closure=False)
+    assert np.allclose(unchecked.torque_Nm, new.torque_Nm, rtol=1e-6, atol=0)
+    with pytest.raises(TypeError, match="tol"):
+        solve(lk, deg, tol=1e-9)

@@ -10,20 +10,24 @@ The public interface is in mm, N, N·m, degrees (see ``rigfem.dynamics.history``
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from rigfem.dynamics.closed import closed_reactions
 from rigfem.dynamics.forces import body_loads
 from rigfem.dynamics.history import ReactionHistory
 from rigfem.dynamics.inverse import general_reactions
+from rigfem.linkage.closed import closed_motion
+from rigfem.linkage.general import general_motion
 from rigfem.linkage.model import Linkage, LinkageState
 from rigfem.linkage.state import linkage_state
 
 __all__ = ["solve", "reactions"]
 
 
-def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
-          check_closure: bool = True, general: bool = False) -> ReactionHistory:
+def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, *, general: bool = False,
+          **deprecated) -> ReactionHistory:
     """Positions, velocities, accelerations and reactions at the driver phases ``crank_deg``.
 
     A toggle-free rig four-bar or slider-crank is solved in closed form
@@ -33,9 +37,22 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: flo
     ``crank_deg`` must be increasing (an evenly spaced full turn for a crank); the driver
     turns at ``speed_hz`` (negative = clockwise).  Returns a ReactionHistory whose
     ``singular_mask`` flags toggle samples and whose ``evaluator`` re-solves at any angle.
+
+    ``tol_mm`` and ``check_closure`` (the general solver's, which no caller changed) are
+    deprecated: given, they warn and go to the general solver; they go in rigfem 0.3.
     """
     deg = np.asarray(crank_deg, float)
-    return reactions(lk, linkage_state(lk, deg, speed_hz, tol_mm, check_closure, general), deg, speed_hz)
+    if deprecated:
+        unknown = sorted(set(deprecated) - {"tol_mm", "check_closure"})
+        if unknown:
+            raise TypeError(f"solve() got an unexpected keyword argument {unknown[0]!r}")
+        given = ", ".join(f"{k}=..." for k in deprecated)
+        warnings.warn(f"solve({given}) is deprecated: no caller changes the general solver's tolerance or "
+                      "closure check; the argument goes in rigfem 0.3", DeprecationWarning, stacklevel=2)
+        motion = (None if general else closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)) or \
+            general_motion(lk, deg, speed_hz, **deprecated)
+        return reactions(lk, motion, deg, speed_hz)
+    return reactions(lk, linkage_state(lk, deg, speed_hz, general), deg, speed_hz)
 
 
 def reactions(lk: Linkage, motion: LinkageState, crank_deg: np.ndarray, speed_hz: float = 1.0) -> ReactionHistory:

@@ -16,10 +16,9 @@ from rigfem.linkage.model import Linkage, LinkageState
 __all__ = ["linkage_state"]
 
 
-def linkage_state(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, tol_mm: float = 1e-9,
-                  check_closure: bool = True, general: bool = False) -> LinkageState:
+def linkage_state(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, general: bool = False) -> LinkageState:
     """``lk``'s motion at the increasing driver phases ``crank_deg`` (deg), the driver at
     ``speed_hz``; ``general=True`` forces the general solver (the closed forms' reference)."""
     deg = np.asarray(crank_deg, float)
     fast = None if general else closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)
-    return fast if fast is not None else general_motion(lk, deg, speed_hz, tol_mm, check_closure)
+    return fast if fast is not None else general_motion(lk, deg, speed_hz)
