@@ -275,3 +275,40 @@ def test_volume_over_more_elements_than_one_chunk():
     fm = fe_mesh(box(2.0, 3.0, 5.0, 24, 24, 24, jitter=0.2), 1)
     assert len(fm.elements) > 65536
     assert volume(fm) == pytest.approx(30.0, rel=1e-12)
+
+
+def test_straightened_elements_come_back_from_the_cache_checked(tmp_path, monkeypatch):
+    """A warm mesh takes the straightened elements from the cache entry of its own P2 mesh (the
+    Jacobian test is not run again; the same nodes as computed); another mesh does not take them;
+    an entry with element numbers out of range is recomputed, not used."""
+    from rigfem.cache import Cache
+    from rigfem.fe import assembly
+
+    cache = Cache(tmp_path / "cache", 10**9)
+    part = box(1, 1, 1, 1, 1, 1)
+    fm0 = fe_mesh(box(1, 1, 1, 1, 1, 1), 2)
+    t = fm0.elements[0]
+    a, b = t[0], t[1]
+    far, mid = fm0.nodes[t[2:4]].mean(0), 0.5 * (fm0.nodes[a] + fm0.nodes[b])
+    runs, real = [], assembly._straighten_distorted
+    monkeypatch.setattr(assembly, "_straighten_distorted", lambda fm: runs.append(1) or real(fm))
+    part.curved_edges = np.array([[a, b]])
+    part.curved_points = (mid + 1.5 * (far - mid))[None]  # inverted: straightened
+    cold = fe_mesh(part, 2, cache)
+    warm = fe_mesh(part, 2, cache)
+    assert len(runs) == 1
+    assert warm.straightened == cold.straightened >= 1
+    assert np.array_equal(warm.nodes, cold.nodes) and np.array_equal(warm.curved, cold.curved)
+    part.curved_points = (mid + 0.05 * (far - mid))[None]  # mildly curved: another mesh, kept curved
+    mild = fe_mesh(part, 2, cache)
+    assert len(runs) == 2 and mild.straightened == 0 and mild.curved.sum() >= 1
+    part.curved_points = (mid + 1.5 * (far - mid))[None]
+    fe_mesh(part, 2, cache.without("straightened"))  # the kind switched off (benchmarks/bench_cache.py)
+    assert len(runs) == 3
+
+    poisoned = Cache(tmp_path / "poisoned", 10**9)
+    monkeypatch.setattr(assembly, "_straighten_distorted", lambda fm: np.array([10**6]))
+    fe_mesh(part, 2, poisoned)  # stored as computed: element 10**6 of 6
+    monkeypatch.setattr(assembly, "_straighten_distorted", lambda fm: runs.append(1) or real(fm))
+    again = fe_mesh(part, 2, poisoned)
+    assert len(runs) == 4 and again.straightened == cold.straightened and np.array_equal(again.nodes, cold.nodes)

@@ -3,6 +3,7 @@
     python tools/mutation_testing.py verdict loads dynamics fe        # run, then write the record
     python tools/mutation_testing.py --report                         # the record again from the last runs
     python tools/mutation_testing.py fe-stress --retest               # its record's survivors again, against new tests
+    python tools/mutation_testing.py fe-loads --sample 150            # a random sample of its mutants, scored with a 95 % interval
 
 Each package is mutated in a scratch copy of this work tree (``--workdir``, default
 ``/tmp/rigfem-mutmut/<package>``): the copy's pyproject.toml gets the package's ``[tool.mutmut]``
@@ -18,6 +19,11 @@ its diff and its fate: ``text`` (only the text of a message changes: a string li
 argument that only names a value in an error message, replaced), ``equivalent`` (with the argument
 why, from ``tools/mutation_fates.toml``) or ``open``.  The physics score leaves the ``text``
 mutants out: killed / (killed + survived + no tests + timeout) of the others.
+
+A package whose mutants take longer than a session (fe/: about half a minute each on two cores)
+is scored on a uniform random sample (``--sample N``, ``--seed``): its names drawn from every
+mutant mutmut makes of the package (mutmut's own generator), run as a whole run would run them;
+the record says "N of M" and gives each score with its 95 % Wilson interval.
 """
 
 from __future__ import annotations
@@ -26,9 +32,12 @@ import argparse
 import datetime
 import importlib
 import io
+import glob
 import json
+import math
 import os
 import platform
+import random
 import re
 import shutil
 import subprocess
@@ -110,12 +119,39 @@ def _prepare(pkg: str, d: Path) -> None:
     (d / "pyproject.toml").write_text(text.rstrip("\n") + "\n\n" + mutmut_table(pkg))
 
 
-def run_package(pkg: str, work: Path, children: int, resume: bool = False) -> dict:
+#: run in a package's scratch folder: the name of every mutant mutmut makes there (its generator,
+#: under the package's [tool.mutmut] table)
+_NAMES = """
+import json
+from pathlib import Path
+from mutmut.mutation.file_mutation import mutate_file_contents
+from mutmut.utils.file_utils import walk_mutatable_files
+from mutmut.utils.format_utils import get_mutant_name
+print(json.dumps(sorted(get_mutant_name(Path(f), n) for f in walk_mutatable_files()
+                        for n in mutate_file_contents(str(f), Path(f).read_text()).mutant_names)))
+"""
+
+
+def draw(d: Path, n: int, seed: int) -> dict:
+    """A uniform random sample of ``n`` of the mutants of the package prepared in ``d``: {n, of, seed, names}."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    every = json.loads(subprocess.run([sys.executable, "-c", _NAMES], cwd=d, env=env, capture_output=True,
+                                      text=True, check=True).stdout)
+    if not 0 < n < len(every):
+        raise SystemExit(f"--sample {n}: {d.name} has {len(every)} mutants; sample from 1 to {len(every) - 1}, "
+                         f"or run them all without --sample")
+    return {"n": n, "of": len(every), "seed": seed, "names": sorted(random.Random(seed).sample(every, n))}
+
+
+def run_package(pkg: str, work: Path, children: int, resume: bool = False,
+                sample: tuple[int, int] | None = None) -> dict:
+    """Run the package (or a random sample of its mutants: ``sample`` = (n, seed)); the run's time,
+    and the sample drawn."""
     d = work / pkg
-    if resume and (d / "mutants").is_dir():  # mutmut keeps the results it has: it runs the rest
-        return _mutmut(d, children)
-    _prepare(pkg, d)
-    return _mutmut(d, children)
+    if not (resume and (d / "mutants").is_dir()):  # resumed, mutmut keeps the results it has: it runs the rest
+        _prepare(pkg, d)
+    drawn = draw(d, *sample) if sample else None
+    return {**_mutmut(d, children, drawn["names"] if drawn else []), **({"sample": drawn} if drawn else {})}
 
 
 def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
@@ -123,7 +159,6 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
     tree's tests (new tests written to kill them); (the run's time, the record it started from).
     mutmut names a mutant by its function and number, so the names are the record's only while the
     mutated files are as they were at the record's commit: refused otherwise."""
-    import glob
 
     prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg) if (OUT / "mutmut.json").exists() else None
     if not prev:
@@ -246,11 +281,25 @@ def equivalent_edit(patch: str) -> str:
     return ""
 
 
+def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
+    """The 95 % Wilson score interval (%) of a proportion ``k`` of ``n``."""
+    p, zz = k / n, z * z / n
+    centre, half = (p + zz / 2) / (1 + zz), z * math.sqrt(p * (1 - p) / n + zz / (4 * n)) / (1 + zz)
+    return [round(100 * (centre - half), 1), round(100 * (centre + half), 1)]
+
+
 def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     """The record of a package's run in ``d``; with ``prior`` (the record a ``--retest`` re-ran the
-    survivors of), its killed mutants stay killed and the re-run decides the rest."""
+    survivors of), its killed mutants stay killed and the re-run decides the rest; a sampled run
+    (``meta["sample"]``) counts its sample only."""
     fates = tomllib.loads(FATES.read_text()) if FATES.exists() else {}
     res = results(d)
+    sample = meta.get("sample")
+    if sample and prior is None:
+        res = {k: v for k, v in res.items() if k in set(sample["names"])}
+        unrun = sorted(k for k in sample["names"] if res.get(k, ("not checked",))[0] == "not checked")
+        if unrun:
+            raise SystemExit(f"--sample {pkg}: mutmut did not run {len(unrun)} of the sample ({unrun[:3]}…)")
     counts: dict[str, int] = {}
     if prior is not None:
         again = {m["mutant"] for m in prior["not_killed"]}
@@ -279,13 +328,15 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     killed = counts.get("killed", 0) + counts.get("timeout", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
     physics_total = total - text - equivalent
+    interval = ({"ci95_mutmut_pct": wilson(killed, total) if total else None,
+                 "ci95_physics_pct": wilson(killed, physics_total) if physics_total else None} if sample else {})
     return {"package": pkg, "mutate": PACKAGES[pkg]["mutate"], "tests": PACKAGES[pkg]["tests"], **meta,
             "counts": counts, "total": total,
             "score_mutmut_pct": round(100 * killed / total, 1) if total else None,
             "text_mutants": text, "equivalent": equivalent,
             "open": sum(1 for m in not_killed if m["fate"] == "open"),
             "score_physics_pct": round(100 * killed / physics_total, 1) if physics_total else None,
-            "not_killed": not_killed}
+            **interval, "not_killed": not_killed}
 
 
 def write(record_by_pkg: dict, command: str) -> None:
@@ -318,14 +369,20 @@ def markdown(rec: dict) -> str:
              "code no number depends on (tools/mutation_fates.toml [not_numerical]) − mutants argued "
              "equivalent).  Every mutant not killed but for message text is listed below with its fate: "
              "`equivalent` (with the argument), `not numerical` (why), or `open` (a test could kill it; "
-             "none does yet).", "",
+             "none does yet).  A package scored on a random sample of its mutants (`--sample`) shows "
+             "*n of N* mutants and each score with its 95 % Wilson interval.", "",
              "| package | mutated | mutants | killed | survived | no tests | timeout | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
+    def score(p: dict, kind: str) -> str:
+        ci = p.get(f"ci95_{kind}_pct")
+        return f"{p[f'score_{kind}_pct']} %" + (f" ({ci[0]}–{ci[1]} %)" if ci else "")
+
     for pkg, p in rec["packages"].items():
-        c = p["counts"]
-        lines.append(f"| {pkg} | {', '.join(p['mutate'])} | {p['total']} | {c.get('killed', 0)} | {c.get('survived', 0)} | "
+        c, smp = p["counts"], p.get("sample")
+        n = f"{p['total']} of {smp['of']} (random, seed {smp['seed']})" if smp else p["total"]
+        lines.append(f"| {pkg} | {', '.join(p['mutate'])} | {n} | {c.get('killed', 0)} | {c.get('survived', 0)} | "
                      f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {p['text_mutants']} | {p['equivalent']} | "
-                     f"{p['score_mutmut_pct']} % | **{p['score_physics_pct']} %** | {p['date'][:10]}, "
+                     f"{score(p, 'mutmut')} | **{score(p, 'physics')}** | {p['date'][:10]}, "
                      f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}`"
                      + (f" (the survivors of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
                         f"{p['first_run']['commit']['sha'][:10]})" if p.get("first_run") else "") + " |")
@@ -349,10 +406,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--resume", action="store_true", help="continue an interrupted run in --workdir (its copy as it is)")
     ap.add_argument("--retest", action="store_true",
                     help="run the mutants the package's record did not kill again (a fresh copy), against this tree's tests")
+    ap.add_argument("--sample", type=int, metavar="N",
+                    help="run a uniform random sample of N of the package's mutants (scores with 95 %% intervals)")
+    ap.add_argument("--seed", type=int, default=0, help="the sample's random seed (default 0)")
     a = ap.parse_args(argv)
     pkgs = a.packages or list(PACKAGES)
     if set(pkgs) - set(PACKAGES):
         ap.error(f"unknown package(s) {sorted(set(pkgs) - set(PACKAGES))}: choose from {', '.join(PACKAGES)}")
+    if a.sample is not None and (a.retest or a.report):
+        ap.error("--sample draws a new run: not with --retest or --report (they keep the record's sample)")
     recs = {}
     for pkg in pkgs:
         meta = {}
@@ -360,15 +422,17 @@ def main(argv: list[str] | None = None) -> int:
         if a.retest:
             meta, prior = retest_package(pkg, a.workdir, a.max_children)
             first = prior.get("first_run") or {k: prior[k] for k in ("date", "commit", "command")}
-            meta = {"seconds": round(prior["seconds"] + meta["seconds"], 1), "first_run": first}
+            meta = {"seconds": round(prior["seconds"] + meta["seconds"], 1), "first_run": first,
+                    **({"sample": prior["sample"]} if prior.get("sample") else {})}
         elif not a.report:
-            meta = run_package(pkg, a.workdir, a.max_children, a.resume)
+            meta = run_package(pkg, a.workdir, a.max_children, a.resume,
+                               None if a.sample is None else (a.sample, a.seed))
         else:
             prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg, {}) if (OUT / "mutmut.json").exists() else {}
             if prev.get("first_run"):  # its folder holds only the re-run mutants: the others would read as unrun
                 raise SystemExit(f"--report {pkg}: its record is a --retest's, whose folder holds only the "
                                  f"mutants it re-ran; run --retest again instead")
-            meta = {"seconds": prev.get("seconds")}
+            meta = {"seconds": prev.get("seconds"), **({"sample": prev["sample"]} if prev.get("sample") else {})}
         recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)
         p = recs[pkg]
         print(f"{pkg}: {p['total']} mutants, {p['counts']}, mutmut score {p['score_mutmut_pct']} %, "
