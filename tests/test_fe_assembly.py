@@ -312,3 +312,30 @@ def test_straightened_elements_come_back_from_the_cache_checked(tmp_path, monkey
     monkeypatch.setattr(assembly, "_straighten_distorted", lambda fm: runs.append(1) or real(fm))
     again = fe_mesh(part, 2, poisoned)
     assert len(runs) == 4 and again.straightened == cold.straightened and np.array_equal(again.nodes, cold.nodes)
+
+
+def test_stiffness_in_chunks_equals_one_chunk():
+    """The stiffness sums its elements in chunks: any chunk size gives the same matrix."""
+    fm = fe_mesh(box(2, 1, 1, 3, 2, 2, jitter=0.2), 2)
+    K = stiffness(fm, 210e3, 0.3)
+    for chunk in (1, 7, len(fm.elements) - 1):
+        assert abs(stiffness(fm, 210e3, 0.3, chunk=chunk) - K).max() <= 1e-12 * abs(K).max()
+
+
+def test_a_mesh_of_the_same_nodes_in_another_element_order_is_straightened_on_its_own(tmp_path):
+    """The straightened elements' cache entry is keyed by the nodes and the elements: the same
+    nodes with the elements in another order do not take the first mesh's element numbers."""
+    from rigfem.cache import Cache
+
+    cache = Cache(tmp_path / "cache", 10**9)
+    part = box(1, 1, 1, 1, 1, 1)
+    fm0 = fe_mesh(box(1, 1, 1, 1, 1, 1), 2)
+    t = fm0.elements[0]
+    far, mid = fm0.nodes[t[2:4]].mean(0), 0.5 * (fm0.nodes[t[0]] + fm0.nodes[t[1]])
+    part.curved_edges = np.array([[t[0], t[1]]])
+    part.curved_points = (mid + 1.5 * (far - mid))[None]
+    turned = PartMesh(part.name, part.points, part.tets[::-1].copy(), surfaces=part.surfaces)
+    turned.curved_edges, turned.curved_points = part.curved_edges, part.curved_points
+    first, alone = fe_mesh(part, 2, cache), fe_mesh(turned, 2)
+    assert np.array_equal(fe_mesh(turned, 2, cache).nodes, alone.nodes)
+    assert np.array_equal(first.nodes, alone.nodes)  # the same nodes: only the elements' order differs

@@ -314,7 +314,7 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     counts = {k: v for k, v in counts.items() if v}
     not_killed = []
     for name, (status, patch) in sorted(res.items()):
-        if status == "killed":
+        if status in ("killed", "timeout", "segfault"):
             continue
         cat = category(patch)
         why = (fates.get("equivalent", {}).get(name, "") or equivalent_edit(patch)
@@ -325,7 +325,9 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
         not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
     text = sum(1 for m in not_killed if m["fate"] in ("text", "not numerical"))
     total = sum(counts.values())
-    killed = counts.get("killed", 0) + counts.get("timeout", 0)
+    # a mutant whose tests hang (timeout) or crash the interpreter (segfault: a kernel handed a bad
+    # array) fails the test run as a killed one does: detected
+    killed = counts.get("killed", 0) + counts.get("timeout", 0) + counts.get("segfault", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
     physics_total = total - text - equivalent
     interval = ({"ci95_mutmut_pct": wilson(killed, total) if total else None,
@@ -364,7 +366,7 @@ def _version(pkg: str) -> str | None:
 def markdown(rec: dict) -> str:
     lines = ["# Mutation testing of the numerical core (mutmut)", "",
              "Written by `tools/mutation_testing.py` from its runs (the command of each package below); "
-             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout) / all, mutmut's own.  "
+             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout + segfault) / all: every mutant that fails the test run.  "
              "*physics score* = killed / (all − mutants that only change a message's text − mutants of "
              "code no number depends on (tools/mutation_fates.toml [not_numerical]) − mutants argued "
              "equivalent).  Every mutant not killed but for message text is listed below with its fate: "

@@ -123,13 +123,12 @@ def _straighten_distorted(fm: FEMesh) -> np.ndarray:
     L = np.vstack([NODE_BARY, tet_quadrature(4)[0]])
     done = [np.zeros(0, np.int64)]
     for _ in range(10):
-        fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
-        idx = np.flatnonzero(fm.curved)
+        idx = np.flatnonzero(np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0)
         x = fm.nodes[fm.elements[idx, :4]]
         det0 = _det3(np.swapaxes(x[:, 1:] - x[:, :1], 1, 2))
         bad = idx[(_det3(_curved_jacobian(fm, L, idx)).min(1) < MIN_JACOBIAN * det0)]
         if not len(bad):
-            return np.concatenate(done)
+            break
         _to_chords(fm, bad)
         done.append(bad)
     fm.curved = np.abs(_chords(fm, slice(None))).max(axis=(1, 2)) > 0
