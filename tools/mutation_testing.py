@@ -208,6 +208,8 @@ for path in walk_mutatable_files():
     m.load()
     for name, code in m.exit_code_by_key.items():
         status = status_by_exit_code[code]
+        if status == "suspicious" and isinstance(code, int) and code < 0:
+            status = "segfault"  # the test process died of a signal (a bus error, an abort): a crash
         out[name] = [status, "" if status == "killed" else get_diff_for_mutant(name, path=path)]
 print(json.dumps(out))
 """
@@ -325,8 +327,8 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
         not_killed.append({"mutant": name, "status": status, "diff": patch, "fate": fate, "why": why})
     text = sum(1 for m in not_killed if m["fate"] in ("text", "not numerical"))
     total = sum(counts.values())
-    # a mutant whose tests hang (timeout) or crash the interpreter (segfault: a kernel handed a bad
-    # array) fails the test run as a killed one does: detected
+    # a mutant whose tests hang (timeout) or crash the interpreter (segfault: any signal that kills the
+    # test process, e.g. a kernel writing outside a badly sized array) fails the test run as a killed one does
     killed = counts.get("killed", 0) + counts.get("timeout", 0) + counts.get("segfault", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
     physics_total = total - text - equivalent
