@@ -436,7 +436,11 @@ def main(argv: list[str] | None = None) -> int:
             if prev.get("first_run"):  # its folder holds only the re-run mutants: the others would read as unrun
                 raise SystemExit(f"--report {pkg}: its record is a --retest's, whose folder holds only the "
                                  f"mutants it re-ran; run --retest again instead")
-            meta = {"seconds": prev.get("seconds"), **({"sample": prev["sample"]} if prev.get("sample") else {})}
+            # the run's own stamp (its date, commit and command), and when it was summarised again
+            meta = {"seconds": prev.get("seconds"), **({"sample": prev["sample"]} if prev.get("sample") else {}),
+                    **{k: prev[k] for k in ("date", "commit", "command", "machine") if k in prev},
+                    "summarised": {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                                   "commit": record.commit(), "command": record.command_line()}}
         recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)
         p = recs[pkg]
         print(f"{pkg}: {p['total']} mutants, {p['counts']}, mutmut score {p['score_mutmut_pct']} %, "
