@@ -105,6 +105,8 @@ def test_bad_mesh_raises():
         fe_mesh(PartMesh("flat", np.vstack([p, [[0, 1, 0]]]), np.array([[0, 1, 2, 3], [0, 1, 2, 4]])), 2)
 
 
+@pytest.mark.heavy  # two fresh interpreters, one compiling numba's kernels from nothing (5 s); the default
+# run checks the child in this process (test_the_compile_child_runs_once_per_cache)
 def test_first_assembly_compiles_the_kernels_in_a_child(tmp_path):
     """With numba's cache empty, one child process compiles the kernels and the assembling
     process loads each from numba's cache (compiles nothing itself); the next process starts no
