@@ -82,6 +82,21 @@ def test_torque_and_bolt_circle_resultants(bar):
     assert np.allclose(f0[on_h0].sum(0), [0, -2500 / 80, 0], atol=1e-9)
 
 
+def test_a_bolt_circle_turns_about_its_first_holes_axis(bar):
+    """A bolt circle's holes may face either way (parallel or opposite axes): the torque is
+    right-handed about the first hole's axis, whichever way the others face."""
+    import dataclasses
+
+    part, fm = bar
+    h2 = part.holes["h2"]
+    holes = dict(part.holes, h2=dataclasses.replace(h2, axis=-np.asarray(h2.axis)))
+    for names, sign in ((("h0", "h2"), 1.0), (("h2", "h0"), -1.0)):  # h0 faces +z, the turned h2 -z
+        f = load_vector(fm, holes, RHO, BoltCircleTorque(names, 2500.0))
+        force, moment = resultant(fm, f, part.holes["h1"].center)
+        assert np.allclose(force, 0, atol=1e-11 * 2500)
+        assert moment[2] == pytest.approx(sign * 2500.0, rel=1e-12)
+
+
 def test_a_torque_is_a_uniform_shear_along_the_bore(bar):
     """Not just its resultant: the work of the torque's nodal forces on the twist u = ζ² a × (x − c)
     (ζ = axial distance / depth from mid-depth) is that of the uniform shear τ = T / (2π R² h),
@@ -185,3 +200,14 @@ def test_gravity_and_inertia_match_rigid_body_dynamics():
     from rigfem.fe.forces import body_basis
 
     assert np.allclose(body_basis(model.mesh, 2 * steel.density)[0], 2 * body_basis(model.mesh, steel.density)[0])
+
+
+def test_a_surface_the_checks_missed_is_a_compute_error_naming_the_surfaces(bar):
+    """Inside the FE a surface name is trusted (rigfem.fe.inputs checked it): one that is not in
+    the mesh is a bug, reported as a ComputeError that lists the mesh's surfaces."""
+    from rigfem.errors import ComputeError
+    from rigfem.fe.supports import _triangles
+
+    _, fm = bar
+    with pytest.raises(ComputeError, match=f"available: {', '.join(fm.surfaces)}"):
+        _triangles(fm, "no_such_face")

@@ -368,15 +368,17 @@ def _version(pkg: str) -> str | None:
 def markdown(rec: dict) -> str:
     lines = ["# Mutation testing of the numerical core (mutmut)", "",
              "Written by `tools/mutation_testing.py` from its runs (the command of each package below); "
-             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout + segfault) / all: every mutant that fails the test run.  "
-             "*physics score* = killed / (all − mutants that only change a message's text − mutants of "
+             "the raw record is `mutmut.json`.  *mutmut score* = (killed + timeout + crash) / all: every "
+             "mutant that fails the test run (a crash: the test process died of a signal).  "
+             "*physics score* = (killed + timeout + crash) / (all − mutants that only change a message's "
+             "text − mutants of "
              "code no number depends on (tools/mutation_fates.toml [not_numerical]) − mutants argued "
              "equivalent).  Every mutant not killed but for message text is listed below with its fate: "
              "`equivalent` (with the argument), `not numerical` (why), or `open` (a test could kill it; "
              "none does yet).  A package scored on a random sample of its mutants (`--sample`) shows "
              "*n of N* mutants and each score with its 95 % Wilson interval.", "",
-             "| package | mutated | mutants | killed | survived | no tests | timeout | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
+             "| package | mutated | mutants | killed | survived | no tests | timeout | crash | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
     def score(p: dict, kind: str) -> str:
         ci = p.get(f"ci95_{kind}_pct")
         return f"{p[f'score_{kind}_pct']} %" + (f" ({ci[0]}–{ci[1]} %)" if ci else "")
@@ -385,7 +387,7 @@ def markdown(rec: dict) -> str:
         c, smp = p["counts"], p.get("sample")
         n = f"{p['total']} of {smp['of']} (random, seed {smp['seed']})" if smp else p["total"]
         lines.append(f"| {pkg} | {', '.join(p['mutate'])} | {n} | {c.get('killed', 0)} | {c.get('survived', 0)} | "
-                     f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {p['text_mutants']} | {p['equivalent']} | "
+                     f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {c.get('segfault', 0)} | {p['text_mutants']} | {p['equivalent']} | "
                      f"{score(p, 'mutmut')} | **{score(p, 'physics')}** | {p['date'][:10]}, "
                      f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}`"
                      + (f" (the survivors of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
