@@ -85,7 +85,9 @@ PACKAGES = {
                  "timeout_multiplier": 3.0, "timeout_constant": 5.0},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS},
-    "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")], "tests": FE_TESTS},
+    # and the stiffness's null space, the rigid modes of supports.py (free bodies are held by them)
+    "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")],
+                 "tests": FE_TESTS + ["tests/test_fe_assembly.py::test_stiffness_symmetric_and_rigid_modes_in_kernel"]},
     # and every test of the assembly: its warm-up (compile_kernels) and the straightening of distorted
     # curved elements are reached by no other
     "fe-assembly": {"mutate": ["rigfem/fe/assembly.py"],
