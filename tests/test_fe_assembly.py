@@ -105,8 +105,8 @@ def test_bad_mesh_raises():
         fe_mesh(PartMesh("flat", np.vstack([p, [[0, 1, 0]]]), np.array([[0, 1, 2, 3], [0, 1, 2, 4]])), 2)
 
 
-@pytest.mark.heavy  # two fresh interpreters, one compiling numba's kernels from nothing (5 s); the default
-# run checks the child in this process (test_the_compile_child_runs_once_per_cache)
+@pytest.mark.heavy  # two fresh interpreters with an empty numba cache (5 s); the default run checks the
+# child with numba's cache as it is (test_the_compile_child_runs_once_per_cache)
 def test_first_assembly_compiles_the_kernels_in_a_child(tmp_path):
     """With numba's cache empty, one child process compiles the kernels and the assembling
     process loads each from numba's cache (compiles nothing itself); the next process starts no
@@ -341,3 +341,14 @@ def test_a_mesh_of_the_same_nodes_in_another_element_order_is_straightened_on_it
     first, alone = fe_mesh(part, 2, cache), fe_mesh(turned, 2)
     assert np.array_equal(fe_mesh(turned, 2, cache).nodes, alone.nodes)
     assert np.array_equal(first.nodes, alone.nodes)  # the same nodes: only the elements' order differs
+
+
+def test_a_parts_own_surfaces_of_any_integer_type_give_the_same_p2_surfaces():
+    """A script's PartMesh may hold its surfaces' triangles as gmsh's unsigned tags: fe_mesh reads
+    them as int64 (uint64 mixed with int64 would turn into floats in numpy)."""
+    part = box(2, 1, 1, 2, 1, 1)
+    own = PartMesh(part.name, part.points, part.tets,
+                   surfaces={k: np.asarray(v, dtype=np.uint64) for k, v in part.surfaces.items()})
+    want, got = fe_mesh(part, 2).surfaces, fe_mesh(own, 2).surfaces
+    assert set(got) == set(want)
+    assert all(got[k].dtype == np.int64 and np.array_equal(got[k], want[k]) for k in want)

@@ -33,6 +33,8 @@ def test_uniaxial_tension_held_on_a_face_and_two_edge_lines():
     dofs = sol.support_dofs
     line_y = dofs["FixedComponents(xmin, y, edge_with=ymin)"]
     line_z = dofs["FixedComponents(xmin, z, edge_with=zmin)"]
+    face = dofs["FixedComponents(xmin, x)"]  # the face support, no edge: u_x of every node on x = 0
+    assert np.array_equal(np.sort(face // 3), np.flatnonzero(x[:, 0] == 0)) and set(face % 3) == {0}
     assert len(line_y) == 3 and set(line_y % 3) == {1} and np.allclose(x[line_y // 3, :2], 0)
     assert len(line_z) == 4 and set(line_z % 3) == {2} and np.allclose(x[line_z // 3][:, [0, 2]], 0)
 

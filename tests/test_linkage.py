@@ -314,16 +314,20 @@ def test_joint_direction_convention():
     assert np.allclose(h2.torque_Nm, h.torque_Nm, atol=1e-9)
 
 
-def test_solve_keeps_its_general_solver_options_as_deprecated_keywords():
-    """``solve(..., tol_mm=, check_closure=)`` still runs (the general solver gets them) with a
-    DeprecationWarning; a misspelt keyword is a TypeError, as before."""
+def test_solve_keeps_its_general_solver_options_as_deprecated_keywords(monkeypatch):
+    """``solve(..., tol_mm=, check_closure=)`` still runs, with a DeprecationWarning, and hands them
+    to the general solver when it runs; a misspelt keyword is a TypeError, as before."""
+    import rigfem.dynamics.solver as solver
+
     lk, deg = four_bar(*REF), crank_angles(72)
+    got, general = [], solver.general_motion
+    monkeypatch.setattr(solver, "general_motion", lambda *a, **k: got.append(k) or general(*a, **k))
     with pytest.warns(DeprecationWarning, match="tol_mm"):
-        old = solve(lk, deg, tol_mm=1e-9, general=True)
-    new = solve(lk, deg, general=True)
-    assert np.allclose(old.torque_Nm, new.torque_Nm, rtol=1e-12, atol=0)
+        old = solve(lk, deg, tol_mm=1e-7, check_closure=False, general=True)
+    assert got == [{"tol_mm": 1e-7, "check_closure": False}]
+    assert np.allclose(old.torque_Nm, solve(lk, deg, general=True).torque_Nm, rtol=1e-9, atol=0)
     with pytest.warns(DeprecationWarning, match="check_closure"):
-        unchecked = solve(lk, deg, check_closure=False)
-    assert np.allclose(unchecked.torque_Nm, new.torque_Nm, rtol=1e-6, atol=0)
+        closed = solve(lk, deg, check_closure=False)  # the closed form applies: no general solver
+    assert len(got) == 1 and closed.meta["solver"] == "closed form"
     with pytest.raises(TypeError, match="tol"):
         solve(lk, deg, tol=1e-9)

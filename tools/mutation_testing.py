@@ -18,7 +18,8 @@ dirty flag, machine, command, mutmut's counts and score, and every mutant that w
 its diff and its fate: ``text`` (only the text of a message changes: a string literal, or a string
 argument that only names a value in an error message, replaced), ``equivalent`` (with the argument
 why, from ``tools/mutation_fates.toml``) or ``open``.  The physics score leaves the ``text``
-mutants out: killed / (killed + survived + no tests + timeout) of the others.
+mutants out, and those argued equivalent or of code no number depends on: (killed + timeout + crash)
+/ the rest.
 
 A package whose mutants take longer than a session (fe/: about half a minute each on two cores)
 is scored on a uniform random sample (``--sample N``, ``--seed``): its names drawn from every
@@ -150,10 +151,15 @@ def run_package(pkg: str, work: Path, children: int, resume: bool = False,
     """Run the package (or a random sample of its mutants: ``sample`` = (n, seed)); the run's time,
     and the sample drawn."""
     d = work / pkg
-    if not (resume and (d / "mutants").is_dir()):  # resumed, mutmut keeps the results it has: it runs the rest
+    resumed = resume and (d / "mutants").is_dir()  # mutmut keeps the results it has: it runs the rest
+    if not resumed:
         _prepare(pkg, d)
     drawn = draw(d, *sample) if sample else None
-    return {**_mutmut(d, children, drawn["names"] if drawn else []), **({"sample": drawn} if drawn else {})}
+    names = drawn["names"] if drawn else []
+    if drawn and resumed:  # mutmut re-runs every mutant named: name only those without a result
+        done = {k for k, (status, _) in results(d).items() if status != "not checked"}
+        names = [n for n in names if n not in done] or names[:1]
+    return {**_mutmut(d, children, names), **({"sample": drawn} if drawn else {})}
 
 
 def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
@@ -210,8 +216,10 @@ for path in walk_mutatable_files():
     m.load()
     for name, code in m.exit_code_by_key.items():
         status = status_by_exit_code[code]
-        if status == "suspicious" and isinstance(code, int) and code < 0:
-            status = "segfault"  # the test process died of a signal (a bus error, an abort): a crash
+        if isinstance(code, int) and code < 0:
+            # a crash (illegal instruction, abort, bus error, floating-point trap, segfault) fails the test
+            # run; any other signal (a stopped run's SIGTERM, the OOM killer's SIGKILL) decides nothing
+            status = "segfault" if -code in (4, 6, 7, 8, 11) else "interrupted"
         out[name] = [status, "" if status == "killed" else get_diff_for_mutant(name, path=path)]
 print(json.dumps(out))
 """
@@ -334,8 +342,11 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     killed = counts.get("killed", 0) + counts.get("timeout", 0) + counts.get("segfault", 0)
     equivalent = sum(1 for m in not_killed if m["fate"] == "equivalent")
     physics_total = total - text - equivalent
+    # a sample's score estimates the package's, with its interval, until tests are written for its own
+    # survivors: re-run (--retest), it says how far those tests got, no longer what the package scores
     interval = ({"ci95_mutmut_pct": wilson(killed, total) if total else None,
-                 "ci95_physics_pct": wilson(killed, physics_total) if physics_total else None} if sample else {})
+                 "ci95_physics_pct": wilson(killed, physics_total) if physics_total else None}
+                if sample and prior is None else {})
     return {"package": pkg, "mutate": PACKAGES[pkg]["mutate"], "tests": PACKAGES[pkg]["tests"], **meta,
             "counts": counts, "total": total,
             "score_mutmut_pct": round(100 * killed / total, 1) if total else None,
@@ -382,8 +393,10 @@ def markdown(rec: dict) -> str:
              "| package | mutated | mutants | killed | survived | no tests | timeout | crash | text or not numerical | equivalent | mutmut score | physics score | date, commit | command |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
     def score(p: dict, kind: str) -> str:
-        ci = p.get(f"ci95_{kind}_pct")
-        return f"{p[f'score_{kind}_pct']} %" + (f" ({ci[0]}–{ci[1]} %)" if ci else "")
+        retested = p.get("sample") and p.get("first_run")
+        ci = None if retested else p.get(f"ci95_{kind}_pct")
+        return f"{p[f'score_{kind}_pct']} %" + (f" ({ci[0]}–{ci[1]} %)" if ci else
+                                                " (the sample's, after tests for its survivors)" if retested else "")
 
     for pkg, p in rec["packages"].items():
         c, smp = p["counts"], p.get("sample")
@@ -417,12 +430,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sample", type=int, metavar="N",
                     help="run a uniform random sample of N of the package's mutants (scores with 95 %% intervals)")
     ap.add_argument("--seed", type=int, default=0, help="the sample's random seed (default 0)")
+    ap.add_argument("--markdown", action="store_true", help="rewrite mutmut.md from mutmut.json (nothing is run)")
     a = ap.parse_args(argv)
+    if a.markdown:
+        (OUT / "mutmut.md").write_text(markdown(json.loads((OUT / "mutmut.json").read_text())))
+        return 0
     pkgs = a.packages or list(PACKAGES)
     if set(pkgs) - set(PACKAGES):
         ap.error(f"unknown package(s) {sorted(set(pkgs) - set(PACKAGES))}: choose from {', '.join(PACKAGES)}")
     if a.sample is not None and (a.retest or a.report):
         ap.error("--sample draws a new run: not with --retest or --report (they keep the record's sample)")
+    if a.sample is not None and not a.resume and (OUT / "mutmut.json").exists():
+        rec = json.loads((OUT / "mutmut.json").read_text())["packages"]
+        used = [p for p in pkgs if (rec.get(p, {}).get("sample") or {}).get("seed") == a.seed]
+        if used:  # tests written for that sample's survivors would make a second draw of it look better
+            ap.error(f"--seed {a.seed}: the record's sample of {', '.join(used)} was drawn with it; "
+                     f"draw a fresh one (--seed {a.seed + 1})")
     recs = {}
     for pkg in pkgs:
         meta = {}
@@ -442,7 +465,8 @@ def main(argv: list[str] | None = None) -> int:
                                  f"mutants it re-ran; run --retest again instead")
             # the run's own stamp (its date, commit and command), and when it was summarised again
             meta = {"seconds": prev.get("seconds"), **({"sample": prev["sample"]} if prev.get("sample") else {}),
-                    **{k: prev[k] for k in ("date", "commit", "command", "machine") if k in prev},
+                    **{k: prev[k] for k in ("date", "commit", "command", "machine", "mutate", "tests", "mutmut")
+                       if k in prev},
                     "summarised": {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                                    "commit": record.commit(), "command": record.command_line()}}
         recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)

@@ -39,7 +39,8 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, *, general:
     ``singular_mask`` flags toggle samples and whose ``evaluator`` re-solves at any angle.
 
     ``tol_mm`` and ``check_closure`` (the general solver's, which no caller changed) are
-    deprecated: given, they warn and go to the general solver; they go in rigfem 0.3.
+    deprecated: given, they warn, and apply where the general solver runs (not where a closed form
+    does); they go in rigfem 0.3.
     """
     deg = np.asarray(crank_deg, float)
     if deprecated:
@@ -52,7 +53,7 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, *, general:
         motion = (None if general else closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)) or \
             general_motion(lk, deg, speed_hz, **deprecated)
         return reactions(lk, motion, deg, speed_hz)
-    return reactions(lk, linkage_state(lk, deg, speed_hz, general), deg, speed_hz)
+    return reactions(lk, linkage_state(lk, deg, speed_hz, general=general), deg, speed_hz)
 
 
 def reactions(lk: Linkage, motion: LinkageState, crank_deg: np.ndarray, speed_hz: float = 1.0) -> ReactionHistory:

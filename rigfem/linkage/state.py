@@ -16,7 +16,7 @@ from rigfem.linkage.model import Linkage, LinkageState
 __all__ = ["linkage_state"]
 
 
-def linkage_state(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, general: bool = False) -> LinkageState:
+def linkage_state(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, *, general: bool = False) -> LinkageState:
     """``lk``'s motion at the increasing driver phases ``crank_deg`` (deg), the driver at
     ``speed_hz``; ``general=True`` forces the general solver (the closed forms' reference)."""
     deg = np.asarray(crank_deg, float)
