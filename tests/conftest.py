@@ -38,9 +38,16 @@ ROOT = Path(tempfile.mkdtemp(prefix="rigfem-tests-")) if _OWN else Path(os.envir
 os.environ[ROOT_ENV] = str(ROOT)
 
 
+#: set by tools/mutation_testing.py: keep its RIGFEM_CACHE, a folder rigfem refuses (no cache), since
+#: its mutants share one package hash and a cache entry one computed would hide another
+KEEP_CACHE_ENV = "RIGFEM_TESTS_KEEP_CACHE"
+
+
 def private_home(root: Path) -> None:
     """Point HOME, the cache and the per-user folders into ``root``."""
     for var, sub in PRIVATE.items():
+        if var == "RIGFEM_CACHE" and os.environ.get(KEEP_CACHE_ENV):
+            continue
         (root / sub).mkdir(parents=True, exist_ok=True)
         os.environ[var] = str(root / sub)
 

@@ -188,7 +188,8 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
 
 def _mutmut(d: Path, children: int, names: list[str] = ()) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    env.update(RIGFEM_CACHE=NO_CACHE, NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
+    env.update(RIGFEM_CACHE=NO_CACHE, RIGFEM_TESTS_KEEP_CACHE="1",  # tests/conftest.py would point it at a folder
+               NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
                **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"))
     t0 = time.time()
     with open(d / "mutmut.log", "a") as log:
