@@ -50,8 +50,9 @@ def solve(lk: Linkage, crank_deg: np.ndarray, speed_hz: float = 1.0, *, general:
         given = ", ".join(f"{k}=..." for k in deprecated)
         warnings.warn(f"solve({given}) is deprecated: no caller changes the general solver's tolerance or "
                       "closure check; the argument goes in rigfem 0.3", DeprecationWarning, stacklevel=2)
-        motion = (None if general else closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)) or \
-            general_motion(lk, deg, speed_hz, **deprecated)
+        motion = None if general else closed_motion(lk, np.radians(deg), 2 * np.pi * speed_hz)
+        if motion is None:  # linkage_state's choice, with the general solver's deprecated options
+            motion = general_motion(lk, deg, speed_hz, **deprecated)
         return reactions(lk, motion, deg, speed_hz)
     return reactions(lk, linkage_state(lk, deg, speed_hz, general=general), deg, speed_hz)
 
