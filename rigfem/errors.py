@@ -1,5 +1,8 @@
 """The two kinds of failure: bad input (the user can fix it) and could-not-compute (rigfem could not).
 
+Bad input is an InputError where input is parsed (a value out of its range), or an
+InfeasibleError from inside (valid values that ask for what cannot be built or run).
+
 The CLI maps them to exit codes 2 and 3; nothing below the CLI knows about exit codes.
 """
 
@@ -24,7 +27,15 @@ class InputError(ValueError):
     """Bad user input: the message names the field, the value and the allowed range."""
 
 
-class ClosureError(InputError):
+class InfeasibleError(InputError):
+    """Well-formed input that asks for what cannot be built or run, known only once rigfem works on
+    it: no four-bar on the rig's rails, a joint off a rail's holes, a peak inside a toggle range, a
+    mesh too coarse for its part, a job past this machine.  The user changes the input (an
+    InputError: exit 2); the layers inside raise it, while a plain InputError (a value out of its
+    range) is raised only where input is parsed."""
+
+
+class ClosureError(InfeasibleError):
     """A linkage's lengths cannot close its loop (at all, or at the crank angles asked): the message
     names the lengths and the angles where it closes (:mod:`rigfem.linkage` raises it)."""
 

@@ -102,6 +102,15 @@ class MeshSettings:
                 "concentrate": sorted(self.concentrate)}
 
 
+def check_groups(part: str, settings: MeshSettings, groups) -> None:
+    """The surface groups ``settings`` refines are groups of the part (``groups``: its names, known
+    once gmsh has built it); InputError listing them otherwise."""
+    unknown = [g for g in settings.refine + settings.concentrate if g not in groups]
+    if unknown:
+        raise InputError(f"refine: {', '.join(unknown)} not a surface group of {part}; "
+                         f"groups: {', '.join(sorted(groups))}")
+
+
 #: MeshSettings' keywords before 0.1 (README's "Your own part"), still taken until rigfem 0.3
 _OLD_MESH_KEYWORDS = {"size": "size_mm", "refine_size": "local_size_mm", "refine_dist": "refine_dist_mm"}
 

@@ -38,6 +38,8 @@ BOUNDARY = {
     # closed forms a script calls with its own dimensions (docs/guide/own-part.md compares its FE
     # peak with plate_hole_peak_mpa): a formula's validity range is the range of its input
     "rigfem.verification.closed_form",
+    # the LE10 benchmark a script solves on its own mesh, in its own length unit (unit_mm)
+    "rigfem.verification.le10",
 }
 
 #: value types whose constructor (__init__/__post_init__) holds the invariants of their fields
@@ -52,43 +54,20 @@ VALUE_TYPES = {
     "rigfem.sweep.run.Scheduler",  # a Dask scheduler's tcp://HOST:PORT
     "rigfem.context.Context",  # a job's worker processes
     "rigfem.dynamics.history.DynamicsOptions",  # a turn's samples, mass model and crank speed
-    "rigfem.verification.le10.Le10Mesh",  # the LE10 benchmark's element size and layers
 }
 
-#: inner sites not moved yet (issue 37 item 2, left open), function -> how many: the list may only
-#: shrink.  What is left, and why:
-#: * synthesis: the "linear map" refusals of synthesize_function and the dyad's singular or
-#:   zero-length solutions are known only after solving the equations for the given inputs; the
-#:   except-InputError catches (a trial design that does not close) are not refusals;
-#: * design: "the rails allow no four-bar" and "no one scale fits" come from enumerating the rig;
-#: * loads.cases._at_peak: a peak refinement can meet a toggle the samples did not flag;
-#: * mesh: unknown refine groups of a custom part are known once gmsh has read it, a mesh's quality
-#:   or empty groups once it is meshed; check_estimate/check_cost hold a job against the machine
-#:   (--allow-large); face_owners/quadratic refuse a hand-made PartMesh's surfaces and edges;
-#: * rig.layout coupling (an off-grid length's nearest coupling can miss the rail's last hole), sweep.bases: a rail too short for a
-#:   joint, no runnable reference configuration; dynamics.cycle.simulate: a config dict's linkage
-#:   type (rigfem.scene could build it, but dynamics may not import scene);
-#: * verification.le10: solve_le10's unit_mm (a script's own number: the unit of its mesh).
-#: (The FE's supports, loads, mesh and solver name are judged once by rigfem.fe.inputs.)
+#: inner sites not moved yet, function -> how many: the list may only shrink.  A hand-made
+#: PartMesh's surfaces and curved edges are refused where they are first looked up (face_owners,
+#: quadratic): judging them at the edge (rigfem.fe.inputs.check_mesh) would sort every tet face of
+#: every mesh a second time, about a second for 600 000 tets.
+#: What is known only once rigfem works on valid input (no four-bar on the rails, a joint off a
+#: rail's holes, a peak in a toggle range, a mesh too coarse for its part, a job past the machine, a
+#: synthesis whose equations have no useful solution) is an InfeasibleError, raised inside; catching
+#: an InputError (a trial design that does not close) is not a refusal.
 PENDING = {
-    "rigfem.design.rig_design:snap_function": 1,
-    "rigfem.design.rig_design:snap_motion": 2,
-    "rigfem.dynamics.cycle:simulate": 1,
-    "rigfem.linkage.synthesis:_dyad": 1,
-    "rigfem.linkage.synthesis:_reachable": 1,
-    "rigfem.linkage.synthesis:check_three_position": 1,
-    "rigfem.linkage.synthesis:optimise_three_position.cost": 1,
-    "rigfem.linkage.synthesis:synthesize_function": 4,
-    "rigfem.linkage.synthesis:three_position": 1,
-    "rigfem.loads.cases:_at_peak": 1,
-    "rigfem.mesh.mesher:_mesh": 3,
-    "rigfem.mesh.mesher:check_estimate": 1,
     "rigfem.mesh.partmesh:face_owners": 2,
     "rigfem.mesh.partmesh:quadratic.lookup": 1,
-    "rigfem.rig.layout:RailLayout.coupling": 1,
-    "rigfem.sweep.bases:_reference_cases": 1,
-    "rigfem.sweep.cost:check_cost": 1,
-    "rigfem.verification.le10:solve_le10": 1,
+    "rigfem.dynamics.cycle:simulate": 1,  # simulate's config dict (moves to rigfem.dynamics.inputs)
 }
 
 NAMES = {"InputError", "check_range"}
@@ -113,6 +92,10 @@ def sites(source: str, mod: str) -> list[str]:
     def visit(node: ast.AST, scope: list[str]) -> None:
         for child in ast.iter_child_nodes(node):
             if isinstance(child, (ast.Import, ast.ImportFrom)):
+                continue
+            if isinstance(child, ast.ExceptHandler):  # catching a refusal is not making one
+                for stmt in child.body:
+                    visit(ast.Module([stmt], []), scope)
                 continue
             inner = scope + [child.name] if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef,
                                                                 ast.ClassDef)) else scope
@@ -161,4 +144,28 @@ def test_the_boundary_check_can_fail():
               "    def size(self):\n        raise InputError('y')\n")
     assert sites(method, "rigfem.verdict.fatigue") == ["rigfem.verdict.fatigue:5 Marin.size uses InputError"]
     assert sites(planted, "rigfem.cli.check") == []
+    caught = ("def trial(x):\n    try:\n        return close(x)\n    except InputError:\n"
+              "        raise InputError('y')\n")
+    assert sites(caught, "rigfem.linkage.synthesis") == ["rigfem.linkage.synthesis:5 trial uses InputError"]
+    assert sites("def snap():\n    raise InfeasibleError('no four-bar')\n", "rigfem.design.rig_design") == []
     assert _over(sites(planted, "rigfem.fe.stress"), PENDING) == ["rigfem.fe.stress:2 peak uses check_range"]
+
+
+def test_refine_groups_are_judged_against_the_parts_groups():
+    """A refine or concentrate name that is not a surface group of the part: bad input listing them."""
+    import pytest
+
+    from rigfem.errors import InputError
+    from rigfem.settings import MeshSettings, check_groups
+
+    s = MeshSettings(size_mm=10.0).refined(("bore", "rim"), ("fillet",))
+    check_groups("plate", s, {"bore": 1, "rim": 2, "fillet": 3})
+    with pytest.raises(InputError, match=r"refine: rim, fillet not a surface group of plate; groups: bore, top$"):
+        check_groups("plate", s, {"bore": 1, "top": 2})
+
+
+def test_infeasible_input_is_still_bad_input():
+    """What valid input asks for but cannot be had is an InputError (exit 2), closure included."""
+    from rigfem.errors import ClosureError, InfeasibleError, InputError
+
+    assert issubclass(InfeasibleError, InputError) and issubclass(ClosureError, InfeasibleError)

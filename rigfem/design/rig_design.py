@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from rigfem.context import Context, default_context
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError, InfeasibleError
 from rigfem.linkage.expression import parse_function
 from rigfem.linkage.kinematics import fourbar_motion
 from rigfem.linkage.loops import BRANCHES, fourbar_angles
@@ -95,7 +95,7 @@ def snap_function(r: dict, top: int = 5, p: SweepParams | None = None) -> list[d
 
     L = rig_fourbars(p)
     if L.size == 0:
-        raise InputError("the rig's rails allow no four-bar that obeys every rig rule")
+        raise InfeasibleError("the rig's rails allow no four-bar that obeys every rig rule")
     coarse_in, coarse_out = rel(41)
     starts = np.arange(0.0, 360.0, 4.0)
     found = []  # (error deg, row, branch, start)
@@ -192,13 +192,13 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
     Ld = np.array([r["lengths"][k] for k in LENGTH_KEYS])
     allowed = rig_fourbars(p)
     if allowed.size == 0:
-        raise InputError("the rig's rails allow no four-bar that obeys every rig rule")
+        raise InfeasibleError("the rig's rails allow no four-bar that obeys every rig rule")
     ok = {tuple(x) for x in allowed}
     if scale is None:
         lo = float(np.max(allowed.min(axis=0) / Ld))
         hi = float(np.min(allowed.max(axis=0) / Ld))
         if not lo <= hi:
-            raise InputError(f"the design's proportions (b2:b3:b4:d = {':'.join(f'{x:.3g}' for x in Ld / Ld[0])}) "
+            raise InfeasibleError(f"the design's proportions (b2:b3:b4:d = {':'.join(f'{x:.3g}' for x in Ld / Ld[0])}) "
                              f"do not fit the rig's rails at any one scale; give --scale")
         scales = np.geomspace(lo, hi, 24) if hi > lo else np.array([lo])
     else:

@@ -17,7 +17,7 @@ import numpy as np
 
 from rigfem.linkage.kinematics import fourbar_motion, fourbar_turn
 from rigfem.linkage.loops import change_points_passed
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError, InfeasibleError, InputError
 from rigfem.linkage.expression import check_interval, parse_function
 
 #: a structural error above this share of the output range (%) is flagged as a defect
@@ -117,16 +117,16 @@ def synthesize_function(expr: str, x0: float, x1: float, in_start: float, in_ran
     try:
         K1, K2, K3 = np.linalg.solve(M, np.cos(t2 - t4))
     except np.linalg.LinAlgError:
-        raise InputError(linear) from None
+        raise InfeasibleError(linear) from None
     if not (abs(K1) * MAX_LINK_RATIO > 1 and abs(K2) * MAX_LINK_RATIO > 1):
-        raise InputError(linear)
+        raise InfeasibleError(linear)
     a, c = d / K1, d / K2
     b2_sq = a * a + c * c + d * d - 2 * a * c * K3
     if not b2_sq > 0:
         raise ComputeError(f"Freudenstein's solution has no real coupler (b² = {b2_sq:.4g})")
     b = float(np.sqrt(b2_sq))
     if b > MAX_LINK_RATIO * d:
-        raise InputError(linear)
+        raise InfeasibleError(linear)
     off_in, off_out = (180.0 if a < 0 else 0.0), (180.0 if c < 0 else 0.0)
     a, c = abs(a), abs(c)
     res = dict(expression=expr, x_range=[x0, x1], y_range=[y0, y1], ground=d,
@@ -196,7 +196,7 @@ def _dyad(delta: np.ndarray, rot_link: np.ndarray, rot_coupler: np.ndarray) -> t
     """Standard-form dyad W, Z (complex, first position) with W(e^{iβk} − 1) + Z(e^{iαk} − 1) = δk, k = 2, 3."""
     M = np.array([[np.exp(1j * rot_link[k]) - 1, np.exp(1j * rot_coupler[k]) - 1] for k in range(2)])
     if abs(np.linalg.det(M)) < 1e-12:
-        raise InputError("the chosen rotations make the dyad equations singular; change --alpha/--beta/--gamma")
+        raise InfeasibleError("the chosen rotations make the dyad equations singular; change --alpha/--beta/--gamma")
     W, Z = np.linalg.solve(M, delta)
     return complex(W), complex(Z)
 
@@ -244,7 +244,7 @@ def three_position(points: np.ndarray, alpha_deg, beta_deg, gamma_deg) -> dict:
     A1, B1 = O2 + W, O4 + U
     b2, b3, b4, d = abs(W), abs(B1 - A1), abs(U), abs(O4 - O2)
     if min(b2, b3, b4, d) < 1e-9 * (np.abs(delta).max()):
-        raise InputError("the chosen rotations give a zero-length link; change --alpha/--beta/--gamma")
+        raise InfeasibleError("the chosen rotations give a zero-length link; change --alpha/--beta/--gamma")
     th1 = np.angle(O4 - O2)
     crank = np.degrees(np.angle(W * np.exp(1j * np.r_[0.0, b])) - th1) % 360.0
     cp = (abs(z[0] - A1), float(np.degrees(np.angle((z[0] - A1) / (B1 - A1)))))

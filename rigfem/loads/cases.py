@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigfem.dynamics.history import BodyHistory, ReactionHistory
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError, InfeasibleError
 from rigfem.rig.layout import RailLayout
 from rigfem.rig.parts import rail_hole_name
 
@@ -198,7 +198,7 @@ def _at_peak(h: ReactionHistory, peak: dict, what: str) -> tuple[ReactionHistory
     """The history evaluated at a refined peak's crank angles (every equal peak, e.g. the mirrored
     ones of a symmetric linkage: the study's case is then the worst of them), and the peak (N)."""
     if peak.get("singular") or peak.get("force_N") is None:
-        raise InputError(f"{what}: the peak lies in a toggle (singular) range; no load can be "
+        raise InfeasibleError(f"{what}: the peak lies in a toggle (singular) range; no load can be "
                          f"derived — change the configuration")
     deg = np.asarray(peak.get("equal_peaks_deg") or [peak["crank_deg"]], float)
     if h.evaluator is not None:

@@ -17,7 +17,7 @@ from rigfem.mesh.partmesh import (
     quality_summary,
     save_npz,
 )
-from rigfem.settings import MeshSettings
+from rigfem.settings import MeshSettings, check_groups
 
 #: machine memory the estimate is checked against, GiB: this machine's physical memory
 MACHINE_GIB = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
@@ -209,13 +209,13 @@ def estimate_part(part, s: MeshSettings) -> Estimate | None:
 
 
 def check_estimate(est: Estimate, s: MeshSettings, machine_gib: float, what: str = "would give") -> None:
-    """Refuse (InputError, one line) a mesh whose estimate exceeds ``machine_gib``, unless the
+    """Refuse (InfeasibleError, one line) a mesh whose estimate exceeds ``machine_gib``, unless the
     user lifted the limit (``rigfem --allow-large``)."""
-    from rigfem.errors import InputError
+    from rigfem.errors import InfeasibleError
     from rigfem.settings import allow_large
 
     if est.gib > machine_gib and not allow_large():
-        raise InputError(f"size_mm = {s.size_mm:g} mm (local_size_mm = {s.near_mm:g} mm) "
+        raise InfeasibleError(f"size_mm = {s.size_mm:g} mm (local_size_mm = {s.near_mm:g} mm) "
                          f"{what} about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
                          f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB) "
                          f"and about {est.seconds:.3g} s of meshing, more than the machine's {machine_gib:g} GiB: "
@@ -227,7 +227,7 @@ def mesh_part(part, settings: MeshSettings, *, cache: Cache | None = None,
     """Mesh a part (``rigfem.rig.parts.PartDef``) with linear tets, through ``cache`` (None: the
     environment's, :func:`rigfem.cache.resolve`; :data:`rigfem.cache.NO_CACHE`: meshed afresh).
 
-    Refuses (InputError) a request whose estimate exceeds ``machine_gib`` (from the part's
+    Refuses (InfeasibleError) a request whose estimate exceeds ``machine_gib`` (from the part's
     dimensions before gmsh starts, then from the built geometry) and a mesh whose minimum
     minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.  gmsh runs
     in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once.
@@ -308,7 +308,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
     """The gmsh work of :func:`mesh_part` (run in the mesher process)."""
     import gmsh
 
-    from rigfem.errors import InputError
+    from rigfem.errors import InfeasibleError
     from rigfem.mesh.geometry import build, gmsh_session
 
     t0 = time.perf_counter()
@@ -321,10 +321,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
         gmsh.option.setNumber("General.NumThreads", 1)
         holes = build(part)
         groups = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups(2)}
-        unknown = [g for g in settings.refine + settings.concentrate if g not in groups]
-        if unknown:
-            raise InputError(f"refine: {', '.join(unknown)} not a surface group of {part.name}; "
-                             f"groups: {', '.join(sorted(groups))}")
+        check_groups(part.name, settings, groups)
         refine_tags, conc_tags = (sorted({t for g in names for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[g])})
                                   for names in (settings.refine + settings.concentrate, settings.concentrate))
         est = _estimate_model(refine_tags, conc_tags, settings)
@@ -345,7 +342,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
             q = _quality()
             lap("3D again (Delaunay)")
         if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
-            raise InputError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
+            raise InfeasibleError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
                              f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
                              f"or local_size_mm = {settings.near_mm:g} mm (or check thin walls in the part file)")
         points, tets, surfaces, edges, mids = second_order(
@@ -355,7 +352,7 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
     seconds = time.perf_counter() - t0
     empty = [k for k, v in surfaces.items() if len(v) == 0]
     if empty or len(tets) == 0:
-        raise InputError(f"part {part.name}: mesh has empty groups {empty}: decrease size_mm = {settings.size_mm:g} mm")
+        raise InfeasibleError(f"part {part.name}: mesh has empty groups {empty}: decrease size_mm = {settings.size_mm:g} mm")
     if not holes:  # custom part: cylinders fitted to the meshed surfaces
         holes = {k: h for k, v in surfaces.items() if (h := fit_cylinder(points, v)) is not None}
     quality = quality_summary(q)  # of the linear mesh, before gmsh curved it

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import InfeasibleError
 from rigfem.rig.parts import load_part, rail_hole_x
 
 
@@ -45,7 +45,7 @@ class RailLayout:
         """
         if not self.fits(distance_mm):
             most = self.hole_x[-1] - self.screw_spacing / 2 - self.pivot_x
-            raise InputError(f"{bar}: a joint {distance_mm:g} mm from the pivot does not fit on a "
+            raise InfeasibleError(f"{bar}: a joint {distance_mm:g} mm from the pivot does not fit on a "
                              f"{self.hole_x[-1] + self.hole_x[0]:g} mm rail; allowed 0..{most:g} mm "
                              f"(choose a longer rail)")
         return self._holes(distance_mm)

@@ -19,7 +19,7 @@ import numpy as np
 from rigfem.dynamics.cycle import simulate
 from rigfem.dynamics.history import peaks
 from rigfem.cache import Cache, resolve
-from rigfem.errors import ComputeError, InputError
+from rigfem.errors import ComputeError, InfeasibleError
 from rigfem.linkage.mechanisms import four_bar, slider_crank
 from rigfem.loads.cases import PartCase, UnitLoad, directions, part_cases
 from rigfem.rig.parts import rail_hole_name
@@ -107,7 +107,7 @@ def _reference_cases(p: SweepParams, s: CheckSettings) -> list[tuple[str, PartCa
         pk = peaks(h)
         if not h.meta.get("singular") and not any(v.get("singular") for v in pk.values()):
             return part_cases(h, pk, s)
-    raise InputError(f"no {p.linkage_type} configuration of rails {list(p.rails)} mm can run")
+    raise InfeasibleError(f"no {p.linkage_type} configuration of rails {list(p.rails)} mm can run")
 
 
 def _basis_specs(p: SweepParams, s: CheckSettings) -> dict[tuple, tuple[PartCase, list[UnitLoad]]]:

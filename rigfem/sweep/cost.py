@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rigfem.errors import InputError
+from rigfem.errors import InfeasibleError
 from rigfem.settings import MAX_JOB_HOURS, allow_large
 from rigfem.sweep.configs import SweepParams
 
@@ -85,7 +85,7 @@ def synthesis_cost(p: SweepParams, candidates: int, stress: bool) -> JobCost:
 
 
 def check_cost(cost: JobCost, machine_gib: float) -> None:
-    """Refuse (InputError, one line) a job past the machine's memory or :data:`MAX_JOB_HOURS`,
+    """Refuse (InfeasibleError, one line) a job past the machine's memory or :data:`MAX_JOB_HOURS`,
     unless the user lifted the limits (``rigfem --allow-large``)."""
     over = []
     if cost.gib > machine_gib:
@@ -93,5 +93,5 @@ def check_cost(cost: JobCost, machine_gib: float) -> None:
     if cost.seconds > MAX_JOB_HOURS * 3600:
         over.append(f"{cost.seconds / 3600:.3g} h, more than the limit of {MAX_JOB_HOURS:g} h")
     if over and not allow_large():
-        raise InputError(f"{cost.what}: estimated {' and '.join(over)}; reduce the job, or pass "
+        raise InfeasibleError(f"{cost.what}: estimated {' and '.join(over)}; reduce the job, or pass "
                          f"rigfem --allow-large")
