@@ -84,6 +84,14 @@ PACKAGES = {
                  # a mutant at least 30 s (a forked pytest's start costs seconds: a budget of 5 s timed
                  # out mutants that the tests kill or that survive) and six times its tests' time
                  "timeout_multiplier": 3.0, "timeout_constant": 5.0},
+    # the kinematics (closed forms, loop closure, change points), the mechanism catalogue and synthesis
+    "linkage": {"mutate": ["rigfem/linkage/*"],
+                "tests": ["tests/test_kinematics.py", "tests/test_linkage.py", "tests/test_linkage_state.py",
+                          "tests/test_synthesis.py", "tests/test_mechanisms.py", "tests/test_extremes_linkage.py",
+                          "tests/test_dynamics_closed.py", "tests/test_dynamics_truths.py"]},
+    # mesh sizing: the size fields, the tet and memory estimates, second order and the quality gate
+    # (gmsh runs in a mesher process: a mutant reached only there shows as "no tests")
+    "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py"]},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS},
     # and the stiffness's null space, the rigid modes of supports.py (free bodies are held by them)
