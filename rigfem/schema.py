@@ -96,6 +96,18 @@ class SliderCrank(_Linkage):
     offset: Annotated[float, Field(ge=-10_000.0, le=10_000.0)] = 0.0
     gas: Gas | None = None
 
+    @model_validator(mode="after")
+    def _clearance(self):
+        """The gas force p (V1/V2 − 1) needs gas left at top dead centre: the cylinder head
+        (L_mm − c_mm from the crank's pivot) beyond the piston's farthest reach."""
+        if self.gas is not None:
+            reach = max((self.b2 + self.b3) ** 2 - self.offset ** 2, 0.0) ** 0.5
+            head = self.gas.L_mm - self.gas.c_mm
+            if not head > reach:
+                raise ValueError(f"[linkage.gas] L_mm - c_mm = {head:g} mm must exceed the piston's top dead "
+                                 f"centre, sqrt((b2 + b3)^2 - offset^2) = {reach:g} mm: no gas is left to compress")
+        return self
+
 
 class InvertedSliderCrank(_Linkage):
     type: Literal["inverted-slider-crank"]

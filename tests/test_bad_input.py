@@ -353,3 +353,18 @@ def test_any_csv_imports_or_is_input_error(tmp_path, step, scale, start, drop):
         return
     assert np.all(np.diff(h.crank_deg) <= 10.0 + 1e-9)
     assert all(np.isfinite(j.force_N).all() for j in h.joints.values())
+
+
+@pytest.mark.parametrize("L_mm", [600.0, 550.0])
+def test_a_compressor_without_clearance_is_refused(tmp_path, capsys, L_mm):
+    """[linkage.gas] whose cylinder head (L_mm − c_mm from the pivot) the piston reaches, 500 mm
+    for crank 150 and rod 350 mm: the gas force would be unbounded (an inf reached the reactions
+    table with exit 0); refused naming both lengths.  Just beyond the reach it runs."""
+    text = (builtin_scenes()["mech5-compressor"]).read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("L_mm = 1000.0", f"L_mm = {L_mm}"))
+    err = _one_line_exit_2(capsys, ["reactions", str(bad)], tmp_path / "none")
+    assert f"L_mm - c_mm = {L_mm - 100:g} mm must exceed the piston's top dead centre" in err and "= 500 mm" in err
+    bad.write_text(text.replace("L_mm = 1000.0", "L_mm = 600.5"))
+    assert main(["reactions", str(bad)]) == 0
+    assert "inf" not in capsys.readouterr().out
