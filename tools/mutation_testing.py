@@ -65,6 +65,7 @@ FE_TESTS = ["tests/test_fe_closed_form.py", "tests/test_fe_cantilever.py", "test
             "tests/test_band_coverage.py::test_band_covers_the_lame_bore_stress",
             "tests/test_band_coverage.py::test_peak_error_pct_is_the_calibrated_zz_estimate_in_percent",
             "tests/test_physics_truths.py", "tests/test_fe_truths.py", "tests/test_report_entry_truths.py",
+            "tests/test_fe_loads_truths.py",
             "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures[plates]"]
 #: package -> what mutmut mutates (globs) and the tests it may run (fast, against independent truths)
 PACKAGES = {
