@@ -227,9 +227,10 @@ for path in walk_mutatable_files():
     m.load()
     for name, code in m.exit_code_by_key.items():
         status = status_by_exit_code[code]
-        if isinstance(code, int) and code < 0:
+        if isinstance(code, int) and code < 0 and status != "timeout":
             # a crash (illegal instruction, abort, bus error, floating-point trap, segfault) fails the test
-            # run; any other signal (a stopped run's SIGTERM, the OOM killer's SIGKILL) decides nothing
+            # run; mutmut's CPU limit (SIGXCPU) is its timeout; any other signal (a stopped run's SIGTERM,
+            # the OOM killer's SIGKILL) decides nothing
             status = "segfault" if -code in (4, 6, 7, 8, 11) else "interrupted"
         out[name] = [status, "" if status == "killed" else get_diff_for_mutant(name, path=path)]
 print(json.dumps(out))
