@@ -80,7 +80,7 @@ PACKAGES = {
                            "tests/test_mechanisms.py", "tests/test_loadcases.py", "tests/test_partial_turn.py",
                            "tests/test_physics_truths.py", "tests/test_load_cases_truths.py", "tests/test_dynamics_truths.py",
                            "tests/test_dynamics_solver_truths.py", "tests/test_dynamics_history_truths.py",
-                           "tests/test_linkage.py"],
+                           "tests/test_original_truths.py", "tests/test_linkage.py"],
                  # peaks' bracket search loops until the bracket is narrow (history._zoom_max): a mutant
                  # that stops it shrinking loops for ever, and mutmut's CPU budget, 2 × multiplier × (the
                  # tests' time + constant), at its defaults (15, 1 s) let each run minutes; 3 and 5 s give
