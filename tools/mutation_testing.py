@@ -233,7 +233,8 @@ for path in walk_mutatable_files():
             # run; mutmut's CPU limit (SIGXCPU) is its timeout; any other signal (a stopped run's SIGTERM,
             # the OOM killer's SIGKILL) decides nothing
             status = "segfault" if -code in (4, 6, 7, 8, 11) else "interrupted"
-        out[name] = [status, "" if status == "killed" else get_diff_for_mutant(name, path=path)]
+        # a diff for what the record lists: not for a kill, nor for a mutant a sample did not draw
+        out[name] = [status, "" if status in ("killed", "not checked") else get_diff_for_mutant(name, path=path)]
 print(json.dumps(out))
 """
 
