@@ -29,6 +29,7 @@ BOUNDARY = {
     "rigfem.mesh.custom",  # a user's own part file (.geo/.step/.brep) read by gmsh
     "rigfem.io.reactions_csv", "rigfem.io.calculix",  # files read: a reactions CSV, CalculiX's output
     "rigfem.linkage.expression",  # the user's function text (synthesis)
+    "rigfem.dynamics.inputs",  # a script's config dict in place of a Linkage (rigfem.dynamics.simulate)
     "rigfem.report.folder",  # output paths
     "rigfem.cache",  # the environment (RIGFEM_CACHE, RIGFEM_CACHE_MAX_GB)
     # the FE's public API takes a script's own supports, loads (surface and hole names) and solver
@@ -67,7 +68,6 @@ VALUE_TYPES = {
 PENDING = {
     "rigfem.mesh.partmesh:face_owners": 2,
     "rigfem.mesh.partmesh:quadratic.lookup": 1,
-    "rigfem.dynamics.cycle:simulate": 1,  # simulate's config dict (moves to rigfem.dynamics.inputs)
 }
 
 NAMES = {"InputError", "check_range"}

@@ -13,8 +13,9 @@ import numpy as np
 from rigfem.dynamics.history import DynamicsOptions, ReactionHistory, Reactions, reactions_of
 from rigfem.dynamics.original import simulate_original
 from rigfem.dynamics.solver import reactions
-from rigfem.errors import ComputeError, InputError
-from rigfem.linkage.mechanisms import BUILDERS, crank_angles
+from rigfem.dynamics.inputs import linkage_of
+from rigfem.errors import ComputeError
+from rigfem.linkage.mechanisms import crank_angles
 from rigfem.linkage.model import Linkage, LinkageState
 from rigfem.linkage.state import linkage_state
 from rigfem.settings import MODELS, check_mass_model
@@ -33,14 +34,7 @@ def simulate(linkage_or_config: Linkage | dict, samples: int = 360, speed_hz: fl
     transmission-angle range of a four-bar.
     """
     DynamicsOptions(samples, model, speed_hz)  # checks them (a value type): a script calls this
-    if isinstance(linkage_or_config, dict):
-        cfg = dict(linkage_or_config)
-        typ = cfg.pop("type", None)
-        if typ not in BUILDERS:
-            raise InputError(f"linkage type = {typ!r} must be one of {', '.join(BUILDERS)}")
-        lk = BUILDERS[typ](**cfg)
-    else:
-        lk = linkage_or_config
+    lk = linkage_of(linkage_or_config) if isinstance(linkage_or_config, dict) else linkage_or_config
     check_mass_model(model, lk.meta)
     deg = crank_angles(int(samples))
     return cycle_history(lk, linkage_state(lk, deg, speed_hz), deg, speed_hz, model)
