@@ -323,9 +323,9 @@ def test_solve_keeps_its_general_solver_options_as_deprecated_keywords(monkeypat
     got, general = [], solver.general_motion
     monkeypatch.setattr(solver, "general_motion", lambda *a, **k: got.append(k) or general(*a, **k))
     with pytest.warns(DeprecationWarning, match="tol_mm"):
-        old = solve(lk, deg, tol_mm=1e-7, check_closure=False, general=True)
+        old = solve(lk, deg, 2.5, tol_mm=1e-7, check_closure=False, general=True)
     assert got == [{"tol_mm": 1e-7, "check_closure": False}]
-    assert np.allclose(old.torque_Nm, solve(lk, deg, general=True).torque_Nm, rtol=1e-9, atol=0)
+    assert np.allclose(old.torque_Nm, solve(lk, deg, 2.5, general=True).torque_Nm, rtol=1e-9, atol=0)
     with pytest.warns(DeprecationWarning, match=r"^solve\(tol_mm=\.\.\., check_closure=\.\.\.\) is deprecated: no "
                       r"caller changes the general solver's tolerance or closure check; the argument goes in "
                       r"rigfem 0\.3$"):

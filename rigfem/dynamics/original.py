@@ -69,10 +69,6 @@ def _layout(b2, b3, th2, w2, th3, th4, w3, w4, a3, a4, mu_deg) -> dict[str, np.n
                 A=np.stack([ax, ay], -1), B=np.stack([bx, by], -1))
 
 
-def _cross(r: np.ndarray, f: np.ndarray) -> np.ndarray:
-    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
-
-
 def original_reactions(b2_mm: float, b3_mm: float, b4_mm: float, d_mm: float, theta2: np.ndarray,
                        speed_hz: float = 1.0, masses: RigMasses = RIG_MASSES,
                        rails_mm: tuple[float, float, float] = RIG_RAILS_MM,
