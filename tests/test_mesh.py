@@ -290,3 +290,18 @@ def test_concentrators_meshed_at_half_the_refined_size():
 def test_curved_surfaces_refine_with_the_global_size():
     """Curvature sizing follows the global size (48 mm / size elements per 2 pi, at least 6)."""
     assert [curvature_n(MeshSettings(s)) for s in (11.3, 8.0, 6.0, 4.0, 2.0)] == [6, 6, 8, 12, 24]
+
+
+def test_the_mesher_runs_in_this_process_only_when_asked(monkeypatch):
+    """worker.call runs its function in a child process (gmsh is interruptible and returns its
+    memory), and in this one with RIGFEM_MESH_IN_PROCESS set (a profiler's or mutation testing's)."""
+    import os
+
+    from rigfem.mesh.worker import IN_PROCESS_ENV, call
+
+    monkeypatch.delenv(IN_PROCESS_ENV, raising=False)
+    assert call(os.getpid) != os.getpid()
+    monkeypatch.setenv(IN_PROCESS_ENV, "1")
+    assert call(os.getpid) == os.getpid()
+    monkeypatch.setenv(IN_PROCESS_ENV, "0")
+    assert call(os.getpid) != os.getpid()

@@ -95,8 +95,9 @@ PACKAGES = {
                           "tests/test_cli_kinematics.py", "tests/test_bad_input_campaign.py", "tests/test_rig_design.py",
                           "tests/test_original_truths.py", "tests/test_dynamics_solver_truths.py"]},
     # mesh sizing: the size fields, the tet and memory estimates, second order and the quality gate
-    # (gmsh runs in a mesher process: a mutant reached only there shows as "no tests")
-    "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py"]},
+    # (gmsh in this process, RIGFEM_MESH_IN_PROCESS: mutmut's coverage sees no child process)
+    "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py"],
+                    "env": {"RIGFEM_MESH_IN_PROCESS": "1"}},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS},
     # and the stiffness's null space, the rigid modes of supports.py (free bodies are held by them)
@@ -118,7 +119,7 @@ def mutmut_table(pkg: str) -> str:
     base = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mutmut"]
     cfg = {**base, "only_mutate": PACKAGES[pkg]["mutate"],
            "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"],
-           **{k: v for k, v in PACKAGES[pkg].items() if k not in ("mutate", "tests")}}
+           **{k: v for k, v in PACKAGES[pkg].items() if k not in ("mutate", "tests", "env")}}
     if pkg.startswith("fe"):
         # a mutant's pytest forks from a server that has only collected the tests: forked from the
         # main process, which has run them, it hangs in MKL/OpenMP (every fe/ mutant timed out); the
@@ -203,7 +204,8 @@ def _mutmut(d: Path, children: int, names: list[str] = ()) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env.update(RIGFEM_CACHE=NO_CACHE, RIGFEM_TESTS_KEEP_CACHE="1",  # tests/conftest.py would point it at a folder
                NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
-               **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"))
+               **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"),
+               **PACKAGES.get(d.name, {}).get("env", {}))  # the package's own (its folder is named after it)
     t0 = time.time()
     with open(d / "mutmut.log", "a") as log:
         rc = subprocess.run(["nice", "-n", "10", MUTMUT, "run", "--max-children", str(children), *names],
