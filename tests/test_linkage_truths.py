@@ -25,7 +25,7 @@ from rigfem.linkage.kinematics import (
     slider_crank_turn,
 )
 from rigfem.linkage.loops import fourbar_angles
-from rigfem.linkage.mechanisms import four_bar, inverted_slider_crank, quick_return, slider_crank
+from rigfem.linkage.mechanisms import four_bar, quick_return, slider_crank
 from rigfem.linkage.model import Body
 
 
