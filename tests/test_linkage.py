@@ -326,6 +326,7 @@ def test_solve_keeps_its_general_solver_options_as_deprecated_keywords(monkeypat
         old = solve(lk, deg, 2.5, tol_mm=1e-7, check_closure=False, general=True)
     assert got == [{"tol_mm": 1e-7, "check_closure": False}]
     assert np.allclose(old.torque_Nm, solve(lk, deg, 2.5, general=True).torque_Nm, rtol=1e-9, atol=0)
+    assert old.meta["speed_hz"] == 2.5  # the history says the speed it was solved at
     with pytest.warns(DeprecationWarning, match=r"^solve\(tol_mm=\.\.\., check_closure=\.\.\.\) is deprecated: no "
                       r"caller changes the general solver's tolerance or closure check; the argument goes in "
                       r"rigfem 0\.3$"):
