@@ -121,10 +121,11 @@ def mutmut_table(pkg: str) -> str:
     cfg = {**base, "only_mutate": PACKAGES[pkg]["mutate"],
            "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"],
            **{k: v for k, v in PACKAGES[pkg].items() if k not in ("mutate", "tests", "env")}}
-    if pkg.startswith("fe"):
+    if pkg.startswith("fe") or pkg == "mesh-sizing":
         # a mutant's pytest forks from a server that has only collected the tests: forked from the
-        # main process, which has run them, it hangs in MKL/OpenMP (every fe/ mutant timed out); the
-        # other packages fork from the main process, ten times faster
+        # main process, which has run them, it hangs in MKL/OpenMP or gmsh's threads (every fe/
+        # mutant, and half of a mesh-sizing sample, timed out); the other packages fork from the
+        # main process, ten times faster
         cfg["process_isolation"] = "forkserver"
     return "[tool.mutmut]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())
 
