@@ -1,6 +1,8 @@
 """General planar solver: four-bar kinematics vs closed form, Newton–Euler balance of every
 body, agreement with the 2013 equations where their quirks vanish, branch continuity, toggles."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -329,8 +331,10 @@ def test_solve_keeps_its_general_solver_options_as_deprecated_keywords(monkeypat
     assert old.meta["speed_hz"] == 2.5  # the history says the speed it was solved at
     with pytest.warns(DeprecationWarning, match=r"^solve\(tol_mm=\.\.\., check_closure=\.\.\.\) is deprecated: no "
                       r"caller changes the general solver's tolerance or closure check; the argument goes in "
-                      r"rigfem 0\.3$"):
+                      r"rigfem 0\.3$") as caught:
         solve(lk, deg, tol_mm=1e-7, check_closure=False, general=True)
+    if "MUTANT_UNDER_TEST" not in os.environ:  # mutmut's trampoline adds a frame
+        assert [w.filename for w in caught] == [__file__]  # the caller's line: a script sees it
     with pytest.warns(DeprecationWarning, match="check_closure"):
         closed = solve(lk, deg, 2.5, check_closure=False)  # the closed form applies: no general solver
     assert len(got) == 2 and closed.meta["solver"] == "closed form"
