@@ -293,15 +293,27 @@ def test_curved_surfaces_refine_with_the_global_size():
 
 
 def test_the_mesher_runs_in_this_process_only_when_asked(monkeypatch):
-    """worker.call runs its function in a child process (gmsh is interruptible and returns its
-    memory), and in this one with RIGFEM_MESH_IN_PROCESS set (a profiler's or mutation testing's)."""
+    """make_mesh meshes in a child process (gmsh is interruptible and returns its memory), and in
+    this one with RIGFEM_MESH_IN_PROCESS set (a profiler's or mutation testing's); a job cancelled
+    while it waits for this process is not meshed."""
     import os
+    import threading
 
-    from rigfem.mesh.worker import IN_PROCESS_ENV, call
+    from rigfem.cache import NO_CACHE
+    from rigfem.errors import ComputeError
+    from rigfem.mesh import mesher
 
-    monkeypatch.delenv(IN_PROCESS_ENV, raising=False)
-    assert call(os.getpid) != os.getpid()
-    monkeypatch.setenv(IN_PROCESS_ENV, "1")
-    assert call(os.getpid) == os.getpid()
-    monkeypatch.setenv(IN_PROCESS_ENV, "0")
-    assert call(os.getpid) != os.getpid()
+    from rigfem.mesh import worker
+
+    monkeypatch.setattr(mesher, "_mesh", lambda part, settings, limit, key: os.getpid())
+    monkeypatch.setattr(worker, "call", lambda fn, *args, **kw: "child")  # what the mesher process runs
+    monkeypatch.delenv(mesher.IN_PROCESS_ENV, raising=False)
+    assert mesher.make_mesh(None, None, "k", {}, NO_CACHE) == "child"
+    monkeypatch.setenv(mesher.IN_PROCESS_ENV, "0")
+    assert mesher.make_mesh(None, None, "k", {}, NO_CACHE) == "child"
+    monkeypatch.setenv(mesher.IN_PROCESS_ENV, "1")
+    assert mesher.make_mesh(None, None, "k", {}, NO_CACHE) == os.getpid()
+    cancelled = threading.Event()
+    cancelled.set()
+    with pytest.raises(ComputeError, match="cancelled"):
+        mesher.make_mesh(None, None, "k", {}, NO_CACHE, cancel=cancelled)

@@ -67,7 +67,12 @@ FE_TESTS = ["tests/test_fe_closed_form.py", "tests/test_fe_cantilever.py", "test
             "tests/test_physics_truths.py", "tests/test_fe_truths.py", "tests/test_report_entry_truths.py",
             "tests/test_fe_loads_truths.py",
             "tests/test_reference_scenes.py::test_final_cm_parts_reproduce_their_committed_figures[plates]"]
-#: package -> what mutmut mutates (globs) and the tests it may run (fast, against independent truths)
+#: a mutant's pytest forks from a server that has only collected the tests: forked from the main
+#: process, which has run them, it hangs in MKL/OpenMP or gmsh's threads (every fe/ mutant, and half
+#: of a mesh-sizing sample, timed out); the other packages fork from the main process, ten times faster
+FORKSERVER = {"process_isolation": "forkserver"}
+#: package -> what mutmut mutates (globs), the tests it may run (fast, against independent truths),
+#: the environment of its runs (``env``) and any other key of mutmut's table
 PACKAGES = {
     "verdict": {"mutate": ["rigfem/verdict/*"],
                 "tests": ["tests/test_verdict.py", "tests/test_trust.py::test_criterion_never_passes_unloaded_or_unbalanced",
@@ -98,17 +103,19 @@ PACKAGES = {
     # mesh sizing: the size fields, the tet and memory estimates, second order and the quality gate
     # (gmsh in this process, RIGFEM_MESH_IN_PROCESS: mutmut's coverage sees no child process)
     "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py"],
-                    "env": {"RIGFEM_MESH_IN_PROCESS": "1"}},
+                    "env": {"RIGFEM_MESH_IN_PROCESS": "1"}, **FORKSERVER},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
-    "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS},
+    "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS,
+                  **FORKSERVER},
     # and the stiffness's null space, the rigid modes of supports.py (free bodies are held by them)
     "fe-loads": {"mutate": [f"rigfem/fe/{m}.py" for m in ("forces", "supports")],
-                 "tests": FE_TESTS + ["tests/test_fe_assembly.py::test_stiffness_symmetric_and_rigid_modes_in_kernel"]},
+                 "tests": FE_TESTS + ["tests/test_fe_assembly.py::test_stiffness_symmetric_and_rigid_modes_in_kernel"],
+                 **FORKSERVER},
     # and every test of the assembly: its warm-up (compile_kernels) and the straightening of distorted
     # curved elements are reached by no other
     "fe-assembly": {"mutate": ["rigfem/fe/assembly.py"],
                     "tests": [t for t in FE_TESTS if not t.startswith("tests/test_fe_assembly.py")]
-                    + ["tests/test_fe_assembly.py"]},
+                    + ["tests/test_fe_assembly.py"], **FORKSERVER},
 }
 #: the mutmut of this Python (its venv need not be on PATH)
 MUTMUT = shutil.which("mutmut", path=str(Path(sys.executable).parent)) or "mutmut"
@@ -121,12 +128,6 @@ def mutmut_table(pkg: str) -> str:
     cfg = {**base, "only_mutate": PACKAGES[pkg]["mutate"],
            "pytest_add_cli_args_test_selection": PACKAGES[pkg]["tests"],
            **{k: v for k, v in PACKAGES[pkg].items() if k not in ("mutate", "tests", "env")}}
-    if pkg.startswith("fe") or pkg == "mesh-sizing":
-        # a mutant's pytest forks from a server that has only collected the tests: forked from the
-        # main process, which has run them, it hangs in MKL/OpenMP or gmsh's threads (every fe/
-        # mutant, and half of a mesh-sizing sample, timed out); the other packages fork from the
-        # main process, ten times faster
-        cfg["process_isolation"] = "forkserver"
     return "[tool.mutmut]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())
 
 
@@ -175,7 +176,7 @@ def run_package(pkg: str, work: Path, children: int, resume: bool = False,
     if drawn and resumed:  # mutmut re-runs every mutant named: name only those without a result
         done = {k for k, (status, _) in results(d).items() if status != "not checked"}
         names = [n for n in names if n not in done] or names[:1]
-    return {**_mutmut(d, children, names), **({"sample": drawn} if drawn else {})}
+    return {**_mutmut(pkg, d, children, names), **({"sample": drawn} if drawn else {})}
 
 
 def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
@@ -199,15 +200,15 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
     d = work / pkg
     _prepare(pkg, d)
     (d / "seconds.txt").unlink(missing_ok=True)
-    return _mutmut(d, children, [m["mutant"] for m in prev["not_killed"]]), prev
+    return _mutmut(pkg, d, children, [m["mutant"] for m in prev["not_killed"]]), prev
 
 
-def _mutmut(d: Path, children: int, names: list[str] = ()) -> dict:
+def _mutmut(pkg: str, d: Path, children: int, names: list[str] = ()) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env.update(RIGFEM_CACHE=NO_CACHE, RIGFEM_TESTS_KEEP_CACHE="1",  # tests/conftest.py would point it at a folder
                NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
                **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"),
-               **PACKAGES.get(d.name, {}).get("env", {}))  # the package's own (its folder is named after it)
+               **PACKAGES[pkg].get("env", {}))  # the package's own
     t0 = time.time()
     with open(d / "mutmut.log", "a") as log:
         rc = subprocess.run(["nice", "-n", "10", MUTMUT, "run", "--max-children", str(children), *names],
@@ -336,8 +337,9 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     if prior is not None:
         again = {m["mutant"] for m in prior["not_killed"]}
         res = {k: v for k, v in res.items() if k in again}
-        if set(res) != again:
-            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {sorted(again - set(res))[:3]}…")
+        unrun = sorted(again - {k for k, (status, _) in res.items() if status != "not checked"})
+        if unrun:
+            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {len(unrun)} of them ({unrun[:3]}…)")
         counts = dict(prior["counts"])
         for m in prior["not_killed"]:
             counts[m["status"]] -= 1
@@ -367,7 +369,8 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
     interval = ({"ci95_mutmut_pct": wilson(killed, total) if total else None,
                  "ci95_physics_pct": wilson(killed, physics_total) if physics_total else None}
                 if sample and prior is None else {})
-    return {"package": pkg, "mutate": PACKAGES[pkg]["mutate"], "tests": PACKAGES[pkg]["tests"], **meta,
+    return {"package": pkg, "mutate": PACKAGES[pkg]["mutate"], "tests": PACKAGES[pkg]["tests"],
+            **({"env": PACKAGES[pkg]["env"]} if PACKAGES[pkg].get("env") else {}), **meta,
             "counts": counts, "total": total,
             "score_mutmut_pct": round(100 * killed / total, 1) if total else None,
             "text_mutants": text, "equivalent": equivalent,
@@ -430,7 +433,8 @@ def markdown(rec: dict) -> str:
     for pkg, p in rec["packages"].items():
         open_ = [m for m in p["not_killed"] if m["fate"] != "text"]
         lines += ["", f"## {pkg}: mutants not killed, but for message text ({len(open_)})", "",
-                  f"Tests: {', '.join(p['tests'])}", ""]
+                  f"Tests: {', '.join(p['tests'])}"
+                  + "".join(f"; environment {k}={v}" for k, v in (p.get("env") or {}).items()), ""]
         for m in open_:
             why = f" — {m['why']}" if m["why"] else ""
             lines += [f"- `{m['mutant']}` ({m['status']}, {m['fate']}){why}", "", "  ```diff",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
 from dataclasses import dataclass
 
@@ -230,7 +231,8 @@ def mesh_part(part, settings: MeshSettings, *, cache: Cache | None = None,
     Refuses (InfeasibleError) a request whose estimate exceeds ``machine_gib`` (from the part's
     dimensions before gmsh starts, then from the built geometry) and a mesh whose minimum
     minSICN is below ``settings.min_quality``; ``refine`` must name surface groups.  gmsh runs
-    in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once.
+    in a child process (:mod:`rigfem.mesh.worker`), so a signal ends meshing at once (but with
+    :data:`IN_PROCESS_ENV` set).
     """
     cache = resolve(cache)
     first = estimate_part(part, settings)
@@ -291,15 +293,30 @@ def mesh_inputs(part, settings: MeshSettings) -> tuple[str, dict]:
     return f"{part.name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}", inputs
 
 
+#: set (not "" or "0"), gmsh meshes in this process, one part at a time and not interruptible: for a
+#: profiler or a debugger, and for mutation testing, whose coverage sees only this process
+#: (tools/mutation_testing.py)
+IN_PROCESS_ENV = "RIGFEM_MESH_IN_PROCESS"
+_IN_PROCESS = threading.Lock()  # gmsh holds one model per process
+
+
 def make_mesh(part, settings: MeshSettings, key: str, inputs: dict, cache: Cache,
               machine_gib: float = MACHINE_GIB, cancel=None) -> PartMesh:
-    """Mesh in the mesher process (:mod:`rigfem.mesh.worker`) and store the mesh in ``cache``
-    under ``inputs``; ``cancel`` (a threading.Event) ends the mesher."""
+    """Mesh in the mesher process (:mod:`rigfem.mesh.worker`; in this one with
+    :data:`IN_PROCESS_ENV` set) and store the mesh in ``cache`` under ``inputs``; ``cancel`` (a
+    threading.Event) ends the mesher, or a job still waiting for this process."""
+    from rigfem.errors import ComputeError
     from rigfem.mesh.worker import call
     from rigfem.settings import allow_large
 
     limit = float("inf") if allow_large() else machine_gib  # the child may not share our environment
-    pm = call(_mesh, part, settings, limit, key, cancel=cancel)
+    if os.environ.get(IN_PROCESS_ENV, "") not in ("", "0"):
+        with _IN_PROCESS:
+            if cancel is not None and cancel.is_set():
+                raise ComputeError("mesher cancelled")
+            pm = _mesh(part, settings, limit, key)
+    else:
+        pm = call(_mesh, part, settings, limit, key, cancel=cancel)
     cache.put("meshes", inputs, lambda d: save_npz(pm, d / "mesh.npz"))
     return pm
 

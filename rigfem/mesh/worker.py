@@ -28,11 +28,6 @@ __all__ = ["call"]
 POLL_S = 0.05
 
 _START = threading.Lock()
-#: set (not "" or "0"), the mesher runs in this process, one mesh at a time and not interruptible:
-#: for a profiler or a debugger, and for mutation testing, whose coverage sees only this process
-#: (tools/mutation_testing.py)
-IN_PROCESS_ENV = "RIGFEM_MESH_IN_PROCESS"
-_IN_PROCESS = threading.Lock()  # gmsh holds one model per process
 #: the longest Unix socket path (Linux sun_path, 108 bytes with its NUL), and what multiprocessing
 #: adds to the temporary folder for the forkserver's (``/pymp-XXXXXXXX/listener-XXXXXXXX``)
 SOCKET_PATH_MAX, SOCKET_SUFFIX = 107, 33
@@ -87,12 +82,9 @@ def call(fn: Callable, *args: Any, cancel: threading.Event | None = None, what: 
     exception raised in the parent while it waits (a signal handler's) kills the child first,
     and so does ``cancel`` being set (a caller in another thread: :mod:`rigfem.mesh.pool`).
     ``what`` names the child in its process name and errors.  In a daemonic process (which may
-    not have children), or with :data:`IN_PROCESS_ENV` set, ``fn`` runs in this process."""
+    not have children) ``fn`` runs in this process."""
     if mp.current_process().daemon:
         return fn(*args)
-    if os.environ.get(IN_PROCESS_ENV, "") not in ("", "0"):
-        with _IN_PROCESS:
-            return fn(*args)
     ctx = _context()
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(send, fn, args, _rigfem_env()), daemon=True, name=f"rigfem-{what}")
