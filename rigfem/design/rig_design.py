@@ -199,7 +199,7 @@ def snap_motion(r: dict, top: int = 5, scale: float | None = None, p: SweepParam
         hi = float(np.min(allowed.max(axis=0) / Ld))
         if not lo <= hi:
             raise InfeasibleError(f"the design's proportions (b2:b3:b4:d = {':'.join(f'{x:.3g}' for x in Ld / Ld[0])}) "
-                             f"do not fit the rig's rails at any one scale; give --scale")
+                                  f"do not fit the rig's rails at any one scale; give --scale")
         scales = np.geomspace(lo, hi, 24) if hi > lo else np.array([lo])
     else:
         scales = np.array([scale])

@@ -199,7 +199,7 @@ def _at_peak(h: ReactionHistory, peak: dict, what: str) -> tuple[ReactionHistory
     ones of a symmetric linkage: the study's case is then the worst of them), and the peak (N)."""
     if peak.get("singular") or peak.get("force_N") is None:
         raise InfeasibleError(f"{what}: the peak lies in a toggle (singular) range; no load can be "
-                         f"derived — change the configuration")
+                              f"derived — change the configuration")
     deg = np.asarray(peak.get("equal_peaks_deg") or [peak["crank_deg"]], float)
     if h.evaluator is not None:
         return h.evaluator(deg), float(peak["force_N"])

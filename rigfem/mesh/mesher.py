@@ -217,10 +217,10 @@ def check_estimate(est: Estimate, s: MeshSettings, machine_gib: float, what: str
 
     if est.gib > machine_gib and not allow_large():
         raise InfeasibleError(f"size_mm = {s.size_mm:g} mm (local_size_mm = {s.near_mm:g} mm) "
-                         f"{what} about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
-                         f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB) "
-                         f"and about {est.seconds:.3g} s of meshing, more than the machine's {machine_gib:g} GiB: "
-                         f"increase size_mm (--size), or pass rigfem --allow-large")
+                              f"{what} about {est.tets:.3g} tets needing {est.gib:.3g} GiB (gmsh "
+                              f"{est.gmsh_bytes / 2**30:.3g} GiB, direct P2 solve {est.solve_bytes / 2**30:.3g} GiB) "
+                              f"and about {est.seconds:.3g} s of meshing, more than the machine's {machine_gib:g} GiB: "
+                              f"increase size_mm (--size), or pass rigfem --allow-large")
 
 
 def mesh_part(part, settings: MeshSettings, *, cache: Cache | None = None,
@@ -360,8 +360,8 @@ def _mesh(part, settings: MeshSettings, machine_gib: float, key: str) -> PartMes
             lap("3D again (Delaunay)")
         if len(q) and q.min() < settings.min_quality:  # before the (costly) second-order step
             raise InfeasibleError(f"part {part.name}: mesh quality minSICN min = {q.min():.3f} is below "
-                             f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
-                             f"or local_size_mm = {settings.near_mm:g} mm (or check thin walls in the part file)")
+                                  f"min_quality = {settings.min_quality:g}; change size_mm = {settings.size_mm:g} mm "
+                                  f"or local_size_mm = {settings.near_mm:g} mm (or check thin walls in the part file)")
         points, tets, surfaces, edges, mids = second_order(
             {g: list(gmsh.model.getEntitiesForPhysicalGroup(2, t)) for g, t in groups.items()},
             smooth=part.kind in SMOOTHED_KINDS)

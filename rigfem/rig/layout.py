@@ -46,8 +46,8 @@ class RailLayout:
         if not self.fits(distance_mm):
             most = self.hole_x[-1] - self.screw_spacing / 2 - self.pivot_x
             raise InfeasibleError(f"{bar}: a joint {distance_mm:g} mm from the pivot does not fit on a "
-                             f"{self.hole_x[-1] + self.hole_x[0]:g} mm rail; allowed 0..{most:g} mm "
-                             f"(choose a longer rail)")
+                                  f"{self.hole_x[-1] + self.hole_x[0]:g} mm rail; allowed 0..{most:g} mm "
+                                  f"(choose a longer rail)")
         return self._holes(distance_mm)
 
 

@@ -94,4 +94,4 @@ def check_cost(cost: JobCost, machine_gib: float) -> None:
         over.append(f"{cost.seconds / 3600:.3g} h, more than the limit of {MAX_JOB_HOURS:g} h")
     if over and not allow_large():
         raise InfeasibleError(f"{cost.what}: estimated {' and '.join(over)}; reduce the job, or pass "
-                         f"rigfem --allow-large")
+                              f"rigfem --allow-large")
