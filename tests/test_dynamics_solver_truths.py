@@ -243,3 +243,16 @@ def test_the_2013_models_ranges_hold_a_flagged_sample_between_its_scan_points():
     assert all(any(a <= x <= b for a, b in ranges) for x in deg[near])
     assert all(min(x, 360 - x) < edge for r in ranges for x in r)
     assert ranges[0][0] == 0.0 and ranges[-1][1] == pytest.approx(359.9)
+
+
+def test_the_closed_form_flags_an_unbounded_gas_force_as_the_general_solver_does():
+    """The same compressor without clearance in closed form: only crank 0° (the piston at the head)
+    is flagged, its values are 0, and every other sample is finite (inf and nan reached a
+    reactions table before)."""
+    lk = slider_crank(150.0, 350.0, masses=None,
+                      slider_force=compressor_gas_force(150.0, 350.0, L_mm=600.0, c_mm=100.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = solve(lk, crank_angles(36), speed_hz=20.0)
+    assert h.meta["solver"] == "closed form" and h.meta["singular"] == [[0.0, 0.0]]
+    assert np.flatnonzero(h.singular_mask).tolist() == [0] and h.torque_Nm[0] == 0.0
+    assert all(np.isfinite(j.force_N).all() for j in h.joints.values()) and np.isfinite(h.torque_Nm).all()

@@ -63,22 +63,23 @@ def closed_reactions(lk: Linkage, motion: LinkageState, loads: dict, deg: np.nda
     bad = _toggles(lk, motion, deg, joints, torque)
     meta = {k: v for k, v in lk.meta.items() if k != "singular_fn"}
     meta.update(speed_hz=speed_hz, driver_unit="N·m", solver="closed form", singular=singular_ranges(deg, bad))
-    if bad is not None:  # non-finite values (exactly at a change point) become 0; peaks() refuses them
+    if bad.any():  # non-finite values (a change point, an unbounded force) become 0; peaks() refuses them
         for jh in joints.values():
             jh.force_N = np.where(np.isfinite(jh.force_N), jh.force_N, 0.0)
         torque = np.where(np.isfinite(torque), torque, 0.0)
     return ReactionHistory(deg, joints, torque, motion.histories, meta,
-                           singular_mask=bad if bad is not None and bad.any() else None, full_turn=motion.full_turn)
+                           singular_mask=bad if bad.any() else None, full_turn=motion.full_turn)
 
 
-def _toggles(lk: Linkage, motion: LinkageState, deg: np.ndarray, joints: dict, torque: np.ndarray) -> np.ndarray | None:
-    """The samples at a toggle of a change-point four-bar (the one closed-form linkage that has
-    toggles): the builder's transmission-angle criterion, a non-finite reaction, and the sample
-    nearest each change point the samples pass; None for any other linkage."""
+def _toggles(lk: Linkage, motion: LinkageState, deg: np.ndarray, joints: dict, torque: np.ndarray) -> np.ndarray:
+    """The samples whose reactions are unbounded: a non-finite reaction or torque (of any linkage:
+    an applied force can grow without bound, e.g. a compressor's gas without clearance) and, for a
+    change-point four-bar (the one closed-form linkage that has toggles), the builder's
+    transmission-angle criterion and the sample nearest each change point the samples pass."""
+    bad = ~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0)
     L = lk.meta.get("lengths_mm") or {}
     if not change_point_turn(L, motion.kind):
-        return None
-    bad = ~np.isfinite(torque) | np.any([~np.isfinite(j.force_N).all(1) for j in joints.values()], 0)
+        return bad
     if lk.meta.get("singular_fn") is not None:
         bad |= lk.meta["singular_fn"](deg, motion.histories)
     for c in change_points_deg(L["b2"], L["b3"], L["b4"], L["d"]):
