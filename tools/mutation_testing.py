@@ -152,10 +152,14 @@ print(json.dumps(sorted(get_mutant_name(Path(f), n) for f in walk_mutatable_file
 """
 
 
+def _env() -> dict[str, str]:
+    """This environment without PYTHONPATH: a run in a scratch copy imports the copy's rigfem."""
+    return {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+
+
 def draw(d: Path, n: int, seed: int) -> dict:
     """A uniform random sample of ``n`` of the mutants of the package prepared in ``d``: {n, of, seed, names}."""
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    every = json.loads(subprocess.run([sys.executable, "-c", _NAMES], cwd=d, env=env, capture_output=True,
+    every = json.loads(subprocess.run([sys.executable, "-c", _NAMES], cwd=d, env=_env(), capture_output=True,
                                       text=True, check=True).stdout)
     if not 0 < n < len(every):
         raise SystemExit(f"--sample {n}: {d.name} has {len(every)} mutants; sample from 1 to {len(every) - 1}, "
@@ -204,7 +208,7 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
 
 
 def _mutmut(pkg: str, d: Path, children: int, names: list[str] = ()) -> dict:
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env = _env()
     env.update(RIGFEM_CACHE=NO_CACHE, RIGFEM_TESTS_KEEP_CACHE="1",  # tests/conftest.py would point it at a folder
                NUMBA_CACHE_DIR=str(d / ".numba-cache"), MPLBACKEND="Agg",
                **dict.fromkeys(("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"),
@@ -248,8 +252,7 @@ print(json.dumps(out))
 
 def results(d: Path) -> dict[str, tuple[str, str]]:
     """mutant -> (status, diff of the mutant if not killed)."""
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    out = subprocess.run([sys.executable, "-c", _READ], cwd=d, env=env, capture_output=True, text=True, check=True).stdout
+    out = subprocess.run([sys.executable, "-c", _READ], cwd=d, env=_env(), capture_output=True, text=True, check=True).stdout
     return {k: (s, "\n".join(ln for ln in p.splitlines() if ln[:1] in "-+" and ln[:3] not in ("---", "+++")))
             for k, (s, p) in json.loads(out).items()}
 
