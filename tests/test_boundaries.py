@@ -57,18 +57,12 @@ VALUE_TYPES = {
     "rigfem.dynamics.history.DynamicsOptions",  # a turn's samples, mass model and crank speed
 }
 
-#: inner sites not moved yet, function -> how many: the list may only shrink.  A hand-made
-#: PartMesh's surfaces and curved edges are refused where they are first looked up (face_owners,
-#: quadratic): judging them at the edge (rigfem.fe.inputs.check_mesh) would sort every tet face of
-#: every mesh a second time, about a second for 600 000 tets.
 #: What is known only once rigfem works on valid input (no four-bar on the rails, a joint off a
 #: rail's holes, a peak in a toggle range, a mesh too coarse for its part, a job past the machine, a
 #: synthesis whose equations have no useful solution) is an InfeasibleError, raised inside; catching
-#: an InputError (a trial design that does not close) is not a refusal.
-PENDING = {
-    "rigfem.mesh.partmesh:face_owners": 2,
-    "rigfem.mesh.partmesh:quadratic.lookup": 1,
-}
+#: an InputError (a trial design that does not close) is not a refusal.  A script's own PartMesh is
+#: judged whole at the edge (rigfem.fe.inputs.check_mesh: its surfaces are tet faces, its curved
+#: edges tet edges), so the FE's face and edge lookups inside raise ComputeError.
 
 NAMES = {"InputError", "check_range"}
 
@@ -118,22 +112,11 @@ def _key(site: str) -> str:
     return f"{site.split(':')[0]}:{site.split()[1]}"
 
 
-def _over(found: list[str], pending: dict[str, int]) -> list[str]:
-    """The sites of ``found`` beyond what ``pending`` still allows, per function."""
-    by: dict[str, list[str]] = {}
-    for s in found:
-        by.setdefault(_key(s), []).append(s)
-    return [s for fn, ss in by.items() if len(ss) > pending.get(fn, 0) for s in ss]
-
-
 def test_input_errors_only_at_the_edge():
-    """No InputError/check_range outside the boundary modules, value-type constructors (and the
-    sites still pending): inside, a bad value is a bug (ComputeError or an
-    assertion)."""
+    """No InputError/check_range outside the boundary modules and value-type constructors:
+    inside, a bad value is a bug (ComputeError or an assertion)."""
     found = [s for f in sorted(PKG.rglob("*.py")) for s in sites(f.read_text(), _module(f))]
-    assert _over(found, PENDING) == [], "\n".join(_over(found, PENDING))
-    done = sorted(set(PENDING) - {_key(s) for s in found})
-    assert done == [], f"moved to the edge: take {done} off PENDING"
+    assert found == [], "\n".join(found)
 
 
 def test_the_boundary_check_can_fail():
@@ -149,7 +132,6 @@ def test_the_boundary_check_can_fail():
               "        raise InputError('y')\n")
     assert sites(caught, "rigfem.linkage.synthesis") == ["rigfem.linkage.synthesis:5 trial uses InputError"]
     assert sites("def snap():\n    raise InfeasibleError('no four-bar')\n", "rigfem.design.rig_design") == []
-    assert _over(sites(planted, "rigfem.fe.stress"), PENDING) == ["rigfem.fe.stress:2 peak uses check_range"]
 
 
 def test_refine_groups_are_judged_against_the_parts_groups():
@@ -199,3 +181,30 @@ def test_infeasible_errors_are_the_listed_ones():
         for s in sites(f.read_text(), mod, names={"InfeasibleError"}, boundary=False):
             found[_key(s)] = found.get(_key(s), 0) + 1
     assert found == INFEASIBLE
+
+
+def test_a_scripts_mesh_is_judged_whole_at_the_edge():
+    """A PartMesh whose surface triangle is no tet face, or whose curved edge is no tet edge, is
+    refused by fe_mesh with the field and what is wrong (exit 2), before the FE looks them up."""
+    import numpy as np
+    import pytest
+
+    from rigfem.errors import InputError
+    from rigfem.fe import fe_mesh
+    from rigfem.mesh.partmesh import PartMesh
+
+    p = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], float)
+    t = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
+    ok = PartMesh("two", p, t, {"base": np.array([[0, 1, 2]]), "slant": np.array([[1, 2, 4]])},
+                  curved_edges=np.array([[3, 4]]), curved_points=np.array([[0.6, 0.6, 1.1]]))
+    assert fe_mesh(ok, 2).nodes.shape == (5 + 9, 3)
+    across = PartMesh("two", p, t, {"base": np.array([[0, 1, 2]]), "cut": np.array([[0, 1, 4]])})
+    with pytest.raises(InputError, match=r"^surface 'cut': 1 of its 1 triangles are not faces of the "
+                                         r"mesh's tets \(first: vertices \(0, 1, 4\)\)$"):
+        fe_mesh(across, 1)
+    chord = PartMesh("two", p, t, curved_edges=np.array([[0, 4]]), curved_points=np.array([[0.5, 0.5, 0.5]]))
+    with pytest.raises(InputError, match=r"^curved_edges: 1 of 1 are not edges of the mesh's tets "
+                                         r"\(first: vertices \(0, 4\)\)$"):
+        fe_mesh(chord, 2)
+    with pytest.raises(InputError, match=r"^surface .base. must be integer triangles \(K, 3\) of tet vertices 0..4, got int64 \(1, 3\)$"):
+        fe_mesh(PartMesh("two", p, t, {"base": np.array([[0, 1, 5]])}), 2)

@@ -300,7 +300,8 @@ def _bearing(fm, holes: dict, name: str, F: np.ndarray) -> None:
 def check_mesh(mesh, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A PartMesh's points (N, 3) and tets (M, 4) as arrays, with each tet's signed volume, and
     the element order (1 or 2) a script asks :func:`rigfem.fe.build_model` for; InputError for an
-    order other than 1 or 2, a malformed, non-finite or out-of-range mesh, or degenerate tets."""
+    order other than 1 or 2, a malformed, non-finite or out-of-range mesh, degenerate tets, a
+    surface triangle that is no tet face or a curved edge that is no tet edge."""
     if order not in (1, 2):
         raise InputError(f"order = {order!r} must be 1 or 2")
     p = np.asarray(mesh.points, dtype=float)
@@ -313,7 +314,58 @@ def check_mesh(mesh, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     flat = np.abs(vol) <= 1e-12 * np.abs(vol).max()
     if flat.any():
         raise InputError(f"mesh has {flat.sum()} degenerate (zero-volume) tets")
+    _check_on_tets(mesh, t)
     return p, t, vol
+
+
+def _on(t: np.ndarray, corners: np.ndarray, n: int) -> np.ndarray:
+    """Which rows of ``corners`` (vertex sets, K × k) are corner sets of ``t``'s rows (tet faces
+    or edges, M × j × k), in any order: only the tet sets whose vertices all lie in ``corners``
+    are keyed, so a surface costs a pass over the tets, not a sort of them."""
+    used = np.zeros(n, bool)
+    used[corners] = True
+    cand = t[used[t].all(-1)]
+
+    def key(c: np.ndarray) -> np.ndarray:
+        c = np.sort(c, axis=-1).astype(np.int64)
+        k = c[:, 0]
+        for i in range(1, c.shape[1]):
+            k = k * n + c[:, i]
+        return k
+
+    return np.isin(key(corners), key(cand))
+
+
+def _check_on_tets(mesh, t: np.ndarray) -> None:
+    """Every surface triangle is a face of a tet and every curved edge an edge of one, so the
+    FE's face and edge lookups (rigfem.mesh.partmesh: face_owners, quadratic) find them all."""
+    from rigfem.mesh.partmesh import TET10_EDGES, TET_FACES
+
+    n = int(t.max()) + 1
+    tris = {name: np.asarray(tri) for name, tri in mesh.surfaces.items()}
+    for name, tri in tris.items():
+        if (tri.ndim != 2 or tri.shape[1] != 3 or tri.dtype.kind not in "iu"
+                or (len(tri) and (tri.min() < 0 or tri.max() >= n))):
+            raise InputError(f"surface {name!r} must be integer triangles (K, 3) of tet vertices "
+                             f"0..{n - 1}, got {tri.dtype} {tri.shape}")
+    every = np.vstack([np.zeros((0, 3), np.int64), *(v.astype(np.int64) for v in tris.values())])
+    if len(every) and not (on := _on(t[:, TET_FACES], every, n)).all():  # one pass for all surfaces
+        for (name, tri), ok in zip(tris.items(), np.split(on, np.cumsum([len(v) for v in tris.values()])[:-1])):
+            if not ok.all():
+                raise InputError(f"surface {name!r}: {(~ok).sum()} of its {len(tri)} triangles are not faces "
+                                 f"of the mesh's tets (first: vertices {tuple(tri[ok.argmin()].tolist())})")
+    e = np.asarray(mesh.curved_edges)
+    x = np.asarray(mesh.curved_points, float)
+    if e.ndim != 2 or e.shape[1] != 2 or x.shape != (len(e), 3) or not np.isfinite(x).all():
+        raise InputError(f"curved_edges (E, 2) and curved_points (E, 3) must match and be finite, got "
+                         f"{e.shape} and {x.shape}")
+    if len(e):
+        if e.dtype.kind not in "iu" or e.min() < 0 or e.max() >= n:
+            raise InputError(f"curved_edges must join tet vertices 0..{n - 1}")
+        off = ~_on(t[:, TET10_EDGES], e.astype(np.int64), n)
+        if off.any():
+            raise InputError(f"curved_edges: {off.sum()} of {len(e)} are not edges of the mesh's tets "
+                             f"(first: vertices {tuple(e[off.argmax()].tolist())})")
 
 
 def check_solver(method: str) -> None:

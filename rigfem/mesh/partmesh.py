@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.errors import InputError
+from rigfem.errors import ComputeError
 from rigfem.files import whole_file
 
 
@@ -153,11 +153,12 @@ def boundary_faces(tets: np.ndarray) -> np.ndarray:
 def face_owners(tets: np.ndarray, tris: np.ndarray, what: str = "surface") -> tuple[np.ndarray, np.ndarray]:
     """Element index and face number (0..3, :data:`TET_FACES` order) of each triangle (K, >=3).
 
-    Raises InputError naming ``what`` if a triangle is not a face of the mesh.
+    ComputeError naming ``what`` if a triangle is not a face of the mesh (a script's own mesh is
+    judged at the edge: rigfem.fe.inputs.check_mesh).
     """
     tris = np.asarray(tris)
     if tris.ndim != 2 or tris.shape[1] < 3 or len(tris) == 0:
-        raise InputError(f"{what} triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
+        raise ComputeError(f"{what} triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
     m = np.int64(max(int(tets[:, :4].max()), int(tris[:, :3].max())) + 1)
 
     def code(corners: np.ndarray) -> np.ndarray:
@@ -169,7 +170,7 @@ def face_owners(tets: np.ndarray, tris: np.ndarray, what: str = "surface") -> tu
     key = code(tris[:, :3])
     pos = np.searchsorted(faces[order], key).clip(0, len(faces) - 1)
     if not np.array_equal(faces[order][pos], key):
-        raise InputError(f"{what} has triangles that are not faces of the mesh")
+        raise ComputeError(f"{what} has triangles that are not faces of the mesh")
     idx = order[pos]
     return idx // 4, idx % 4
 
@@ -185,8 +186,6 @@ def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarra
     Nodes are the vertices, then one node per edge: at ``pm.curved_points`` for the edges of
     ``pm.curved_edges``, at the straight midpoint elsewhere.
     """
-    from rigfem.errors import InputError
-
     points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
     n = len(points)
     ukeys, inv = np.unique(_edge_keys(tets[:, TET10_EDGES], n), return_inverse=True)
@@ -196,7 +195,7 @@ def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarra
         k = _edge_keys(pairs, n)
         pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
         if not (ukeys[pos] == k).all():
-            raise InputError(f"{what} has edges that are not tet edges of the mesh")
+            raise ComputeError(f"{what} has edges that are not tet edges of the mesh")
         return pos
 
     if len(pm.curved_edges):
@@ -213,8 +212,6 @@ def to_meshio(pm: PartMesh, order: int = 1):
     geometry where the boundary is curved).
     """
     import meshio
-
-    from rigfem.errors import ComputeError
 
     if order not in (1, 2):  # the CLI's --order offers 1 and 2 only
         raise ComputeError(f"order = {order!r} must be 1 or 2")
@@ -235,8 +232,6 @@ def to_meshio(pm: PartMesh, order: int = 1):
 
 def write_mesh(pm: PartMesh, path: str | Path, order: int = 1) -> None:
     """Write .vtu or .msh (gmsh 2.2 format, physical names kept) through meshio."""
-    from rigfem.errors import ComputeError
-
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".vtu", ".msh"):  # the CLI's --out is checked so (rigfem.cli.outputs.new_output)
