@@ -157,10 +157,15 @@ def _env() -> dict[str, str]:
     return {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 
 
+def _names(d: Path) -> list[str]:
+    """Every mutant of the package prepared in ``d``."""
+    return json.loads(subprocess.run([sys.executable, "-c", _NAMES], cwd=d, env=_env(), capture_output=True,
+                                     text=True, check=True).stdout)
+
+
 def draw(d: Path, n: int, seed: int) -> dict:
     """A uniform random sample of ``n`` of the mutants of the package prepared in ``d``: {n, of, seed, names}."""
-    every = json.loads(subprocess.run([sys.executable, "-c", _NAMES], cwd=d, env=_env(), capture_output=True,
-                                      text=True, check=True).stdout)
+    every = _names(d)
     if not 0 < n < len(every):
         raise SystemExit(f"--sample {n}: {d.name} has {len(every)} mutants; sample from 1 to {len(every) - 1}, "
                          f"or run them all without --sample")
@@ -187,7 +192,9 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
     """Run the mutants the package's record did not kill again, in a fresh copy, against this
     tree's tests (new tests written to kill them); (the run's time, the record it started from).
     mutmut names a mutant by its function and number, so the names are the record's only while the
-    mutated files are as they were at the record's commit: refused otherwise."""
+    mutated files are as they were at the record's commit.  Where they changed since, a sampled
+    record's whole sample is run again (``retest: "whole sample"``: its kills are this tree's too);
+    a full run's record is refused (run the package afresh)."""
 
     prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg) if (OUT / "mutmut.json").exists() else None
     if not prev:
@@ -195,16 +202,24 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
     files = sorted(f for pattern in PACKAGES[pkg]["mutate"] for f in glob.glob(pattern, root_dir=ROOT))
     diff = subprocess.run(["git", "-C", str(ROOT), "diff", "--name-only", prev["commit"]["sha"], "--", *files],
                           capture_output=True, text=True)
-    if prev["commit"]["dirty"] or diff.returncode or diff.stdout.strip():
+    changed = bool(prev["commit"]["dirty"] or diff.returncode or diff.stdout.strip())
+    if changed and not prev.get("sample"):
         raise SystemExit(f"--retest {pkg}: the mutated files are not those of the record "
                          f"({prev['commit']['sha'][:10]}{', dirty' if prev['commit']['dirty'] else ''}): "
                          f"run the package afresh")
-    if not prev["not_killed"]:
+    if not changed and not prev["not_killed"]:
         raise SystemExit(f"--retest {pkg}: its record has no mutant left to kill")
     d = work / pkg
     _prepare(pkg, d)
     (d / "seconds.txt").unlink(missing_ok=True)
-    return _mutmut(pkg, d, children, [m["mutant"] for m in prev["not_killed"]]), prev
+    if not changed:
+        return _mutmut(pkg, d, children, [m["mutant"] for m in prev["not_killed"]]), prev
+    names = prev["sample"]["names"]
+    gone = sorted(set(names) - set(_names(d)))
+    if gone:
+        raise SystemExit(f"--retest {pkg}: {len(gone)} of its sample ({gone[:3]}) are no mutants of the changed "
+                         f"files; draw a fresh sample (--sample N --seed S)")
+    return {**_mutmut(pkg, d, children, names), "retest": "whole sample"}, prev
 
 
 def _mutmut(pkg: str, d: Path, children: int, names: list[str] = ()) -> dict:
@@ -337,7 +352,12 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
         if unrun:
             raise SystemExit(f"--sample {pkg}: mutmut did not run {len(unrun)} of the sample ({unrun[:3]}…)")
     counts: dict[str, int] = {}
-    if prior is not None:
+    if prior is not None and meta.get("retest") == "whole sample":  # every mutant of the sample decided anew
+        res = {k: v for k, v in res.items() if k in set(sample["names"])}
+        unrun = sorted(k for k in sample["names"] if res.get(k, ("not checked",))[0] == "not checked")
+        if unrun:
+            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {len(unrun)} of the sample ({unrun[:3]}…)")
+    elif prior is not None:
         again = {m["mutant"] for m in prior["not_killed"]}
         res = {k: v for k, v in res.items() if k in again}
         unrun = sorted(again - {k for k, (status, _) in res.items() if status != "not checked"})
@@ -431,7 +451,8 @@ def markdown(rec: dict) -> str:
                      f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {c.get('segfault', 0)} | {p['text_mutants']} | {p['equivalent']} | "
                      f"{score(p, 'mutmut')} | **{score(p, 'physics')}** | {p['date'][:10]}, "
                      f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}`"
-                     + (f" (the survivors of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
+                     + (f" ({'the whole sample, its files changed since' if p.get('retest') else 'the survivors'} "
+                        f"of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
                         f"{p['first_run']['commit']['sha'][:10]})" if p.get("first_run") else "") + " |")
     for pkg, p in rec["packages"].items():
         open_ = [m for m in p["not_killed"] if m["fate"] != "text"]
@@ -481,7 +502,8 @@ def main(argv: list[str] | None = None) -> int:
             meta, prior = retest_package(pkg, a.workdir, a.max_children)
             first = prior.get("first_run") or {k: prior[k] for k in ("date", "commit", "command")}
             meta = {"seconds": round(prior["seconds"] + meta["seconds"], 1), "first_run": first,
-                    **({"sample": prior["sample"]} if prior.get("sample") else {})}
+                    **({"sample": prior["sample"]} if prior.get("sample") else {}),
+                    **({"retest": meta["retest"]} if meta.get("retest") else {})}
         elif not a.report:
             meta = run_package(pkg, a.workdir, a.max_children, a.resume,
                                None if a.sample is None else (a.sample, a.seed))
