@@ -267,3 +267,41 @@ def test_body_history_keeps_the_centre_of_mass():
     z = np.zeros(n)
     bh = b.history(z, z, z, np.zeros((n, 2)), np.zeros((n, 2)), np.zeros((n, 2)))
     assert np.allclose(bh.com_local_mm, [75.0, 5.0])
+
+
+CLOSE = [0.0, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 9.99e-3, 1e-2, 2e-2]  #: rad from a change point
+
+
+def test_rates_of_the_rhombus_near_its_change_points_are_the_parallelograms():
+    """The rhombus 500/500/500/500 moves as a parallelogram (the rocker parallel to the crank): ω4 =
+    ω2, α4 = α2, ω3 = α3 = 0 exactly, on both sides of its change points at crank 0 and 180°, where the
+    closed form reads 0/0 and, a little off them, loses its digits."""
+    t = np.array([c + s * x for c in (0.0, np.pi) for s in (-1, 1) for x in CLOSE]) % (2 * np.pi)
+    k = fourbar_angles(500.0, 500.0, 500.0, 500.0, t, 7.0, 3.0)
+    np.testing.assert_allclose(k["omega4"], 7.0, rtol=1e-10)
+    np.testing.assert_allclose(k["alpha4"], 3.0, rtol=1e-7)
+    np.testing.assert_allclose(k["omega3"], 0.0, atol=7e-10)
+    np.testing.assert_allclose(k["alpha3"], 0.0, atol=3e-7)
+
+
+@pytest.mark.parametrize("lengths, change", [((200.0, 400.0, 700.0, 500.0), 0.0), ((200.0, 300.0, 400.0, 500.0), np.pi)])
+def test_rates_near_a_change_point_continue_the_branch_the_motion_is_on(lengths, change):
+    """Near a change point the rates are those of the smooth curve the motion is on at that side:
+    its values well off the point (1e-2 to 6e-2 rad, where the closed form keeps its digits), the
+    branch on the near side and the other one beyond (continuation through the change point), fitted
+    by a polynomial of degree 7 and read at the point.  On the change point itself, the motion is
+    on the curve it leaves on."""
+    far = np.linspace(1e-2, 6e-2, 6)
+    for side in (-1, 1):
+        close = np.array(CLOSE if side > 0 else CLOSE[1:])  # on the point itself: the curve it leaves on
+        t = (change + side * close) % (2 * np.pi)
+        got = fourbar_angles(*lengths, t, 2.0, 0.5)
+        # the branch the motion follows on this side (+1 from crank 0 on) and, past the point, its other sign
+        near = fourbar_angles(*lengths, change + side * far, 2.0, 0.5)
+        beyond = fourbar_angles(*lengths, change - side * far, 2.0, 0.5,
+                                branch=-1 if change == 0.0 else 1)
+        x = np.r_[side * far, -side * far]
+        for key in ("omega3", "omega4", "alpha3", "alpha4"):
+            fit = np.polynomial.Polynomial.fit(x, np.r_[near[key], beyond[key]], 7)
+            want = fit(side * close)
+            np.testing.assert_allclose(got[key], want, rtol=1e-6, atol=1e-7 * np.abs(want).max(), err_msg=f"{key} side {side}")

@@ -83,9 +83,12 @@ def _branch_signs(at180, th2, branch):
     return np.where(at180 & (np.mod(th2, 2 * np.pi) > np.pi), -float(branch), float(branch))
 
 
-#: crank step (rad) of the rates at a change point: the smooth branch's rates on both sides,
-#: Richardson-combined (truncation ~h⁴, round-off ~eps/h²: ~1e-10 relative)
-_CHANGE_STEP = 1e-3
+#: crank step (rad) of the rates near a change point: within it, where the formulas read 0/0 or
+#: lose their digits (at 1e-3 rad from it, accelerations keep five), the rates are interpolated
+#: from the smooth branch's at 1, 2 and 3 steps on either side (a quintic: its truncation and the
+#: formulas' round-off there are both near 1e-9 relative)
+_CHANGE_STEP = 1e-2
+_CHANGE_NODES = np.array([-3.0, -2.0, -1.0, 1.0, 2.0, 3.0])  #: in steps from the change point
 
 
 def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w2, a2=0.0,
@@ -95,8 +98,8 @@ def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w
     -1 crossed.  NaN where the loop cannot close.
 
     A change-point four-bar (:func:`change_points_deg`) is followed through its change points by
-    continuity (the smooth motion: angles and rates continuous), its rates at a change point
-    being those of the smooth branch on both sides (where the formulas read 0/0)."""
+    continuity (the smooth motion: angles and rates continuous), its rates near a change point
+    (where the formulas read 0/0) being those of the smooth curve through it."""
     th2 = np.asarray(th2, float)
     at0, at180 = _change_masks(b2, b3, b4, d)
     if np.any(at0) or np.any(at180):  # one turn [0, 360): 360 deg is crank 0 again, not the end of a turn
@@ -108,25 +111,33 @@ def fourbar_angles(b2: float, b3: float, b4: float, d: float, th2: np.ndarray, w
 
 
 def _rates_at_change_points(out: dict, at0, at180, args: tuple, branch: int) -> None:
-    """Replace the rates at crank angles on a change point (within 1e-9 rad) by the smooth branch's."""
+    """Replace the rates within :data:`_CHANGE_STEP` of a change point by those of the smooth curve
+    the motion is on there (its Lagrange interpolant through :data:`_CHANGE_NODES`): the branch it
+    follows on that side, continued through the change point by the other sign (on the change
+    point itself, the branch it leaves on)."""
     shape = np.broadcast(*args).shape
+    h = _CHANGE_STEP
     turn = np.mod(args[4], 2 * np.pi)
-    on = np.broadcast_to((at0 & (np.minimum(turn, 2 * np.pi - turn) < 1e-9)) | (at180 & (np.abs(turn - np.pi) < 1e-9)),
-                         shape)
+    past0, past180 = np.mod(turn + np.pi, 2 * np.pi) - np.pi, turn - np.pi  # signed, from each change point
+    near0, near180 = at0 & (np.abs(past0) < h), at180 & (np.abs(past180) < h)
+    on = np.broadcast_to(near0 | near180, shape)
     if not on.any():
         return
     b2, b3, b4, d, t, w2, a2 = (np.broadcast_to(x, shape)[on] for x in args)
-    after = _branch_signs(np.broadcast_to(at180, shape)[on], t + _CHANGE_STEP / 2, branch)  # just past it
-
-    def mean(h: float) -> dict:
-        hi = _fourbar_angles(b2, b3, b4, d, t + h, w2, a2, after)
-        lo = _fourbar_angles(b2, b3, b4, d, t - h, w2, a2, -after)  # just before it: the other sign
-        return {k: (hi[k] + lo[k]) / 2 for k in ("omega3", "omega4", "alpha3", "alpha4")}
-
-    near, far = mean(_CHANGE_STEP), mean(2 * _CHANGE_STEP)
-    for k in near:
+    at180_on = np.broadcast_to(at180, shape)[on]
+    delta = np.where(np.broadcast_to(near0, shape)[on], np.broadcast_to(past0, shape)[on],
+                     np.broadcast_to(past180, shape)[on])
+    t0 = t - delta
+    # the sign on the side past the change point, of the curve the motion is on at t
+    ahead = np.where(delta < 0, -_branch_signs(at180_on, t, branch), _branch_signs(at180_on, t0 + h, branch))
+    u = delta / h
+    x = _CHANGE_NODES
+    weights = [np.prod([(u - x[m]) / (x[j] - x[m]) for m in range(len(x)) if m != j], axis=0)
+               for j in range(len(x))]
+    nodes = [_fourbar_angles(b2, b3, b4, d, t0 + k * h, w2, a2, np.sign(k) * ahead) for k in x]
+    for k in ("omega3", "omega4", "alpha3", "alpha4"):
         v = np.array(np.broadcast_to(out[k], shape), float)
-        v[on] = (4 * near[k] - far[k]) / 3
+        v[on] = sum(w * n[k] for w, n in zip(weights, nodes))
         out[k] = v
 
 
