@@ -54,7 +54,8 @@ def closed_reactions(lk: Linkage, motion: LinkageState, loads: dict, deg: np.nda
         FB = np.stack([fx, (M["rod"] + r[:, 1] * fx) / r[:, 0]], -1)
         FA = FB - D["rod"]
         forces = {"O2": FA - D["crank"], "A": FA, "B": FB, "slide": -FB - D["slider"]}
-    torque = cross(A, FA) - M["crank"]
+    with np.errstate(invalid="ignore"):  # an unbounded force at a change point (inf × 0): flagged below
+        torque = cross(A, FA) - M["crank"]
     joints = {}
     for j in lk.joints:
         prism = isinstance(j, Prismatic)
