@@ -99,10 +99,11 @@ PACKAGES = {
                           "tests/test_dynamics_closed.py", "tests/test_dynamics_truths.py", "tests/test_change_points.py",
                           "tests/test_cli_kinematics.py", "tests/test_bad_input_campaign.py", "tests/test_rig_design.py",
                           "tests/test_original_truths.py", "tests/test_dynamics_solver_truths.py",
-                          "tests/test_linkage_truths.py", "tests/test_mechanisms_truths.py"]},
+                          "tests/test_linkage_truths.py", "tests/test_mechanisms_truths.py",
+                          "tests/test_synthesis_truths.py"]},
     # mesh sizing: the size fields, the tet and memory estimates, second order and the quality gate
     # (gmsh in this process, RIGFEM_MESH_IN_PROCESS: mutmut's coverage sees no child process)
-    "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py"],
+    "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py", "tests/test_mesh_sizing_truths.py"],
                     "env": {"RIGFEM_MESH_IN_PROCESS": "1"}, **FORKSERVER},
     # fe/'s numerical modules, in three runs (about 3000 mutants: hours on two shared cores)
     "fe-stress": {"mutate": ["rigfem/fe/stress.py", "rigfem/tensors.py", "rigfem/fe/solution.py"], "tests": FE_TESTS,
