@@ -100,7 +100,7 @@ PACKAGES = {
                           "tests/test_cli_kinematics.py", "tests/test_bad_input_campaign.py", "tests/test_rig_design.py",
                           "tests/test_original_truths.py", "tests/test_dynamics_solver_truths.py",
                           "tests/test_linkage_truths.py", "tests/test_mechanisms_truths.py",
-                          "tests/test_synthesis_truths.py"]},
+                          "tests/test_synthesis_truths.py", "tests/test_linkage_expression_truths.py"]},
     # mesh sizing: the size fields, the tet and memory estimates, second order and the quality gate
     # (gmsh in this process, RIGFEM_MESH_IN_PROCESS: mutmut's coverage sees no child process)
     "mesh-sizing": {"mutate": ["rigfem/mesh/mesher.py"], "tests": ["tests/test_mesh.py", "tests/test_mesh_sizing_truths.py"],
