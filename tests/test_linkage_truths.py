@@ -305,3 +305,16 @@ def test_rates_near_a_change_point_continue_the_branch_the_motion_is_on(lengths,
             fit = np.polynomial.Polynomial.fit(x, np.r_[near[key], beyond[key]], 7)
             want = fit(side * close)
             np.testing.assert_allclose(got[key], want, rtol=1e-6, atol=1e-7 * np.abs(want).max(), err_msg=f"{key} side {side}")
+
+
+@pytest.mark.parametrize("exact, off", [((1.0, 3.0, 2.0, 2.0), (1.0000000000000004, 3.000000000000003, 2.000000000000003, 2.0)),
+                                        ((500.0, 500.0, 500.0, 500.0), (500.0, 500.0, 500.0, 500.0000001))])
+def test_a_change_point_four_bar_off_by_rounding_turns_as_the_exact_one(exact, off):
+    """Lengths a rounding error off Grashof's equality (within change_points_deg's 1e-9 of the
+    longest: e.g. recovered by a synthesis) make the same change-point four-bar: the crank turns
+    fully, its dead points are the change points (not a pair 1e-6° either side of one, bounding a
+    crank range) and it repeats after as many turns."""
+    want, got = fourbar_turn(*exact), fourbar_turn(*off)
+    assert got["change_points_deg"] == want["change_points_deg"] and want["crank_turns_fully"]
+    for key in ("crank_turns_fully", "dead_points_deg", "crank_range_deg", "turns_to_repeat"):
+        assert got[key] == want[key], key

@@ -172,9 +172,15 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
     """
     Lengths({"b2": b2, "b3": b3, "b4": b4, "d": d}, lo=0.0, hi=1e5)
     sgn = BRANCHES[Options(branch).branch]
-    full = bool((abs(d - b2) >= abs(b3 - b4)) and (d + b2 <= b3 + b4))
+    # a change point, Grashof's equality to change_points_deg's tolerance, counts as the equality
+    change = change_points_deg(b2, b3, b4, d)
+    at0, at180 = 0.0 in change, 180.0 in change
+    full = bool((at0 or abs(d - b2) >= abs(b3 - b4)) and (at180 or d + b2 <= b3 + b4))
     dead = []
-    for f in (b3 + b4, abs(b3 - b4)):
+    for f, on, deg in ((b3 + b4, at180, 180.0), (abs(b3 - b4), at0, 0.0)):
+        if on:  # the dead point lies on the change point, not a rounding error off it
+            dead.append(deg)
+            continue
         c = (b2**2 + d**2 - f**2) / (2 * b2 * d)
         if abs(c) <= 1.0:
             a = float(np.degrees(np.arccos(c)))
@@ -194,7 +200,6 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
             tg = dict(kind=kind, crank_deg=deg, rocker_deg=float(np.degrees(k["theta4"][0]) % 360.0))
             if abs(np.sin(rel)) < 1e-6 and (np.cos(rel) > 0) == (kind == "extended") and tg not in toggles:
                 toggles.append(tg)
-    change = change_points_deg(b2, b3, b4, d)
     out = dict(grashof=grashof_class(b2, b3, b4, d), branch=branch, crank_turns_fully=full,
                dead_points_deg=dead, crank_range_deg=None if full else _crank_range(b2, b3, b4, d, dead),
                toggles=toggles, rocker_limits_deg=None, rocker_swing_deg=None, time_ratio=None,
