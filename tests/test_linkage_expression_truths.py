@@ -162,3 +162,12 @@ def _names_pole_or_jump(msg: str, expr: str, c: float) -> None:
                    f"is continuous",
                    f"EXPR = {expr!r} is not finite at x = {c:.6g} (a pole); give an interval [X0, X1] where it "
                    f"is finite")
+
+
+@pytest.mark.parametrize("expr, column", [("2*(x+1", 7), ("sin(x", 6), ("((x)", 5), ("1+sqrt(x*(2+x)", 15)])
+def test_an_unclosed_parenthesis_is_named_where_it_is_missing(expr, column):
+    """A parenthesis left open is reported at the end of the text, where the ')' is missing
+    (column counted from 1), not where the parser last had a whole expression."""
+    with pytest.raises(InputError) as e:
+        parse_function(expr)
+    assert str(e.value).startswith(f"EXPR = {expr!r} is not an expression of x: Expected ')' at column {column}; allowed x,")
