@@ -315,7 +315,9 @@ def check_three_position(r: dict) -> dict:
 def optimise_three_position(points: np.ndarray, alpha_deg=None, seed: int = 0, maxiter: int = 60) -> dict:
     """Free choices (crank and rocker rotations; the coupler rotations too unless ``alpha_deg``
     is given) that maximise the smallest transmission angle min(μ_min, 180 − μ_max) over a
-    full crank turn, for a defect-free crank-rocker (scipy differential evolution, seeded)."""
+    full crank turn, for a defect-free four-bar whose crank turns fully: a crank-rocker or, the
+    ground shortest, a double-crank (scipy differential evolution, seeded; the result's
+    check_three_position names which)."""
     from scipy.optimize import differential_evolution
 
     from rigfem.rig.rules import transmission_angle_range
@@ -344,5 +346,5 @@ def optimise_three_position(points: np.ndarray, alpha_deg=None, seed: int = 0, m
     bounds = [(-350, 350)] * 2 + [(-120, 120)] * 2 + ([(-120, 120)] * 2 if alpha_deg is None else [])
     res = differential_evolution(cost, bounds, seed=seed, maxiter=maxiter, popsize=15, tol=1e-8, polish=False)
     if res.fun >= 5e2:
-        raise ComputeError("no defect-free crank-rocker found for these positions within the search bounds")
+        raise ComputeError("no defect-free four-bar whose crank turns fully found for these positions within the search bounds")
     return design(res.x)
