@@ -206,5 +206,18 @@ def test_a_scripts_mesh_is_judged_whole_at_the_edge():
     with pytest.raises(InputError, match=r"^curved_edges: 1 of 1 are not edges of the mesh's tets "
                                          r"\(first: vertices \(0, 4\)\)$"):
         fe_mesh(chord, 2)
-    with pytest.raises(InputError, match=r"^surface .base. must be integer triangles \(K, 3\) of tet vertices 0..4, got int64 \(1, 3\)$"):
+    with pytest.raises(InputError, match=r"^surface 'base': vertex 5 is not a tet vertex \(0..4\)$"):
         fe_mesh(PartMesh("two", p, t, {"base": np.array([[0, 1, 5]])}), 2)
+    with pytest.raises(InputError, match=r"^surface 'base' must hold whole vertex numbers, got float64 "
+                                         r"values such as 0.5$"):
+        fe_mesh(PartMesh("two", p, t, {"base": np.array([[0.5, 1, 2]])}), 2)
+    with pytest.raises(InputError, match=r"^curved_points must be one finite point \(x, y, z\) per curved edge, "
+                                         r"\(1, 3\); got float64 \(1, 2\)$"):
+        fe_mesh(PartMesh("two", p, t, curved_edges=np.array([[3, 4]]), curved_points=np.array([[0.6, 0.6]])), 2)
+    with pytest.raises(InputError, match=r"^surface 'nil' must be a \(K, 3\) array of tet vertices, got shape \(0,\)$"):
+        fe_mesh(PartMesh("two", p, t, {"nil": []}), 1)
+    # an empty (0, 3) surface of any type is empty, no curved edges may be [] (as before);
+    # whole-valued floats (np.loadtxt) are vertex numbers
+    loose = PartMesh("two", p, t, {"base": np.array([[0.0, 1.0, 2.0]]), "none": np.zeros((0, 3))},
+                     curved_edges=[], curved_points=[])
+    assert set(fe_mesh(loose, 2).surfaces) == {"base", "none"} and set(fe_mesh(loose, 1).surfaces) == {"base", "none"}

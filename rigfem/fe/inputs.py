@@ -324,16 +324,33 @@ def _on(t: np.ndarray, corners: np.ndarray, n: int) -> np.ndarray:
     are keyed, so a surface costs a pass over the tets, not a sort of them."""
     used = np.zeros(n, bool)
     used[corners] = True
-    cand = t[used[t].all(-1)]
+    cand = t[used[t].all(-1)].reshape(-1, corners.shape[1])
+    a, b = np.sort(corners, axis=-1).astype(np.int64), np.sort(cand, axis=-1).astype(np.int64)
+    if n ** a.shape[1] >= 2**63:  # one integer per set would overflow: compare the rows' bytes
+        row = np.dtype((np.void, 8 * a.shape[1]))
+        return np.isin(np.ascontiguousarray(a).view(row).ravel(), np.ascontiguousarray(b).view(row).ravel())
+    weights = n ** np.arange(a.shape[1] - 1, -1, -1, dtype=np.int64)
+    return np.isin(a @ weights, b @ weights)
 
-    def key(c: np.ndarray) -> np.ndarray:
-        c = np.sort(c, axis=-1).astype(np.int64)
-        k = c[:, 0]
-        for i in range(1, c.shape[1]):
-            k = k * n + c[:, i]
-        return k
 
-    return np.isin(key(corners), key(cand))
+def _vertices(field: str, v, k: int, n: int) -> np.ndarray:
+    """``v`` as an int64 (K, k) array of tet vertices (whole-valued floats accepted, as read by
+    np.loadtxt); InputError naming the field, what is wrong and the allowed range."""
+    v = np.asarray(v)
+    if v.ndim != 2 or v.shape[1] != k:
+        raise InputError(f"{field} must be a ({'K' if k == 3 else 'E'}, {k}) array of tet vertices, "
+                         f"got shape {v.shape}")
+    if v.size == 0:
+        return np.zeros((0, k), np.int64)
+    if v.dtype.kind not in "iuf":
+        raise InputError(f"{field} must hold whole vertex numbers, got {v.dtype} values")
+    if v.dtype.kind == "f" and not np.array_equal(v, np.round(v)):
+        raise InputError(f"{field} must hold whole vertex numbers, got {v.dtype} values such as "
+                         f"{v[v != np.round(v)][0].item()!r}")
+    bad = (v < 0) | (v >= n)
+    if bad.any():
+        raise InputError(f"{field}: vertex {v[bad][0]:g} is not a tet vertex (0..{n - 1})")
+    return v.astype(np.int64)
 
 
 def _check_on_tets(mesh, t: np.ndarray) -> None:
@@ -342,27 +359,21 @@ def _check_on_tets(mesh, t: np.ndarray) -> None:
     from rigfem.mesh.partmesh import TET10_EDGES, TET_FACES
 
     n = int(t.max()) + 1
-    tris = {name: np.asarray(tri) for name, tri in mesh.surfaces.items()}
-    for name, tri in tris.items():
-        if (tri.ndim != 2 or tri.shape[1] != 3 or tri.dtype.kind not in "iu"
-                or (len(tri) and (tri.min() < 0 or tri.max() >= n))):
-            raise InputError(f"surface {name!r} must be integer triangles (K, 3) of tet vertices "
-                             f"0..{n - 1}, got {tri.dtype} {tri.shape}")
-    every = np.vstack([np.zeros((0, 3), np.int64), *(v.astype(np.int64) for v in tris.values())])
+    tris = {name: _vertices(f"surface {name!r}", tri, 3, n) for name, tri in mesh.surfaces.items()}
+    every = np.vstack([np.zeros((0, 3), np.int64), *tris.values()])
     if len(every) and not (on := _on(t[:, TET_FACES], every, n)).all():  # one pass for all surfaces
         for (name, tri), ok in zip(tris.items(), np.split(on, np.cumsum([len(v) for v in tris.values()])[:-1])):
             if not ok.all():
                 raise InputError(f"surface {name!r}: {(~ok).sum()} of its {len(tri)} triangles are not faces "
                                  f"of the mesh's tets (first: vertices {tuple(tri[ok.argmin()].tolist())})")
-    e = np.asarray(mesh.curved_edges)
-    x = np.asarray(mesh.curved_points, float)
-    if e.ndim != 2 or e.shape[1] != 2 or x.shape != (len(e), 3) or not np.isfinite(x).all():
-        raise InputError(f"curved_edges (E, 2) and curved_points (E, 3) must match and be finite, got "
-                         f"{e.shape} and {x.shape}")
+    e = _vertices("curved_edges", mesh.curved_edges, 2, n) if np.size(mesh.curved_edges) else np.zeros((0, 2), int)
+    x = np.asarray(mesh.curved_points)
+    x = np.zeros((0, 3)) if x.size == 0 else x
+    if x.shape != (len(e), 3) or x.dtype.kind not in "iuf" or not np.isfinite(x).all():
+        raise InputError(f"curved_points must be one finite point (x, y, z) per curved edge, ({len(e)}, 3); "
+                         f"got {x.dtype} {x.shape}")
     if len(e):
-        if e.dtype.kind not in "iu" or e.min() < 0 or e.max() >= n:
-            raise InputError(f"curved_edges must join tet vertices 0..{n - 1}")
-        off = ~_on(t[:, TET10_EDGES], e.astype(np.int64), n)
+        off = ~_on(t[:, TET10_EDGES], e, n)
         if off.any():
             raise InputError(f"curved_edges: {off.sum()} of {len(e)} are not edges of the mesh's tets "
                              f"(first: vertices {tuple(e[off.argmax()].tolist())})")
