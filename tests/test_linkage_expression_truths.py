@@ -171,3 +171,13 @@ def test_an_unclosed_parenthesis_is_named_where_it_is_missing(expr, column):
     with pytest.raises(InputError) as e:
         parse_function(expr)
     assert str(e.value).startswith(f"EXPR = {expr!r} is not an expression of x: Expected ')' at column {column}; allowed x,")
+
+
+@pytest.mark.parametrize("expr, column", [("sin(", 5), ("sin()", 5), ("*x", 1)])
+def test_a_missing_operand_is_named_where_it_is_missing(expr, column):
+    """A function's empty argument or a leading operator is named as a missing expression at its
+    column, not as pyparsing's dump of the grammar."""
+    with pytest.raises(InputError) as e:
+        parse_function(expr)
+    assert str(e.value).startswith(f"EXPR = {expr!r} is not an expression of x: Expected an expression at column "
+                                   f"{column}; allowed x,")

@@ -24,7 +24,7 @@ from rigfem.linkage.kinematics import (
     slider_crank_motion,
     slider_crank_turn,
 )
-from rigfem.linkage.loops import fourbar_angles
+from rigfem.linkage.loops import fourbar_angles, fourbar_closes
 from rigfem.linkage.mechanisms import four_bar, quick_return, slider_crank
 from rigfem.linkage.model import Body
 
@@ -284,14 +284,16 @@ def test_rates_of_the_rhombus_near_its_change_points_are_the_parallelograms():
     np.testing.assert_allclose(k["alpha3"], 0.0, atol=3e-7)
 
 
-@pytest.mark.parametrize("lengths, change", [((200.0, 400.0, 700.0, 500.0), 0.0), ((200.0, 300.0, 400.0, 500.0), np.pi)])
+@pytest.mark.parametrize("lengths, change", [((200.0, 400.0, 700.0, 500.0), 0.0),
+                                             ((200.0, 300.0, 400.0, 500.0), np.pi)])
 def test_rates_near_a_change_point_continue_the_branch_the_motion_is_on(lengths, change):
     """Near a change point the rates are those of the smooth curve the motion is on at that side:
-    its values well off the point (1e-2 to 6e-2 rad, where the closed form keeps its digits), the
-    branch on the near side and the other one beyond (continuation through the change point), fitted
-    by a polynomial of degree 7 and read at the point.  On the change point itself, the motion is
+    its values well off the point (1.5e-2 to 6e-2 rad: the closed form there, outside the
+    interpolation's 0.01 rad, keeps its digits), the branch on the near side and the other one
+    beyond (continuation through the change point), fitted by a polynomial of degree 7 and read at
+    the point.  On the change point itself, the motion is
     on the curve it leaves on."""
-    far = np.linspace(1e-2, 6e-2, 6)
+    far = np.linspace(1.5e-2, 6e-2, 6)
     for side in (-1, 1):
         close = np.array(CLOSE if side > 0 else CLOSE[1:])  # on the point itself: the curve it leaves on
         t = (change + side * close) % (2 * np.pi)
@@ -304,17 +306,52 @@ def test_rates_near_a_change_point_continue_the_branch_the_motion_is_on(lengths,
         for key in ("omega3", "omega4", "alpha3", "alpha4"):
             fit = np.polynomial.Polynomial.fit(x, np.r_[near[key], beyond[key]], 7)
             want = fit(side * close)
-            np.testing.assert_allclose(got[key], want, rtol=1e-6, atol=1e-7 * np.abs(want).max(), err_msg=f"{key} side {side}")
+            np.testing.assert_allclose(got[key], want, rtol=1e-6, atol=1e-7 * np.abs(want).max(),
+                                       err_msg=f"{key} side {side}")
 
 
-@pytest.mark.parametrize("exact, off", [((1.0, 3.0, 2.0, 2.0), (1.0000000000000004, 3.000000000000003, 2.000000000000003, 2.0)),
-                                        ((500.0, 500.0, 500.0, 500.0), (500.0, 500.0, 500.0, 500.0000001))])
+@pytest.mark.parametrize("exact, off", [
+    ((1.0, 3.0, 2.0, 2.0), (1.0000000000000004, 3.000000000000003, 2.000000000000003, 2.0)),
+    ((500.0, 500.0, 500.0, 500.0), (500.0, 500.0, 500.0, 500.00000000000006))])
 def test_a_change_point_four_bar_off_by_rounding_turns_as_the_exact_one(exact, off):
-    """Lengths a rounding error off Grashof's equality (within change_points_deg's 1e-9 of the
-    longest: e.g. recovered by a synthesis) make the same change-point four-bar: the crank turns
-    fully, its dead points are the change points (not a pair 1e-6° either side of one, bounding a
-    crank range) and it repeats after as many turns."""
+    """Lengths a rounding error off Grashof's equality (e.g. recovered by a synthesis) make the same
+    change-point four-bar: the crank turns fully, its dead points are the change points (not a pair
+    1e-6° either side of one, bounding a crank range) and it repeats after as many turns."""
     want, got = fourbar_turn(*exact), fourbar_turn(*off)
     assert got["change_points_deg"] == want["change_points_deg"] and want["crank_turns_fully"]
     for key in ("crank_turns_fully", "dead_points_deg", "crank_range_deg", "turns_to_repeat"):
         assert got[key] == want[key], key
+
+
+@pytest.mark.parametrize("lengths", [(200.0, 400.0, 700.0000006, 500.0), (500.0, 500.0, 500.0, 500.0000001),
+                                     (1000.0, 10.0, 10.0, 1000.0), (200.0, 400.0, 700.0, 500.0)])
+def test_the_crank_range_of_a_four_bar_near_a_change_point_is_where_its_loop_closes(lengths):
+    """Near Grashof's equality (within change_points_deg's tolerance, beyond rounding's) the crank
+    turns fully exactly when the loop closes at every crank angle, and its range ends where it stops
+    closing (the law of cosines, sampled every 0.01° here)."""
+    r = fourbar_turn(*lengths)
+    grid = np.linspace(0.0, 360.0, 36001)
+    closes = fourbar_closes(*lengths, grid)
+    assert r["crank_turns_fully"] == closes.all()
+    if not closes.all():
+        lo, hi = r["crank_range_deg"]
+        inside = ((grid - lo) % 360.0 <= (hi - lo)) | np.isclose((grid - lo) % 360.0, hi - lo, rtol=0, atol=1e-9)
+        assert np.array_equal(inside, closes)
+
+
+def test_rates_of_a_crank_that_swings_through_its_change_point_within_a_few_steps():
+    """1000/10/10/1000 mm swings ±1.15° through its change point at 0: the interpolation's nodes
+    there must stay inside that range, so its rates are finite and on the smooth curve — the
+    central difference of the rocker angle across the point (the branch it leaves on ahead, the
+    other behind) — and at ±0.005 rad they are the rocker angle's derivative (central differences)."""
+    L = (1000.0, 10.0, 10.0, 1000.0)
+    h = 1e-5
+    ahead = fourbar_angles(*L, np.array([h]), 1.0)["theta4"]
+    behind = fourbar_angles(*L, np.array([-h]), 1.0, branch=-1)["theta4"]
+    np.testing.assert_allclose(fourbar_angles(*L, np.array([0.0, 1e-9]), 1.0, 0.0)["omega4"],
+                               np.angle(np.exp(1j * (ahead - behind)))[0] / (2 * h), rtol=1e-5)
+    h = 1e-7
+    for t in (0.005, -0.005):
+        th4 = fourbar_angles(*L, np.array([t - h, t + h]), 1.0, 0.0)["theta4"]
+        np.testing.assert_allclose(fourbar_angles(*L, np.array([t]), 1.0, 0.0)["omega4"],
+                                   (th4[1] - th4[0]) / (2 * h), rtol=1e-6)

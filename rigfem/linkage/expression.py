@@ -28,12 +28,13 @@ def _grammar() -> pp.ParserElement:
     number = pp.Regex(r"(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?").set_parse_action(lambda t: ("num", float(t[0])))
     name = pp.Word(pp.alphas + "_", pp.alphanums + "_")
     expr, factor = pp.Forward(), pp.Forward()
-    call = (name + pp.Suppress("(") + expr - pp.Suppress(")")).set_parse_action(lambda t: ("call", t[0], t[1]))
+    call = (name + pp.Suppress("(") - expr - pp.Suppress(")")).set_parse_action(lambda t: ("call", t[0], t[1]))
     var = name.copy().set_parse_action(lambda t: ("name", t[0]))
     atom = call | number | var | (pp.Suppress("(") + expr - pp.Suppress(")"))
     power = (atom + pp.Optional(pp.one_of("** ^").suppress() + factor)).set_parse_action(
         lambda t: ("**", t[0], t[1]) if len(t) == 2 else t[0])
-    factor <<= (pp.one_of("+ -") + factor).set_parse_action(lambda t: ("neg", t[1]) if t[0] == "-" else t[1]) | power
+    signed = (pp.one_of("+ -") + factor).set_parse_action(lambda t: ("neg", t[1]) if t[0] == "-" else t[1])
+    factor <<= (signed | power).set_name("an expression")  # the name a refusal says it expected
     term = (factor + pp.ZeroOrMore(pp.one_of("* /") + factor)).set_parse_action(lambda t: _fold_left(t))
     expr <<= (term + pp.ZeroOrMore(pp.one_of("+ -") + term)).set_parse_action(lambda t: _fold_left(t))
     return expr

@@ -172,13 +172,15 @@ def fourbar_turn(b2: float, b3: float, b4: float, d: float, branch: str = "open"
     """
     Lengths({"b2": b2, "b3": b3, "b4": b4, "d": d}, lo=0.0, hi=1e5)
     sgn = BRANCHES[Options(branch).branch]
-    # a change point, Grashof's equality to change_points_deg's tolerance, counts as the equality
+    # the crank's diagonal is shortest at 0 and longest at 180 deg: the loop closes for every crank
+    # angle (to fourbar_closes' rounding tolerance, as the motion's) where it closes at both
     change = change_points_deg(b2, b3, b4, d)
-    at0, at180 = 0.0 in change, 180.0 in change
-    full = bool((at0 or abs(d - b2) >= abs(b3 - b4)) and (at180 or d + b2 <= b3 + b4))
+    closes = fourbar_closes(b2, b3, b4, d, np.array([0.0, 180.0]))
+    full = bool(closes.all())
     dead = []
-    for f, on, deg in ((b3 + b4, at180, 180.0), (abs(b3 - b4), at0, 0.0)):
-        if on:  # the dead point lies on the change point, not a rounding error off it
+    for f, on, deg in ((b3 + b4, 180.0 in change and closes[1], 180.0),
+                       (abs(b3 - b4), 0.0 in change and closes[0], 0.0)):
+        if on:  # a change point where the loop closes: its dead point, not a rounding error off it
             dead.append(deg)
             continue
         c = (b2**2 + d**2 - f**2) / (2 * b2 * d)

@@ -114,13 +114,14 @@ def _rates_at_change_points(out: dict, at0, at180, args: tuple, branch: int) -> 
     """Replace the rates within :data:`_CHANGE_STEP` of a change point by those of the smooth curve
     the motion is on there (its Lagrange interpolant through :data:`_CHANGE_NODES`): the branch it
     follows on that side, continued through the change point by the other sign (on the change
-    point itself, the branch it leaves on)."""
+    point itself, the branch it leaves on).  A crank that swings through its change point within
+    a few steps (its dead points close by) takes steps 8 or 64 times shorter; where even those
+    would run into a dead point, the closed form stays."""
     shape = np.broadcast(*args).shape
-    h = _CHANGE_STEP
     turn = np.mod(args[4], 2 * np.pi)
     past0, past180 = np.mod(turn + np.pi, 2 * np.pi) - np.pi, turn - np.pi  # signed, from each change point
-    near0, near180 = at0 & (np.abs(past0) < h), at180 & (np.abs(past180) < h)
-    on = np.broadcast_to(near0 | near180, shape)
+    near0 = at0 & (np.abs(past0) < _CHANGE_STEP)
+    on = np.broadcast_to(near0 | (at180 & (np.abs(past180) < _CHANGE_STEP)), shape)
     if not on.any():
         return
     b2, b3, b4, d, t, w2, a2 = (np.broadcast_to(x, shape)[on] for x in args)
@@ -129,15 +130,31 @@ def _rates_at_change_points(out: dict, at0, at180, args: tuple, branch: int) -> 
                      np.broadcast_to(past180, shape)[on])
     t0 = t - delta
     # the sign on the side past the change point, of the curve the motion is on at t
-    ahead = np.where(delta < 0, -_branch_signs(at180_on, t, branch), _branch_signs(at180_on, t0 + h, branch))
-    u = delta / h
-    x = _CHANGE_NODES
-    weights = [np.prod([(u - x[m]) / (x[j] - x[m]) for m in range(len(x)) if m != j], axis=0)
-               for j in range(len(x))]
-    nodes = [_fourbar_angles(b2, b3, b4, d, t0 + k * h, w2, a2, np.sign(k) * ahead) for k in x]
-    for k in ("omega3", "omega4", "alpha3", "alpha4"):
+    ahead = np.where(delta < 0, -_branch_signs(at180_on, t, branch),
+                     _branch_signs(at180_on, t0 + _CHANGE_STEP, branch))
+    rates = {k: np.broadcast_to(out[k], shape)[on].astype(float) for k in ("omega3", "omega4", "alpha3", "alpha4")}
+    todo = np.ones(len(t), bool)
+    for h in (_CHANGE_STEP, _CHANGE_STEP / 8, _CHANGE_STEP / 64):
+        x = _CHANGE_NODES * h
+        sel = todo & (np.abs(delta) < h)
+
+        def at(k: float) -> dict:
+            return _fourbar_angles(b2[sel], b3[sel], b4[sel], d[sel], t0[sel] + k, w2[sel], a2[sel],
+                                   np.sign(k) * ahead[sel])
+
+        # the curve must close a step beyond the nodes, else they may run into a dead point
+        room = np.isfinite(at(x.min() - h)["theta4"]) & np.isfinite(at(x.max() + h)["theta4"])
+        u = delta[sel]
+        weights = [np.prod([(u - x[m]) / (x[j] - x[m]) for m in range(len(x)) if m != j], axis=0)
+                   for j in range(len(x))]
+        nodes = [at(k) for k in x]
+        idx = np.flatnonzero(sel)[room]
+        for k in rates:
+            rates[k][idx] = sum(w * n[k] for w, n in zip(weights, nodes))[room]
+        todo[idx] = False
+    for k, r in rates.items():
         v = np.array(np.broadcast_to(out[k], shape), float)
-        v[on] = sum(w * n[k] for w, n in zip(weights, nodes))
+        v[on] = r
         out[k] = v
 
 
