@@ -187,9 +187,9 @@ def test_p2_nodes_of_the_hole_wall_lie_on_the_cylinder(coarse):
     assert bent.sum() >= 10 and np.all(np.abs(axis_distance(node[bent]) - R) < 1e-6)
 
 
-def test_curved_edges_are_exactly_those_off_their_chord(coarse):
-    """second_order lists an edge iff its P2 node is off the straight midpoint by more than
-    1e-3 of the edge length: every listed one is."""
+def test_curved_edges_are_off_their_chord(coarse):
+    """second_order lists an edge only if its P2 node is off the straight midpoint by more than
+    1e-3 of the edge length (the chords across the hole wall are listed: the test above)."""
     a, b = coarse.points[coarse.curved_edges[:, 0]], coarse.points[coarse.curved_edges[:, 1]]
     off = np.linalg.norm(coarse.curved_points - 0.5 * (a + b), axis=1)
     assert len(off) and np.all(off > 1e-3 * np.linalg.norm(b - a, axis=1))
@@ -210,7 +210,7 @@ def test_p2_nodes_of_a_flat_face_stay_in_its_plane_at_the_midpoints(coarse):
 def test_smoothed_part_moves_interior_p2_nodes(coarse):
     """A custom part is smoothed (HighOrderElastic moves interior nodes so the elements along the
     curved wall stay valid): some P2 node off its chord belongs to an edge with a vertex inside
-    the solid; and quadratic() gives a valid tetra10 mesh."""
+    the solid; and quadratic() gives one tetra10 per tet."""
     assert coarse.meta["smoothed"] is True
     t = coarse.tets
     faces = np.sort(np.concatenate([t[:, [0, 1, 2]], t[:, [0, 1, 3]], t[:, [0, 2, 3]], t[:, [1, 2, 3]]]), axis=1)

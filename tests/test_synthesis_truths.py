@@ -213,8 +213,8 @@ def test_optimiser_maximises_the_smallest_transmission_angle(de_calls, alpha, ma
     """The design returned is defect-free, its crank turning fully (Grashof, the crank or the ground
     shortest), through the three positions (loop closure here); the value the search minimises is
     −min(μ_min, 180 − μ_max) of each feasible design (closed form here), and the design returned is
-    the best the search met.  The rotation ranges searched are symmetric about 0: the mirrored
-    positions' designs are the mirrored ones."""
+    the best the search met.  The rotation ranges searched are symmetric about 0 (turning either
+    way is searched alike)."""
     P = TRAINER + [5.0, 2.0]
     r = optimise_three_position(P, alpha, seed=0, maxiter=maxiter)
     assert len(r["beta_deg"]) == 2 and len(r["gamma_deg"]) == 2 and len(r["alpha_deg"]) == 2

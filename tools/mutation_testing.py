@@ -189,13 +189,15 @@ def run_package(pkg: str, work: Path, children: int, resume: bool = False,
     return {**_mutmut(pkg, d, children, names), **({"sample": drawn} if drawn else {})}
 
 
-def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
+def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict, bool]:
     """Run the mutants the package's record did not kill again, in a fresh copy, against this
-    tree's tests (new tests written to kill them); (the run's time, the record it started from).
+    tree's tests (new tests written to kill them); (the run's time, the record it started from,
+    whether the whole sample ran).
     mutmut names a mutant by its function and number, so the names are the record's only while the
     mutated files are as they were at the record's commit.  Where they changed since, a sampled
     record's whole sample is run again (``retest: "whole sample"``: its kills are this tree's too);
-    a full run's record is refused (run the package afresh)."""
+    a full run's record is refused (run the package afresh).  ``of`` counts the package's mutants
+    at this tree."""
 
     prev = json.loads((OUT / "mutmut.json").read_text())["packages"].get(pkg) if (OUT / "mutmut.json").exists() else None
     if not prev:
@@ -214,13 +216,13 @@ def retest_package(pkg: str, work: Path, children: int) -> tuple[dict, dict]:
     _prepare(pkg, d)
     (d / "seconds.txt").unlink(missing_ok=True)
     if not changed:
-        return _mutmut(pkg, d, children, [m["mutant"] for m in prev["not_killed"]]), prev
-    names = prev["sample"]["names"]
-    gone = sorted(set(names) - set(_names(d)))
+        return _mutmut(pkg, d, children, [m["mutant"] for m in prev["not_killed"]]), prev, False
+    names, every = prev["sample"]["names"], _names(d)
+    gone = sorted(set(names) - set(every))
     if gone:
         raise SystemExit(f"--retest {pkg}: {len(gone)} of its sample ({gone[:3]}) are no mutants of the changed "
                          f"files; draw a fresh sample (--sample N --seed S)")
-    return {**_mutmut(pkg, d, children, names), "retest": "whole sample"}, prev
+    return {**_mutmut(pkg, d, children, names), "of": len(every)}, prev, True
 
 
 def _mutmut(pkg: str, d: Path, children: int, names: list[str] = ()) -> dict:
@@ -340,10 +342,11 @@ def wilson(k: int, n: int, z: float = 1.96) -> list[float]:
     return [round(100 * (centre - half), 1), round(100 * (centre + half), 1)]
 
 
-def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
+def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None, whole: bool = False) -> dict:
     """The record of a package's run in ``d``; with ``prior`` (the record a ``--retest`` re-ran the
-    survivors of), its killed mutants stay killed and the re-run decides the rest; a sampled run
-    (``meta["sample"]``) counts its sample only."""
+    survivors of), its killed mutants stay killed and the re-run decides the rest, or, ``whole``
+    (the files changed since: the sample ran again), the re-run decides every mutant; a sampled
+    run (``meta["sample"]``) counts its sample only."""
     fates = tomllib.loads(FATES.read_text()) if FATES.exists() else {}
     res = results(d)
     sample = meta.get("sample")
@@ -353,7 +356,7 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None) -> dict:
         if unrun:
             raise SystemExit(f"--sample {pkg}: mutmut did not run {len(unrun)} of the sample ({unrun[:3]}…)")
     counts: dict[str, int] = {}
-    if prior is not None and meta.get("retest") == "whole sample":  # every mutant of the sample decided anew
+    if prior is not None and whole:  # every mutant of the sample decided anew
         res = {k: v for k, v in res.items() if k in set(sample["names"])}
         unrun = sorted(k for k in sample["names"] if res.get(k, ("not checked",))[0] == "not checked")
         if unrun:
@@ -498,13 +501,15 @@ def main(argv: list[str] | None = None) -> int:
     recs = {}
     for pkg in pkgs:
         meta = {}
-        prior = None
+        prior, whole = None, False
         if a.retest:
-            meta, prior = retest_package(pkg, a.workdir, a.max_children)
+            meta, prior, whole = retest_package(pkg, a.workdir, a.max_children)
             first = prior.get("first_run") or {k: prior[k] for k in ("date", "commit", "command")}
+            # once its whole sample ran again at changed files, the record says so from then on
+            retest = "whole sample" if whole else prior.get("retest")
+            sample = {**prior["sample"], "of": meta["of"]} if whole else prior.get("sample")
             meta = {"seconds": round(prior["seconds"] + meta["seconds"], 1), "first_run": first,
-                    **({"sample": prior["sample"]} if prior.get("sample") else {}),
-                    **({"retest": meta["retest"]} if meta.get("retest") else {})}
+                    **({"sample": sample} if sample else {}), **({"retest": retest} if retest else {})}
         elif not a.report:
             meta = run_package(pkg, a.workdir, a.max_children, a.resume,
                                None if a.sample is None else (a.sample, a.seed))
@@ -519,7 +524,7 @@ def main(argv: list[str] | None = None) -> int:
                        if k in prev},
                     "summarised": {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                                    "commit": record.commit(), "command": record.command_line()}}
-        recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior)
+        recs[pkg] = summarise(pkg, a.workdir / pkg, meta, prior, whole)
         p = recs[pkg]
         print(f"{pkg}: {p['total']} mutants, {p['counts']}, mutmut score {p['score_mutmut_pct']} %, "
               f"physics score {p['score_physics_pct']} %", flush=True)
