@@ -455,7 +455,7 @@ def markdown(rec: dict) -> str:
                      f"{c.get('no tests', 0)} | {c.get('timeout', 0)} | {c.get('segfault', 0)} | {p['text_mutants']} | {p['equivalent']} | "
                      f"{score(p, 'mutmut')} | **{score(p, 'physics')}** | {p['date'][:10]}, "
                      f"{p['commit']['sha'][:10]}{' (dirty)' if p['commit']['dirty'] else ''} | `{p['command']}`"
-                     + (f" ({'the whole sample, its files changed since' if p.get('retest') else 'the survivors'} "
+                     + (f" ({'the whole sample, run again at changed files,' if p.get('retest') else 'the survivors'} "
                         f"of `{p['first_run']['command']}`, {p['first_run']['date'][:10]}, "
                         f"{p['first_run']['commit']['sha'][:10]})" if p.get("first_run") else "") + " |")
     for pkg, p in rec["packages"].items():
