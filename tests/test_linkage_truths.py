@@ -355,3 +355,25 @@ def test_rates_of_a_crank_that_swings_through_its_change_point_within_a_few_step
         th4 = fourbar_angles(*L, np.array([t - h, t + h]), 1.0, 0.0)["theta4"]
         np.testing.assert_allclose(fourbar_angles(*L, np.array([t]), 1.0, 0.0)["omega4"],
                                    (th4[1] - th4[0]) / (2 * h), rtol=1e-6)
+
+
+@pytest.mark.parametrize("lengths", [(300.0, 100.0, 250.0, 300.0), (400.0, 150.0, 300.0, 350.0)])
+def test_the_folded_toggle_of_a_coupler_shorter_than_its_crank(lengths):
+    """Folded, a coupler shorter than the crank lies back along it: B on the crank's own line at
+    b2 − b3 from O2, and on the rocker's circle — the law of cosines gives the crank angle (one of
+    ±θ, the branch's), and the rocker angle is B's direction from O4."""
+    b2, b3, b4, d = lengths
+    (fold,) = [t for t in fourbar_turn(*lengths)["toggles"] if t["kind"] == "folded"]
+    r = b2 - b3
+    th = np.radians(fold["crank_deg"])
+    assert np.cos(th) == pytest.approx((r * r + d * d - b4 * b4) / (2 * r * d), abs=1e-12)
+    B = r * np.array([np.cos(th), np.sin(th)])
+    assert fold["rocker_deg"] == pytest.approx(np.degrees(np.arctan2(B[1], B[0] - d)) % 360.0, abs=1e-9)
+
+
+def test_the_dead_points_of_a_change_point_four_bar_are_its_change_points():
+    """The kite 300/700/700/300 lies flat at crank 0 (d − b2 = b3 − b4 = 0) and the rhombus at 0 and
+    180°: the law of cosines' cos θ = ±1 exactly there, so those are its dead points, to the bit."""
+    assert fourbar_turn(300.0, 700.0, 700.0, 300.0)["dead_points_deg"] == [0.0]
+    assert sorted(fourbar_turn(500.0, 500.0, 500.0, 500.0)["dead_points_deg"]) == [0.0, 180.0]
+    assert fourbar_turn(200.0, 400.0, 700.0, 500.0)["dead_points_deg"] == [0.0]
