@@ -322,15 +322,12 @@ def _on(t: np.ndarray, corners: np.ndarray, n: int) -> np.ndarray:
     """Which rows of ``corners`` (vertex sets, K × k) are corner sets of ``t``'s rows (tet faces
     or edges, M × j × k), in any order: only the tet sets whose vertices all lie in ``corners``
     are keyed, so a surface costs a pass over the tets, not a sort of them."""
+    from rigfem.mesh.partmesh import vertex_set_keys
+
     used = np.zeros(n, bool)
     used[corners] = True
-    cand = t[used[t].all(-1)].reshape(-1, corners.shape[1])
-    a, b = np.sort(corners, axis=-1).astype(np.int64), np.sort(cand, axis=-1).astype(np.int64)
-    if n ** a.shape[1] >= 2**63:  # one integer per set would overflow: compare the rows' bytes
-        row = np.dtype((np.void, 8 * a.shape[1]))
-        return np.isin(np.ascontiguousarray(a).view(row).ravel(), np.ascontiguousarray(b).view(row).ravel())
-    weights = n ** np.arange(a.shape[1] - 1, -1, -1, dtype=np.int64)
-    return np.isin(a @ weights, b @ weights)
+    cand = t[used[t].all(-1)]
+    return np.isin(vertex_set_keys(corners, n), vertex_set_keys(cand, n).ravel())
 
 
 def _vertices(field: str, v, k: int, n: int) -> np.ndarray:

@@ -159,15 +159,10 @@ def face_owners(tets: np.ndarray, tris: np.ndarray, what: str = "surface") -> tu
     tris = np.asarray(tris)
     if tris.ndim != 2 or tris.shape[1] < 3 or len(tris) == 0:
         raise ComputeError(f"{what} triangles must be a non-empty (K, 3) or (K, 6) array, got {tris.shape}")
-    m = np.int64(max(int(tets[:, :4].max()), int(tris[:, :3].max())) + 1)
-
-    def code(corners: np.ndarray) -> np.ndarray:
-        c = np.sort(corners, axis=-1).astype(np.int64)
-        return (c[..., 0] * m + c[..., 1]) * m + c[..., 2]
-
-    faces = code(tets[:, TET_FACES]).ravel()  # row 4e + f
+    m = max(int(tets[:, :4].max()), int(tris[:, :3].max())) + 1
+    faces = vertex_set_keys(tets[:, TET_FACES], m).ravel()  # row 4e + f
     order = np.argsort(faces)
-    key = code(tris[:, :3])
+    key = vertex_set_keys(tris[:, :3], m)
     pos = np.searchsorted(faces[order], key).clip(0, len(faces) - 1)
     if not np.array_equal(faces[order][pos], key):
         raise ComputeError(f"{what} has triangles that are not faces of the mesh")
@@ -175,9 +170,15 @@ def face_owners(tets: np.ndarray, tris: np.ndarray, what: str = "surface") -> tu
     return idx // 4, idx % 4
 
 
-
-def _edge_keys(pairs: np.ndarray, n: int) -> np.ndarray:
-    return np.minimum(pairs[..., 0], pairs[..., 1]).astype(np.int64) * n + np.maximum(pairs[..., 0], pairs[..., 1])
+def vertex_set_keys(corners: np.ndarray, n: int) -> np.ndarray:
+    """One key per vertex set of a mesh of ``n`` points (the last axis of ``corners``, in any
+    order): the sorted set as an int64 in base n (an edge (a, b), a < b: a·n + b), or its bytes
+    where that would overflow (triangles of more than 2 million points)."""
+    c = np.sort(np.asarray(corners), axis=-1).astype(np.int64)
+    k = c.shape[-1]
+    if n**k >= 2**63:
+        return np.ascontiguousarray(c).view(np.dtype((np.void, 8 * k)))[..., 0]
+    return c @ (np.int64(n) ** np.arange(k - 1, -1, -1, dtype=np.int64))
 
 
 def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
@@ -188,11 +189,11 @@ def quadratic(pm: PartMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarra
     """
     points, tets = np.asarray(pm.points, float), np.asarray(pm.tets, np.int64)
     n = len(points)
-    ukeys, inv = np.unique(_edge_keys(tets[:, TET10_EDGES], n), return_inverse=True)
+    ukeys, inv = np.unique(vertex_set_keys(tets[:, TET10_EDGES], n), return_inverse=True)
     mid = 0.5 * (points[ukeys // n] + points[ukeys % n])
 
     def lookup(pairs: np.ndarray, what: str) -> np.ndarray:
-        k = _edge_keys(pairs, n)
+        k = vertex_set_keys(pairs, n)
         pos = np.searchsorted(ukeys, k).clip(0, len(ukeys) - 1)
         if not (ukeys[pos] == k).all():
             raise ComputeError(f"{what} has edges that are not tet edges of the mesh")
