@@ -352,26 +352,19 @@ def summarise(pkg: str, d: Path, meta: dict, prior: dict | None = None, whole: b
     fates = tomllib.loads(FATES.read_text()) if FATES.exists() else {}
     res = results(d)
     sample = meta.get("sample")
-    if sample and prior is None:
-        res = {k: v for k, v in res.items() if k in set(sample["names"])}
-        unrun = sorted(k for k in sample["names"] if res.get(k, ("not checked",))[0] == "not checked")
-        if unrun:
-            raise SystemExit(f"--sample {pkg}: mutmut did not run {len(unrun)} of the sample ({unrun[:3]}…)")
     counts: dict[str, int] = {}
-    if prior is not None and whole:  # every mutant of the sample decided anew
-        res = {k: v for k, v in res.items() if k in set(sample["names"])}
-        unrun = sorted(k for k in sample["names"] if res.get(k, ("not checked",))[0] == "not checked")
-        if unrun:
-            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {len(unrun)} of the sample ({unrun[:3]}…)")
-    elif prior is not None:
-        again = {m["mutant"] for m in prior["not_killed"]}
-        res = {k: v for k, v in res.items() if k in again}
-        unrun = sorted(again - {k for k, (status, _) in res.items() if status != "not checked"})
-        if unrun:
-            raise SystemExit(f"--retest {pkg}: mutmut did not re-run {len(unrun)} of them ({unrun[:3]}…)")
+    if prior is None or whole:  # every mutant run (of the sample, if drawn) decided here
+        run = set(sample["names"]) if sample else set(res)
+    else:  # the prior record's survivors decided again; its kills stand
+        run = {m["mutant"] for m in prior["not_killed"]}
         counts = dict(prior["counts"])
         for m in prior["not_killed"]:
             counts[m["status"]] -= 1
+    res = {k: v for k, v in res.items() if k in run}
+    unrun = sorted(k for k in run if res.get(k, ("not checked",))[0] == "not checked")
+    if unrun and (sample or prior is not None):
+        raise SystemExit(f"{'--sample' if prior is None else '--retest'} {pkg}: mutmut did not run {len(unrun)} "
+                         f"of the mutants it had to ({unrun[:3]}…)")
     for s, _ in res.values():
         counts[s] = counts.get(s, 0) + 1
     counts = {k: v for k, v in counts.items() if v}
