@@ -301,9 +301,7 @@ def test_the_mesher_runs_in_this_process_only_when_asked(monkeypatch):
 
     from rigfem.cache import NO_CACHE
     from rigfem.errors import ComputeError
-    from rigfem.mesh import mesher
-
-    from rigfem.mesh import worker
+    from rigfem.mesh import mesher, worker
 
     monkeypatch.setattr(mesher, "_mesh", lambda part, settings, limit, key: os.getpid())
     monkeypatch.setattr(worker, "call", lambda fn, *args, **kw: "child")  # what the mesher process runs
