@@ -1,7 +1,8 @@
 """The one cache: whatever rigfem stores to skip a computation, verified when read.
 
 An entry is a folder ``<root>/rigfem-entries/<kind>/<key>/`` holding the files its writer made and
-``manifest.json``: rigfem's signature, the kind, the full description of the inputs, rigfem's
+``manifest.json``: rigfem's signature, the kind, the full description of the inputs (an array in
+them by its digest, :func:`array_digest`), rigfem's
 version, a hash of the whole installed package (:func:`package_hash`: any edit of any file of it
 invalidates every entry, no hand-kept list of source files) and the SHA-256 of every file.  A read
 verifies all of it; an entry that is corrupt, truncated, made from other inputs or by another
@@ -91,8 +92,17 @@ def array_digest(*arrays) -> str:
     return h.hexdigest()
 
 
+def _encoded(value: Any) -> Any:
+    """A key's stand-in for what JSON cannot hold: an array by its digest (:func:`array_digest`),
+    anything else by its text."""
+    if hasattr(value, "dtype") and hasattr(value, "shape"):
+        return {"array": array_digest(value)}
+    return str(value)
+
+
 def _canonical(inputs: Mapping) -> dict:
-    return json.loads(json.dumps(inputs, sort_keys=True, default=str))
+    """``inputs`` as the key holds them: plain JSON, arrays by their digest."""
+    return json.loads(json.dumps(inputs, sort_keys=True, default=_encoded))
 
 
 class Corrupt(ValueError):

@@ -2,7 +2,8 @@
 
 :func:`read_job` is the scene stage, the edge where a request is validated: the scene file and
 its ``[check]`` table against :mod:`rigfem.schema`, the linkage built with the forces it names,
-the parts resolved against their definitions, the rig rules, the material and the reactions CSV.
+the parts resolved against their definitions, the rig rules, the material and the reactions CSV
+(read here, once).
 Everything after it trusts the Job.
 """
 
@@ -16,13 +17,14 @@ from pathlib import Path
 
 from rigfem.cache import Cache
 from rigfem.dynamics.forces import loaded_linkage
-from rigfem.dynamics.history import DynamicsOptions, Reactions
+from rigfem.dynamics.history import DynamicsOptions, ReactionHistory, Reactions
 from rigfem.errors import InputError, plain
 from rigfem.fe.partcase import CaseResult
+from rigfem.io.reactions_csv import read_csv
 from rigfem.linkage.mechanisms import crank_angles
 from rigfem.linkage.model import Linkage
-from rigfem.material import table_material
-from rigfem.rig.rules import broken_rules
+from rigfem.material import material_sources, table_material
+from rigfem.rig.rules import broken_rules, rules_for
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
 from rigfem.settings import REFERENCE_SCENE, CheckSettings, check_mass_model, part_settings
@@ -50,8 +52,9 @@ class Request:
 @dataclasses.dataclass(frozen=True)
 class Job:
     """A scene read for checking: its linkage with the forces it names, the check's settings, how
-    the reactions are got, the animation frames, the rig rules it breaks (allowed explicitly), the
-    hashes of its inputs and the report's author."""
+    the reactions are got, the animation frames, the rig rules it breaks (allowed explicitly) and
+    whether they apply (not to a textbook linkage), the hashes of its inputs, the report's author and
+    the sources of its material's values."""
 
     scene: Scene
     linkage: Linkage
@@ -63,6 +66,11 @@ class Job:
     scene_sha256: str = ""  #: SHA-256 of the scene file's bytes
     input_sha256: str = ""  #: SHA-256 of everything the result depends on (scene, [check] as run, reactions CSV)
     author: str = ""
+    rig_rules: bool = True  #: whether the rig rules apply (a rig configuration, not a textbook linkage)
+    #: where each value of ``settings.material`` comes from (:func:`rigfem.material.material_sources`)
+    material_sources: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    #: the reactions CSV (``dynamics.reactions_csv``) as read, checked against the linkage's joints; None without one
+    external: ReactionHistory | None = None
 
     @property
     def crank_deg(self):
@@ -100,13 +108,6 @@ def read_job(request: Request, cache: Cache) -> Job:
         raise InputError(f"scene {plain(sc.name, 80)!r}: nothing loads its parts (no masses, no external "
                          f"force), so a stress check would pass at 0 %; for its motion alone use rigfem kinematics")
     settings = part_settings(table, lk.meta["type"], lk.meta.get("rails_mm"))
-    # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
-    broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
-    if broken and not request.allow_rule_violations:
-        raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
-                         f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it does not meet "
-                         f"the rig rules; pass --allow-rule-violations to check it anyway")
-    settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
     csv_path = None
     if dyn["reactions_csv"] is not None:
         csv_path = path.parent / str(dyn["reactions_csv"])
@@ -117,6 +118,18 @@ def read_job(request: Request, cache: Cache) -> Job:
                               dyn["reactions_csv_missing"])
     if csv_path is None:  # (an imported CSV's reactions use no mass model)
         check_mass_model(options.mass_model, lk.meta)
+        external = None
+    else:
+        external = read_csv(csv_path, options.csv_missing, tuple(j.name for j in lk.joints))
+    # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
+    broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
+    rig_rules = bool(rules_for(lk.meta))
+    if broken and not request.allow_rule_violations:
+        raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
+                         f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it does not meet "
+                         f"the rig rules; pass --allow-rule-violations to check it anyway")
+    settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
+    sources = material_sources(settings.material)
     scene_sha = _sha256(path.read_bytes())
     inputs = {"scene": scene_sha, "allow_rule_violations": bool(broken),  # the CSV by its content, not its path
               "check": {**table, **dyn, "reactions_csv": _sha256(csv_path.read_bytes()) if csv_path else None}}
@@ -124,4 +137,4 @@ def read_job(request: Request, cache: Cache) -> Job:
     return Job(sc, lk, settings, options, int(dyn["frames"]), tuple(broken),
                sc.raw.get("description", sc.raw["linkage"].get("title", "")), scene_sha,
                _sha256(json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str).encode()),
-               plain(author, 200))
+               plain(author, 200), rig_rules, sources, external)

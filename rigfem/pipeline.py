@@ -31,7 +31,6 @@ from rigfem.context import Context, default_context
 from rigfem.dynamics import cycle, imported
 from rigfem.dynamics.history import Reactions
 from rigfem.fe.executor import Plan, solve_cases
-from rigfem.io.reactions_csv import read_csv
 from rigfem.job import Checked, Job, Request, read_job
 from rigfem.linkage.state import linkage_state
 from rigfem.loads.cases import part_cases
@@ -44,14 +43,12 @@ __all__ = ["Request", "Output", "Context", "check", "load_cases", "solve_job", "
 
 
 def load_cases(job: Job, ctx: Context) -> tuple[Reactions, list]:
-    """The stages from a read job to its part cases: motion, reactions (the dynamics, or the job's
-    reactions CSV) and part cases (none at a toggle, where the reactions are unbounded)."""
+    """The stages from a read job to its part cases: motion, reactions (the dynamics, or those of the
+    job's reactions CSV, read with the job) and part cases (none at a toggle, where the reactions are unbounded)."""
     motion, options = linkage_state(job.linkage, job.crank_deg, job.scene.speed_hz), job.dynamics
-    if options.reactions_csv:
+    if job.external is not None:
         ctx.observer.stage("reactions from the CSV")
-        external = read_csv(options.reactions_csv, options.csv_missing,
-                            tuple(j.name for j in job.linkage.joints))
-        reactions = imported.react(job.linkage, motion, external, options)
+        reactions = imported.react(job.linkage, motion, job.external, options)
     else:
         ctx.observer.stage("dynamics")
         reactions = cycle.react(job.linkage, motion, options)
@@ -63,7 +60,8 @@ def solve_job(job: Job, ctx: Context) -> Checked:
     its verdict is decided), verdicts."""
     reactions, cases = load_cases(job, ctx)
     results = solve_cases(cases, job.settings, Plan(Target(job.settings), job.frames), ctx) if cases else []
-    verdicts = judge([r.outcome for r in results], job.settings, job.rule_violations, reactions.singular)
+    verdicts = judge([r.outcome for r in results], job.settings, job.rule_violations if job.rig_rules else None,
+                     reactions.singular)
     return Checked(job, reactions, tuple(results), verdicts)
 
 

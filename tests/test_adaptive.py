@@ -249,7 +249,7 @@ def test_the_report_states_what_was_asked_and_what_was_done(far):
     (p,) = far["parts"]
     assert p["mesh"]["asked"] == {"fidelity": "standard", "adaptive": True, "target_pct_of_allowable": 3.0,
                                   "target_pct_of_peak": None, "cap": "standard"}
-    assert far["settings"]["target_pct_of_peak"] is None and far["schema"] == 6
+    assert far["settings"]["target_pct_of_peak"] is None and far["schema"] == 7
     from rigfem.report.document import render_markdown
 
     fine = {**far, "settings": {**far["settings"], "fidelity": "fine", "target_pct": 1.0, "target_pct_of_peak": 5.0},

@@ -105,9 +105,19 @@ def test_the_check_report_says_the_three_things_apart():
     assert said in html and 'Stress criterion <span class="badge pass">PASS</span>' in html
     assert "DOES NOT MEET THE RIG RULES" in html and "MOUNTABLE" not in html
     assert _summary(r).splitlines()[-1].startswith(f"overall: FAIL — {said} (allowable σu/2 = 375 MPa)")
-    r_ok = dict(r, rule_violations=[], verdict="pass")
-    assert "assembles; meets the rig rules; passes the stress criterion" in render_markdown(r_ok)
-    assert "the rig rules do not apply" in render_markdown(dict(r_ok, rules=[]))  # not a rig configuration
+
+    # the verdict stage says it, the report only prints it
+    from rigfem.cache import NO_CACHE
+    from rigfem.job import Request, read_job
+    from rigfem.verdict.part import Outcome, judge
+
+    settings = read_job(Request("final-cm"), NO_CACHE).settings
+    ok = [Outcome("plate_A", "plate", "original", 100.0, 1.0, 0.0)]
+    assert judge(ok, settings).standing == "assembles; meets the rig rules; passes the stress criterion"
+    assert judge(ok, settings, ("a rule",)).standing == said.removeprefix("the configuration ")
+    assert judge(ok, settings, None).standing.startswith("assembles; the rig rules do not apply")  # a textbook one
+    failing = [Outcome("plate_A", "plate", "original", 500.0, 1.0, 0.0)]
+    assert judge(failing, settings).standing.endswith("fails the stress criterion")
 
 
 def test_scene_descriptions_use_the_vocabulary(capsys):

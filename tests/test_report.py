@@ -62,7 +62,7 @@ def two_plates(tmp_path_factory):
 
 def test_report_json_has_material_mesh_and_balance_tables(two_plates):
     report, out = two_plates
-    assert report["schema"] == 6 and report["configuration"]["branch"] == "open"
+    assert report["schema"] == 7 and report["configuration"]["branch"] == "open"
     mat = {m["property"]: m for m in report["material"]}
     assert set(mat) == {"E", "nu", "sigma_u", "sigma_y", "density"}
     assert mat["E"]["value"] == 210000.0 and mat["density"]["value"] == pytest.approx(7850.0)

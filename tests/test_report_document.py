@@ -104,7 +104,7 @@ def test_summary_names_the_governing_part_first_with_units_in_every_header(subse
 def test_title_block_carries_the_provenance(subset):
     _, out, r = subset
     pv = r["provenance"]
-    assert r["schema"] == REPORT_SCHEMA == 6
+    assert r["schema"] == REPORT_SCHEMA == 7
     assert pv["rigfem_version"] == r["rigfem_version"] and pv["author"] == "A. Student <lab 3>"
     import rigfem
 

@@ -72,7 +72,7 @@ def _overrides(a: argparse.Namespace) -> dict:
 def _summary(r: dict) -> str:
     """The terminal's summary: the governing part case first, then every part case by utilisation
     (units in every header, numbers rounded to what they mean), then the verdict and its scope."""
-    from rigfem.report.document import standing_text, verdict_line
+    from rigfem.report.document import verdict_line
     from rigfem.report.figures import allowable_label, asked_text, band, by_utilisation, sf_text, stopped_text
 
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
@@ -109,7 +109,7 @@ def _summary(r: dict) -> str:
         lines.append(f"mesh asked: {'; '.join(asked)}")
     if r.get("not_checked", {}).get("parts"):
         lines.append(f"not checked: {', '.join(r['not_checked']['parts'])}")
-    lines.append(f"overall: {verdict_line(r)} — the configuration {standing_text(r)} ({allowable})")
+    lines.append(f"overall: {verdict_line(r)} — the configuration {r['standing']} ({allowable})")
     return "\n".join(lines)
 
 

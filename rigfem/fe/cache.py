@@ -84,7 +84,7 @@ def peak_sweep(sol: Solution, C: np.ndarray, cache: Cache) -> tuple[np.ndarray, 
         ok = vals.shape == (len(C),) and np.allclose(at, vals, rtol=1e-9, atol=0.0)
         return "" if ok else "a stored peak is not the stress at its node"
 
-    got, _ = cache.cached("sweeps", {"solution": sol.key, "C": array_digest(C)}, lambda: sol.peak_sweep(C),
+    got, _ = cache.cached("sweeps", {"solution": sol.key, "C": C}, lambda: sol.peak_sweep(C),
                           lambda a, tmp: save_arrays(tmp, {"peak": a[0], "node": a[1]}),
                           lambda entry: (entry.array("peak"), entry.array("node")), at_nodes)
     return got

@@ -28,7 +28,7 @@ from rigfem.fe.solution import Peak, Solution
 from rigfem.tensors import von_mises
 from rigfem.fe.supports import Fixed, FreeBody, ShaftInHole, Symmetry
 from rigfem.loads.cases import PartCase, UnitLoad
-from rigfem.cache import Cache, array_digest, resolve, save_arrays
+from rigfem.cache import Cache, resolve, save_arrays
 from rigfem.mesh.mesher import MeshSettings, mesh_part
 from rigfem.verdict.part import Outcome
 from rigfem.mesh.partmesh import PartMesh
@@ -117,7 +117,7 @@ def _basis_resultants(model: Model, c: np.ndarray, cache: Cache) -> np.ndarray:
     fm, rho = model.mesh, float(model.material.density)
     mass = rho * model.volume * np.eye(3)
     got, _ = cache.cached(
-        "body_resultants", {"mesh": array_digest(fm.nodes, fm.elements), "density": rho},
+        "body_resultants", {"mesh": [fm.nodes, fm.elements], "density": rho},
         lambda: _resultants(fm.nodes, body_basis(fm, rho)[0], c),
         lambda RB, tmp: save_arrays(tmp, {"RB": RB}), lambda entry: entry.array("RB"),
         lambda RB: "" if RB.shape == (6, 12) and np.allclose(RB[:3, :3], mass, rtol=1e-6, atol=0.0)
@@ -177,6 +177,8 @@ class CaseResult:
     frames: dict = dataclasses.field(default_factory=dict)
     #: the same rows' pin loads (:func:`finish`): case row -> (hole, its centre mm, force N) per loaded hole
     frame_loads: dict = dataclasses.field(default_factory=dict)
+    #: the critical row's fields on every node once final (:func:`finish`): displacement, stress, von Mises (float32)
+    critical_fields: dict = dataclasses.field(default_factory=dict)
 
     @property
     def loaded(self) -> bool:
@@ -303,22 +305,28 @@ def frame_rows(result: CaseResult, frames: int) -> list[int]:
 
 
 def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
-    """The cases of a part that is final, holding only what a report reads: each case's animation
-    frames (``frames`` rows of a cycle case: von Mises, stress and displacement on the mesh's
-    vertices, float32, and the pin load on each loaded hole) and its solution reduced to the critical rows' combinations
+    """The cases of a part that is final, holding only what a report reads: each case's fields at
+    its critical row (every node: displacement, stress, von Mises; float32), its animation frames
+    (``frames`` rows of a cycle case: the same fields on the mesh's vertices, and the pin load on
+    each loaded hole) and its solution reduced to the critical rows' combinations
     (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a solution share the reduced one):
     the unit solutions of a finished part are not held while the next parts solve."""
     out, kept = [], {}
     for r in results:
         x = r.solution.model.mesh.nodes
         n = r.solution.model.mesh.n_vertices
-        fields, loads = {}, {}
-        for i in frame_rows(r, frames):
-            s = r.solution.stress(r.coef[i])[:n]
-            fields[i] = {"displacement": r.solution.displacement(r.coef[i])[:n].astype(np.float32),
-                         "stress": s.astype(np.float32), "von_mises": von_mises(s).astype(np.float32)}
-            loads[i] = [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
-        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads))
+        loads = {i: [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
+                 for i in frame_rows(r, frames)}
+        fields = {i: {k: v[:n] for k, v in _fields(r.solution, r.coef[i]).items()} for i in loads}
+        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads,
+                                       critical_fields=_fields(r.solution, r.coef[r.row])))
         kept.setdefault(id(r.solution), (r.solution, []))[1].append(r.coef[r.row])
     small = {k: sol.kept(np.vstack(C)) for k, (sol, C) in kept.items()}
     return [dataclasses.replace(r, solution=small[id(r.solution)]) for r in out]
+
+
+def _fields(sol: Solution, c: np.ndarray) -> dict[str, np.ndarray]:
+    """The fields a report writes of the load combination ``c`` of ``sol``, on every node (float32)."""
+    s = sol.stress(c)
+    return {"displacement": sol.displacement(c).astype(np.float32), "stress": s.astype(np.float32),
+            "von_mises": von_mises(s).astype(np.float32)}

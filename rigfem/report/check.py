@@ -31,8 +31,8 @@ from rigfem.report.picture_cache import (  # drawn once, then copied from the ca
     reactions_plot,
     started_part_pictures,
     utilisation_plot,
+    write_case_vtu,
     write_frames,
-    write_vtu,
 )
 from rigfem.report.vtu import write_frame
 
@@ -92,7 +92,7 @@ def document(checked: Checked) -> dict:
         "schema": REPORT_SCHEMA, "scene": job.scene.name, "description": job.description,
         "rigfem_version": __version__, "provenance": provenance(job.scene_sha256, job.input_sha256, job.author),
         "rule_violations": list(job.rule_violations), "assumed": h.meta.get("assumed", []),
-        "verdict": v.overall, "left_out": v.left_out, "checked": v.checked,
+        "verdict": v.overall, "stress_verdict": v.stress, "standing": v.standing, "left_out": v.left_out, "checked": v.checked,
         "not_checked": {"parts": list(v.not_checked[0]), "modes": list(v.not_checked[1])}, "limit_mpa": v.limit_mpa,
         "conclusion": conclusion(parts, v.limit_mpa, s.material.sigma_u), "part_minima": part_minima(parts),
         "units": [{"quantity": q, "unit": u} for q, u in UNITS], "assumptions": list(ASSUMPTIONS),
@@ -107,7 +107,7 @@ def document(checked: Checked) -> dict:
                      "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},
-        "material": material_table(s.material),
+        "material": material_table(s.material, job.material_sources),
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
 
@@ -177,8 +177,8 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
             plot_peaks(list(results), limit, d / "peak_von_mises.png", allowable, cache)
             first.append("peak_von_mises.png")
         for r, entry in zip(results, parts):
-            stem, c = f"{r.case.name}_{r.mode}", r.coef[r.row]
-            write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit, cache=cache)
+            stem = f"{r.case.name}_{r.mode}"
+            write_case_vtu(d / f"{stem}.vtu", r, limit, cache)
             fields.append(f"{stem}.vtu")
             if output.export_inp:  # written last (write_check), once the report is
                 fields.append(f"{stem}.inp")

@@ -14,13 +14,12 @@ from pathlib import Path
 from rigfem.errors import plain
 from rigfem.report.figures import (allowable_label, asked_text, band, by_utilisation, part_label, safety_factor,
                                    sf_text, stopped_text)
-from rigfem.rig.rules import standing
-from rigfem.verdict.criterion import overall
 
 #: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning, goes or
 #: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa; 6: each part
-#: case's mesh.asked, the settings' target_pct_of_peak, the cycle-mode picture of a part drawn in original mode)
-REPORT_SCHEMA = 6
+#: case's mesh.asked, the settings' target_pct_of_peak, the cycle-mode picture of a part drawn in original mode;
+#: 7: stress_verdict and standing, as the verdict stage decided them)
+REPORT_SCHEMA = 7
 
 #: the units of every number in a report
 UNITS = [("length, position, displacement", "mm"), ("stress, strength, modulus", "MPa"), ("force", "N"),
@@ -82,11 +81,9 @@ _PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displaceme
             "safety_factor": "factor of safety against the allowable"}
 
 
-def material_table(m) -> list[dict]:
-    """The material table of a report (rigfem.material.Material): each value with its unit and source."""
-    from rigfem.material import material_sources
-
-    src = material_sources(m)
+def material_table(m, src: dict[str, str]) -> list[dict]:
+    """The material table of a report (a rigfem.material.Material and the source of each value,
+    :attr:`rigfem.job.Job.material_sources`): each value with its unit and source."""
     return [{"property": "E", "value": m.E, "unit": "MPa", "source": src["E"]},
             {"property": "nu", "value": m.nu, "unit": "-", "source": src["nu"]},
             {"property": "sigma_u", "value": m.sigma_u, "unit": "MPa", "source": src["sigma_u"]},
@@ -161,19 +158,6 @@ def verdict_line(r: dict) -> str:
     return r["verdict"].upper() + (f" ({checked})" if checked else "")
 
 
-def stress_verdict(r: dict) -> str:
-    """The verdict on stress alone, a broken rig rule aside: the parts' verdicts (a toggle fails it)."""
-    if r.get("singular"):
-        return "fail"
-    return overall(r["parts"]) if r["parts"] else "undecided"
-
-
-def standing_text(r: dict) -> str:
-    """What the checked configuration is, in the one vocabulary (:func:`rigfem.rig.rules.standing`):
-    it assembles (a check computes only one that does), meets the rig rules or not, passes the stress criterion or not."""
-    return standing(True, not r.get("rule_violations") if r.get("rules") else None, stress_verdict(r))
-
-
 def title_block(r: dict) -> list[str]:
     """Markdown of the title block: what was checked, when, by whom, with what (schema 4 and later)."""
     pv = r.get("provenance")
@@ -196,8 +180,8 @@ def conclusion_lines(r: dict) -> list[str]:
     """Markdown of the conclusion: the verdict, the governing part case, its utilisation with the
     band, the minimum factor of safety, the reserve, and what a check of a subset left out."""
     allowable = allowable_label(r["settings"]["limit_factor"], r["limit_mpa"])
-    out = ["", "## Conclusion", "", f"**Overall verdict: {verdict_line(r)}** — the configuration {standing_text(r)}.",
-           "", f"Stress criterion: **{stress_verdict(r).upper()}** — peak von Mises < the {allowable} "
+    out = ["", "## Conclusion", "", f"**Overall verdict: {verdict_line(r)}** — the configuration {r['standing']}.",
+           "", f"Stress criterion: **{r['stress_verdict'].upper()}** — peak von Mises < the {allowable} "
            f"({md_text(r['settings']['material'])}, σu = {r['settings']['sigma_u_mpa']:g} MPa)."]
     c = r.get("conclusion")
     if c:

@@ -17,7 +17,7 @@ from pathlib import Path
 from rigfem.cache import Cache, resolve
 from rigfem.files import file_sha256
 from rigfem.report.document import (MODE_TEXT, assumption_lines, configuration_lines, loads_lines, model_lines,
-                                    standing_text, stress_verdict, study_tables, title_block)
+                                    study_tables, title_block)
 from rigfem.report.figures import allowable_label, asked_text, band, by_utilisation, safety_factor, stopped_text
 from rigfem.report.pages import json_script, markdown_html, render_page
 from rigfem.report.viewer import viewer_data
@@ -78,7 +78,7 @@ def render_html(report: dict, folder: str | Path, cache: Cache | None = None) ->
         parts_by_name={n: [p for p in r["parts"] if p["name"] == n] for n in names},
         viewer=[v["name"] for v in viewer], viewer_json=json_script(viewer),
         allowable=allowable_label(r["settings"]["limit_factor"], r["limit_mpa"]),
-        standing=standing_text(r), stress=stress_verdict(r),
+        standing=r["standing"], stress=r["stress_verdict"],
         rows=by_utilisation(r["parts"]), band=band, stopped=stopped_text, asked=asked_text,
         safety=lambda p: p.get("safety_factor", safety_factor(p.get("peak_mpa"), r["limit_mpa"])),
         md={k: markdown_html("\n".join(f(r))) for k, f in

@@ -7,7 +7,7 @@ versions; the package's code is in every key) into the key of a verified cache e
 (:mod:`rigfem.cache`, kind ``pictures``), and a hit copies the stored files: byte for byte the
 pictures a cold run drew, without pyvista.  A fallback picture (matplotlib, where no OpenGL
 runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU field files of a
-cached solution (:func:`write_vtu`) and a cycle case's animation frames (:func:`write_frames`)
+cached solution (:func:`write_case_vtu`) and a cycle case's animation frames (:func:`write_frames`)
 are stored the same way, keyed by the solution's entry and the load combinations.
 
 The drawing code (matplotlib) is imported only where a picture is drawn, so a warm check, which
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigfem.cache import Cache, Entry, array_digest, resolve
+from rigfem.cache import Cache, Entry, resolve
 from rigfem.memory import trim_heap
 from rigfem.report.figures import PICTURES
 
@@ -88,8 +88,8 @@ def _part_inputs(r, c: np.ndarray, entry: dict, limit: float, label: str, allowa
                  kinds: tuple[str, ...] = PICTURES, stem: str | None = None) -> dict:
     sol, fm = r.solution, r.solution.model.mesh
     groups = sorted(fm.surfaces)
-    return {"fields": array_digest(sol.von_mises(c), sol.displacement(c), sol.loads(c)),
-            "mesh": array_digest(fm.nodes, fm.elements, *(fm.surfaces[g] for g in groups)), "groups": groups,
+    return {"fields": [sol.von_mises(c), sol.displacement(c), sol.loads(c)],
+            "mesh": [fm.nodes, fm.elements, *(fm.surfaces[g] for g in groups)], "groups": groups,
             "n_vertices": fm.n_vertices, "case": r.case.name, "mode": r.mode,
             "crank_deg": float(r.case.rows[r.row]),
             "loads": [(ld.kind, ld.group) for ld in r.case.loads], "supports": r.case.supports,
@@ -192,7 +192,7 @@ def utilisation_plot(r, limit: float, path: str | Path, label: str, allowable: s
                      cache: Cache | None = None) -> Path:
     """:func:`rigfem.report.pictures.utilisation_plot` through ``cache``."""
     path = Path(path)
-    inputs = {"curve": array_digest(r.case.rows, r.vm_rows), "limit": limit, "label": label, "allowable": allowable,
+    inputs = {"curve": [r.case.rows, r.vm_rows], "limit": limit, "label": label, "allowable": allowable,
               "name": path.name}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
@@ -211,7 +211,7 @@ def reactions_plot(h, path: str | Path, cache: Cache | None = None) -> None:
     joints = sorted(h.joints)
     mask = h.singular_mask if h.singular_mask is not None else np.zeros(0, bool)
     meta = {k: h.meta.get(k) for k in ("driver_unit", "singular", "lengths_mm", "type", "model")}
-    inputs = {"curves": array_digest(h.crank_deg, mask, h.torque_Nm, *(h.joints[j].force_N for j in joints)),
+    inputs = {"curves": [h.crank_deg, mask, h.torque_Nm, *(h.joints[j].force_N for j in joints)],
               "joints": list(h.joints), "meta": meta, "name": path.name}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
@@ -226,7 +226,7 @@ def reactions_plot(h, path: str | Path, cache: Cache | None = None) -> None:
 def plot_peaks(results: list, limit: float, path: Path, allowable: str, cache: Cache | None = None) -> None:
     """The peaks-over-the-cycle picture of :mod:`rigfem.report.pictures` through the cache."""
     cycle = [r for r in results if r.mode == "cycle"]
-    inputs = {"curves": array_digest(*(a for r in cycle for a in (r.case.rows, r.vm_rows))),
+    inputs = {"curves": [a for r in cycle for a in (r.case.rows, r.vm_rows)],
               "labels": [(r.case.name, r.case.part) for r in cycle], "limit": limit, "allowable": allowable,
               "name": Path(path).name}
 
@@ -239,19 +239,19 @@ def plot_peaks(results: list, limit: float, path: Path, allowable: str, cache: C
     cached("peaks", inputs, Path(path).parent, draw, resolve(cache))
 
 
-def write_vtu(path: str | Path, sol, c, allowable: float, cache: Cache | None = None) -> Path:
-    """:func:`rigfem.report.vtu.write_vtu` through the cache when ``sol`` is a cached solution
-    (its entry's key names its mesh and loads); written directly otherwise."""
-    from rigfem.report.vtu import write_vtu as write
+def write_case_vtu(path: str | Path, r, allowable: float, cache: Cache | None = None) -> Path:
+    """:func:`rigfem.report.vtu.write_fields` of the case result ``r`` (its critical row's fields)
+    through the cache when its solution is a cached one (its entry's key names its mesh and loads)."""
+    from rigfem.report.vtu import write_fields
 
-    path = Path(path)
+    path, sol = Path(path), r.solution
     if not sol.key:
-        return write(path, sol, c, allowable)
-    inputs = {"solution": sol.key, "c": array_digest(np.asarray(c, dtype=float)), "allowable": allowable,
+        return write_fields(path, sol.model.mesh, r.critical_fields, allowable)
+    inputs = {"solution": sol.key, "c": np.asarray(r.coef[r.row], dtype=float), "allowable": allowable,
               "name": path.name}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
-        write(d / path.name, sol, c, allowable)
+        write_fields(d / path.name, sol.model.mesh, r.critical_fields, allowable)
         return {}, [path.name]
 
     cached("vtu", inputs, path.parent, draw, resolve(cache))
@@ -265,8 +265,7 @@ def write_frames(folder: Path, names: list[str], sol, coef: np.ndarray, allowabl
     if not sol.key:
         write(folder)
         return
-    inputs = {"solution": sol.key, "c": array_digest(np.asarray(coef, dtype=float)), "allowable": allowable,
-              "names": names}
+    inputs = {"solution": sol.key, "c": np.asarray(coef, dtype=float), "allowable": allowable, "names": names}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
         write(d)

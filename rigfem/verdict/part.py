@@ -14,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rigfem.errors import ComputeError
+from rigfem.rig.rules import standing
 from rigfem.settings import MODES, PARTS
 from rigfem.verdict.criterion import Verdict, allowable_stress, half_ultimate, overall
 from rigfem.verdict.fatigue import goodman
@@ -57,7 +58,8 @@ class PartVerdict:
 @dataclasses.dataclass(frozen=True)
 class Verdicts:
     """Every part case's verdict, the stress verdict over them, the configuration's verdict (a broken
-    rig rule fails it) and the parts and modes left out of a check of a subset ("" when none)."""
+    rig rule fails it), its standing in the one vocabulary (:func:`rigfem.rig.rules.standing`) and
+    the parts and modes left out of a check of a subset ("" when none)."""
 
     parts: tuple[PartVerdict, ...]
     stress: str
@@ -68,6 +70,8 @@ class Verdicts:
     #: what a check of a subset checked, short ("1 of 6 parts, original mode only"; "" when everything)
     checked: str = ""
     not_checked: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())  #: (parts, modes) not checked
+    #: "assembles; meets the rig rules (or they do not apply); passes the stress criterion (or not)"
+    standing: str = ""
 
     @property
     def governing(self) -> PartVerdict | None:
@@ -114,12 +118,13 @@ def _scope(settings) -> dict:
     return {"left_out": ", ".join(long), "checked": ", ".join(short), "not_checked": (parts, modes)}
 
 
-def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] = (),
+def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] | None = (),
           singular: list | None = None) -> Verdicts:
     """The verdicts of ``outcomes`` under ``settings`` (a :class:`rigfem.settings.CheckSettings`:
     material, limit factor, fatigue).  The configuration fails when it breaks a rig rule
-    (``rule_violations``), whatever its stresses, and when its linkage passes a toggle
-    (``singular``: the crank-angle ranges where its reactions grow without bound)."""
+    (``rule_violations``; None: the rig rules do not apply, a textbook linkage), whatever its
+    stresses, and when its linkage passes a toggle (``singular``: the crank-angle ranges where its
+    reactions grow without bound).  A configuration a check computes assembles."""
     parts = []
     for o in outcomes:
         if o.loaded and not o.peak_mpa > 0:  # an invariant no cache entry can hide: load without stress is a bug
@@ -132,6 +137,7 @@ def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] 
         parts.append(PartVerdict(o, v, fatigue))
     stress = ("fail" if singular else overall([{"verdict": p.verdict.verdict} for p in parts]) if parts
               else "undecided")
-    return Verdicts(tuple(parts), stress, "fail" if rule_violations else stress,
-                    allowable_stress(settings.material.sigma_u, settings.limit_factor), tuple(rule_violations),
-                    **_scope(settings))
+    broken = tuple(rule_violations or ())
+    return Verdicts(tuple(parts), stress, "fail" if broken else stress,
+                    allowable_stress(settings.material.sigma_u, settings.limit_factor), broken, **_scope(settings),
+                    standing=standing(True, None if rule_violations is None else not broken, stress))
