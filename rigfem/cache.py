@@ -218,6 +218,7 @@ class Cache:
         """``load(entry)`` of the verified entry of ``inputs``, or None: missing, vanished while it
         was read, or bad (then it is removed and logged; the caller computes it again).  ``check``
         returns why a loaded value cannot be right ("" if it can)."""
+        inputs = _canonical(inputs)  # arrays hashed once, not for the key and again for the manifest
         folder = self.entry_folder(kind, inputs)
         if folder is None or not (folder / MANIFEST).is_file():
             return None
@@ -250,6 +251,7 @@ class Cache:
         """Store an entry: ``save(tmp)`` writes its files in a temporary folder, the manifest is
         added and the folder renamed into place.  False if it could not be stored (no cache, a full
         disk, a concurrent writer got there first): a cache is an optimisation only."""
+        inputs = _canonical(inputs)
         folder = self.entry_folder(kind, inputs)
         if folder is None:
             return False
@@ -280,6 +282,7 @@ class Cache:
         """``compute()``, or the stored value of ``inputs``; and whether it was stored.  A new
         value is saved with ``save(value, folder)``; a stored one read with ``load(entry)`` and
         used only if ``check(value)`` says nothing against it."""
+        inputs = _canonical(inputs)
         got = self.get(kind, inputs, load, check)
         if got is not None:
             return got, True
