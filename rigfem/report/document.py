@@ -278,7 +278,12 @@ def assumption_lines(r: dict) -> list[str]:
 
 
 def _xyz(v) -> str:
-    return " | ".join(f"{x + 0.0:.1f}" for x in v)
+    """Table cells of a vector, 0.1 apart; a value that rounds to zero is 0.0, never -0.0.
+
+    >>> _xyz([-1e-9, 0.04, -0.06])
+    '0.0 | 0.0 | -0.1'
+    """
+    return " | ".join(f"{round(x, 1) + 0.0:.1f}" for x in v)
 
 
 def loads_lines(r: dict) -> list[str]:
