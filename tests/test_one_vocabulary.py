@@ -155,3 +155,18 @@ def test_the_sweep_and_the_explorer_use_the_vocabulary(tmp_path):
     words = json.loads(re.search(r'<script type="application/json" id="words">(.*?)</script>', page).group(1))
     assert words == {"assembles": list(ASSEMBLES), "rules": list(MEETS_RULES), "stress": STRESS}
     assert "mount" not in page.lower()
+
+
+def test_a_textbook_linkage_is_checked_without_the_rig_rules(tmp_path):
+    """The compressor (a textbook linkage with a gas force) is no rig configuration: its check says
+    the rig rules do not apply, not that it meets them."""
+    from rigfem.cache import NO_CACHE
+    from rigfem.job import Request, read_job
+    from rigfem.pipeline import Output, run_check
+
+    assert read_job(Request("final-cm"), NO_CACHE).rig_rules
+    request = Request("mech5-compressor", {"fidelity": "draft", "parts": ["plate_A"], "modes": ["original"],
+                                           "frames": 0})
+    assert not read_job(request, NO_CACHE).rig_rules
+    r = run_check(request, Output(tmp_path / "mech5", pictures=False))
+    assert r["rules"] == [] and r["standing"].startswith("assembles; the rig rules do not apply; ")

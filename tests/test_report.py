@@ -27,7 +27,8 @@ def _report():
     part = {"name": "crank_rail", "part": "rail_size25", "mode": "original", "peak_mpa": 123.4,
             "crank_deg": 16.6, "surface": "hole_02", "location_mm": [80.0, 3.5, 12.0], "error_pct": 2.0,
             "utilisation_pct": 32.9, "verdict": "pass", "fatigue": None, "notes": ["held by its pivot"]}
-    return {"scene": "demo", "description": "", "verdict": "pass", "limit_mpa": 375.0,
+    return {"scene": "demo", "description": "", "verdict": "pass", "stress_verdict": "pass",
+            "standing": "assembles; meets the rig rules; passes the stress criterion", "limit_mpa": 375.0,
             "configuration": {"type": "four-bar", "lengths_mm": {"b2": 480.0}, "speed_hz": 1.0,
                               "model": "rigid-body", "samples": 360},
             "transmission_angle_deg": {"min": 40.0, "max": 140.0}, "singular": None,
