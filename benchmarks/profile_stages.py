@@ -38,7 +38,7 @@ STAGES = {
     "pictures": [("report/pictures.py", "render_field"), ("report/pictures.py", "utilisation_plot"),
                  ("report/pictures.py", "reactions_plot"), ("report/pictures.py", "_plot_peaks")],
     "HTML report": [("report/html.py", "write_html")],
-    "VTU/PVD writing": [("report/vtu.py", "write_vtu")],
+    "VTU/PVD writing": [("report/vtu.py", "write_unstructured")],
     "sweep: unit-field peaks": [("sweep/bases.py", "case_peak")],
     "sweep: load cases": [("loads/cases.py", "part_cases")],
 }

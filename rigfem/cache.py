@@ -93,10 +93,13 @@ def array_digest(*arrays) -> str:
 
 
 def _encoded(value: Any) -> Any:
-    """A key's stand-in for what JSON cannot hold: an array by its digest (:func:`array_digest`),
+    """A key's stand-in for what JSON cannot hold: a numpy scalar (or 0-d array) by its value, an
+    array by its digest (:func:`array_digest`; not one of objects, whose bytes are addresses),
     anything else by its text."""
-    if hasattr(value, "dtype") and hasattr(value, "shape"):
-        return {"array": array_digest(value)}
+    if type(value).__module__ == "numpy" and hasattr(value, "dtype"):  # numpy's own: not imported for it
+        if value.dtype.hasobject:
+            raise TypeError("an array of Python objects cannot key a cache entry")
+        return value.item() if value.ndim == 0 else {"array": array_digest(value)}
     return str(value)
 
 

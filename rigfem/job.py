@@ -121,15 +121,16 @@ def read_job(request: Request, cache: Cache) -> Job:
         external = None
     else:
         external = read_csv(csv_path, options.csv_missing, tuple(j.name for j in lk.joints))
-    # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules
-    broken = broken_rules(lk.meta) if sc.raw.get("linkage", {}).get("masses", "rig") == "rig" else []
-    rig_rules = bool(rules_for(lk.meta))
+    settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
+    sources = material_sources(settings.material)
+    # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules.
+    # Checked last: a configuration allowed to break a rule has nothing else wrong with its input.
+    rig_rules = sc.raw.get("linkage", {}).get("masses", "rig") == "rig" and bool(rules_for(lk.meta))
+    broken = broken_rules(lk.meta) if rig_rules else []
     if broken and not request.allow_rule_violations:
         raise InputError(f"scene {plain(path.name, 80)!r} breaks the rig rule {broken[0]}"
                          f"{f' (and {len(broken) - 1} more)' if len(broken) > 1 else ''}: it does not meet "
                          f"the rig rules; pass --allow-rule-violations to check it anyway")
-    settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
-    sources = material_sources(settings.material)
     scene_sha = _sha256(path.read_bytes())
     inputs = {"scene": scene_sha, "allow_rule_violations": bool(broken),  # the CSV by its content, not its path
               "check": {**table, **dyn, "reactions_csv": _sha256(csv_path.read_bytes()) if csv_path else None}}

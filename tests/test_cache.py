@@ -177,3 +177,21 @@ def test_unusable_cache_folder_runs_without_a_cache_and_says_so_once(tmp_path, w
     assert (tmp_path / "p.vtu").stat().st_size > 0
     if where == "file":
         assert cache.read_text() == "a user's file\n"
+
+
+def test_arrays_key_an_entry_by_their_content(tmp_path):
+    """An array among an entry's inputs keys it by its bytes, dtype and shape (not numpy's abridged
+    text, which would make large arrays that differ in the middle the same key); a numpy scalar by its value."""
+    import numpy as np
+
+    cache = Cache(tmp_path / "c", 10**9)
+    a = np.zeros(5000)
+    b = a.copy()
+    b[2500] = 1.0
+    assert str(a) == str(b)  # what json.dumps(default=str) used to key them by
+    folders = {cache.entry_folder("t", {"x": x}) for x in (a, b, a.astype(np.float32), a.reshape(50, 100))}
+    assert len(folders) == 4
+    assert cache.entry_folder("t", {"x": a}) == cache.entry_folder("t", {"x": a.copy()})
+    assert cache.entry_folder("t", {"x": np.float32(1.5)}) == cache.entry_folder("t", {"x": 1.5})
+    with pytest.raises(TypeError, match="Python objects"):
+        cache.entry_folder("t", {"x": np.array([object()])})

@@ -38,7 +38,7 @@ def test_report_and_files(plate_report):
     m = meshio.read(out / "plate_A_original.vtu")
     assert {"displacement", "stress", "von_mises", "safety_factor"} <= set(m.point_data)
     assert np.isclose(m.point_data["von_mises"].max(), orig["peak_mpa"], rtol=1e-6)
-    # each case's file is its critical crank angle's field: the cycle case's too (not its first row's)
+    # each case's file is its critical crank angle's field, the cycle case's too
     assert np.isclose(meshio.read(out / "plate_A_cycle.vtu").point_data["von_mises"].max(), cyc["peak_mpa"],
                       rtol=1e-6)
     assert "plate_A_cycle_000.vtu" in (out / "plate_A_cycle.pvd").read_text()

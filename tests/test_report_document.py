@@ -351,3 +351,12 @@ def test_dirty_means_the_code_that_ran_changed(tmp_path):
     assert _commit(tmp_path)[1] is True
     git("checkout", "pyproject.toml"), (tmp_path / "geometry").mkdir(), (tmp_path / "geometry/p.toml").write_text("")
     assert _commit(tmp_path)[1] is True
+
+
+@pytest.mark.parametrize("scene", ["final-cm", "final-nc", "final-nm", "slider-crank-300-840"])
+def test_no_negative_zero_in_a_committed_report(scene):
+    """A value that rounds to zero prints 0.0: "-0.0" (a -1e-9 N reaction, a location a hair below 0) reads
+    as a sign that means something."""
+    for name in ("report.md", "report.html"):
+        text = (ROOT / "results" / scene / name).read_text(encoding="utf-8")
+        assert not re.findall(r"(?<![\d.])-0\.0*(?![0-9])", text), name

@@ -129,7 +129,7 @@ def test_changed_field_draws_the_part_again(warm, monkeypatch):
 
 
 def test_peak_sweep_is_cached_and_a_wrong_stored_peak_is_discarded(warm, monkeypatch, caplog):
-    from rigfem.cache import array_digest, save_arrays
+    from rigfem.cache import save_arrays
     from rigfem.fe import Solution, peak_sweep
 
     root, _ = warm
@@ -145,7 +145,7 @@ def test_peak_sweep_is_cached_and_a_wrong_stored_peak_is_discarded(warm, monkeyp
     monkeypatch.setattr(Solution, "peak_sweep", lambda *a: pytest.fail("a stored sweep was computed again"))
     again = peak_sweep(sol, C, cache)
     assert np.array_equal(again[0], vals) and np.array_equal(again[1], nodes)
-    inputs = {"solution": sol.key, "C": array_digest(np.atleast_2d(C))}
+    inputs = {"solution": sol.key, "C": np.atleast_2d(np.asarray(C, dtype=float))}  # as peak_sweep keys it
     shutil.rmtree(cache.entry_folder("sweeps", inputs))
     cache.put("sweeps", inputs, lambda t: save_arrays(t, {"peak": vals * 0.5, "node": nodes}))  # checksums fine
     monkeypatch.undo()

@@ -178,7 +178,7 @@ class CaseResult:
     #: the same rows' pin loads (:func:`finish`): case row -> (hole, its centre mm, force N) per loaded hole
     frame_loads: dict = dataclasses.field(default_factory=dict)
     #: the critical row's fields on every node once final (:func:`finish`): displacement, stress, von Mises (float32)
-    critical_fields: dict = dataclasses.field(default_factory=dict)
+    critical_fields: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
     @property
     def loaded(self) -> bool:
@@ -317,16 +317,18 @@ def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
         n = r.solution.model.mesh.n_vertices
         loads = {i: [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
                  for i in frame_rows(r, frames)}
-        fields = {i: {k: v[:n] for k, v in _fields(r.solution, r.coef[i]).items()} for i in loads}
-        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads,
-                                       critical_fields=_fields(r.solution, r.coef[r.row])))
+        critical = _fields(r.solution, r.coef[r.row])
+        fields = {i: {k: v[:n].copy() for k, v in critical.items()} if i == r.row else
+                  _fields(r.solution, r.coef[i], n) for i in loads}  # copies: a frame holds its vertices only
+        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads, critical_fields=critical))
         kept.setdefault(id(r.solution), (r.solution, []))[1].append(r.coef[r.row])
     small = {k: sol.kept(np.vstack(C)) for k, (sol, C) in kept.items()}
     return [dataclasses.replace(r, solution=small[id(r.solution)]) for r in out]
 
 
-def _fields(sol: Solution, c: np.ndarray) -> dict[str, np.ndarray]:
-    """The fields a report writes of the load combination ``c`` of ``sol``, on every node (float32)."""
-    s = sol.stress(c)
-    return {"displacement": sol.displacement(c).astype(np.float32), "stress": s.astype(np.float32),
+def _fields(sol: Solution, c: np.ndarray, n: int | None = None) -> dict[str, np.ndarray]:
+    """The fields a report writes of the load combination ``c`` of ``sol`` on its first ``n`` nodes
+    (None: every node), float32."""
+    s = sol.stress(c)[:n]
+    return {"displacement": sol.displacement(c)[:n].astype(np.float32), "stress": s.astype(np.float32),
             "von_mises": von_mises(s).astype(np.float32)}

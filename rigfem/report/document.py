@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 from rigfem.errors import plain
@@ -81,7 +82,7 @@ _PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displaceme
             "safety_factor": "factor of safety against the allowable"}
 
 
-def material_table(m, src: dict[str, str]) -> list[dict]:
+def material_table(m, src: Mapping[str, str]) -> list[dict]:
     """The material table of a report (a rigfem.material.Material and the source of each value,
     :attr:`rigfem.job.Job.material_sources`): each value with its unit and source."""
     return [{"property": "E", "value": m.E, "unit": "MPa", "source": src["E"]},
@@ -222,7 +223,7 @@ def verdict_table(r: dict) -> list[str]:
                        f"**{p['verdict'].upper()}** | – | – | – | – | – |")
             continue
         fat = p.get("fatigue")
-        where = f"{p['surface']} ({', '.join(f'{x:.1f}' for x in p['location_mm'])})"
+        where = f"{p['surface']} ({', '.join(f'{round(x, 1) + 0.0:.1f}' for x in p['location_mm'])})"
         sf = p.get("safety_factor", safety_factor(p["peak_mpa"], r["limit_mpa"]))
         b = band(p)
         out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | {p['peak_mpa']:.1f} | "

@@ -113,7 +113,7 @@ def part_entry(res: CaseResult, pv: PartVerdict, settings) -> dict:
     out = {
         "name": res.case.name, "part": res.case.part, "mode": res.mode,
         "peak_mpa": v.peak_mpa, "crank_deg": res.crank_deg,
-        "surface": pk.surface, "location_mm": [round(float(t), 3) for t in pk.xyz],
+        "surface": pk.surface, "location_mm": [round(float(t), 3) + 0.0 for t in pk.xyz],  # + 0.0: never -0.0
         "error_pct": v.error_pct, "limit_mpa": v.limit_mpa, "utilisation_pct": v.utilisation_pct,
         # the band also in MPa and in % of the allowable: ±43.7 % of a peak at 2 % of the allowable is ±0.9 %
         "band_mpa": v.peak_mpa * v.error_pct / 100, "band_pct_of_allowable": v.utilisation_pct * v.error_pct / 100,

@@ -26,7 +26,7 @@ def _env() -> jinja2.Environment:
     env = jinja2.Environment(loader=jinja2.PackageLoader("rigfem", "templates"),
                              autoescape=True, undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True)
-    env.filters["num"] = lambda x, digits=1: "–" if x is None else f"{x:.{digits}f}"
+    env.filters["num"] = lambda x, digits=1: "–" if x is None else f"{round(x, digits) + 0.0:.{digits}f}"  # no -0.0
     from rigfem.report.scale import scale_json
 
     env.globals["utilisation_scale"] = json_script(scale_json())  # the pages' colours: rigfem.report.scale

@@ -17,13 +17,16 @@ connectivity Int32: same arrays, same names, a few times smaller than uncompress
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rigfem.errors import ComputeError
-from rigfem.fe.assembly import FEMesh
 from rigfem.fe.solution import Solution
 from rigfem.tensors import von_mises
+
+if TYPE_CHECKING:
+    from rigfem.fe.assembly import FEMesh
 
 SAFETY_CAP = 100.0
 

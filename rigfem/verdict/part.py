@@ -122,9 +122,10 @@ def judge(outcomes: Sequence[Outcome], settings, rule_violations: Sequence[str] 
           singular: list | None = None) -> Verdicts:
     """The verdicts of ``outcomes`` under ``settings`` (a :class:`rigfem.settings.CheckSettings`:
     material, limit factor, fatigue).  The configuration fails when it breaks a rig rule
-    (``rule_violations``; None: the rig rules do not apply, a textbook linkage), whatever its
-    stresses, and when its linkage passes a toggle (``singular``: the crank-angle ranges where its
-    reactions grow without bound).  A configuration a check computes assembles."""
+    (``rule_violations``: the rules it breaks, none by default; None: the rig rules do not apply,
+    a textbook linkage), whatever its stresses, and when its linkage passes a toggle
+    (``singular``: the crank-angle ranges where its reactions grow without bound).  A
+    configuration a check computes assembles."""
     parts = []
     for o in outcomes:
         if o.loaded and not o.peak_mpa > 0:  # an invariant no cache entry can hide: load without stress is a bug
