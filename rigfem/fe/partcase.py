@@ -17,6 +17,7 @@ cancels its resultant.  The relieved fraction is reported; the 3-2-1 support the
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -177,8 +178,6 @@ class CaseResult:
     frames: dict = dataclasses.field(default_factory=dict)
     #: the same rows' pin loads (:func:`finish`): case row -> (hole, its centre mm, force N) per loaded hole
     frame_loads: dict = dataclasses.field(default_factory=dict)
-    #: the critical row's fields on every node once final (:func:`finish`): displacement, stress, von Mises (float32)
-    critical_fields: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
     @property
     def loaded(self) -> bool:
@@ -189,6 +188,13 @@ class CaseResult:
     def crank_deg(self) -> float:
         """The critical row's crank angle (deg)."""
         return float(self.case.rows[self.row])
+
+    @functools.cached_property
+    def critical_fields(self) -> dict[str, np.ndarray]:
+        """The critical row's fields on every node (displacement, stress, von Mises; float32): what a
+        report writes.  Computed when first asked, so a report whose VTU files are cached never
+        recovers them, and a cold one does while its pictures are drawn."""
+        return _fields(self.solution, self.coef[self.row])
 
     @property
     def outcome(self) -> Outcome:
@@ -305,10 +311,10 @@ def frame_rows(result: CaseResult, frames: int) -> list[int]:
 
 
 def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
-    """The cases of a part that is final, holding only what a report reads: each case's fields at
-    its critical row (every node: displacement, stress, von Mises; float32), its animation frames
-    (``frames`` rows of a cycle case: the same fields on the mesh's vertices, and the pin load on
-    each loaded hole) and its solution reduced to the critical rows' combinations
+    """The cases of a part that is final, holding only what a report reads: each case's animation
+    frames (``frames`` rows of a cycle case: displacement, stress and von Mises on the mesh's
+    vertices, float32, and the pin load on each loaded hole) and its solution reduced to the
+    critical rows' combinations
     (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a solution share the reduced one):
     the unit solutions of a finished part are not held while the next parts solve."""
     out, kept = [], {}
@@ -317,10 +323,8 @@ def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
         n = r.solution.model.mesh.n_vertices
         loads = {i: [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
                  for i in frame_rows(r, frames)}
-        critical = _fields(r.solution, r.coef[r.row])
-        fields = {i: {k: v[:n].copy() for k, v in critical.items()} if i == r.row else
-                  _fields(r.solution, r.coef[i], n) for i in loads}  # copies: a frame holds its vertices only
-        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads, critical_fields=critical))
+        fields = {i: _fields(r.solution, r.coef[i], n) for i in loads}
+        out.append(dataclasses.replace(r, frames=fields, frame_loads=loads))
         kept.setdefault(id(r.solution), (r.solution, []))[1].append(r.coef[r.row])
     small = {k: sol.kept(np.vstack(C)) for k, (sol, C) in kept.items()}
     return [dataclasses.replace(r, solution=small[id(r.solution)]) for r in out]

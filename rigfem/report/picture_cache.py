@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rigfem.cache import Cache, Entry, resolve
-from rigfem.errors import ComputeError
 from rigfem.memory import trim_heap
 from rigfem.report.figures import PICTURES
 
@@ -128,8 +127,7 @@ def _one_combination(r, c: np.ndarray):
     sol = r.solution
     model = dataclasses.replace(sol.model, mesh=dataclasses.replace(sol.model.mesh, cache={}), _K=None)
     one = dataclasses.replace(sol.kept(c[None]), model=model)
-    return dataclasses.replace(r, solution=one, cycle_nodes=None, cycle_stress=None, frames={}, frame_loads={},
-                               critical_fields={})
+    return dataclasses.replace(r, solution=one, cycle_nodes=None, cycle_stress=None, frames={}, frame_loads={})
 
 
 def _draw_all(jobs: list[tuple], cache: Cache) -> list[dict]:
@@ -246,13 +244,11 @@ def plot_peaks(results: list, limit: float, path: Path, allowable: str, cache: C
 
 
 def write_case_vtu(path: str | Path, r: CaseResult, allowable: float, cache: Cache | None = None) -> Path:
-    """:func:`rigfem.report.vtu.write_fields` of a finished case result ``r`` (its critical row's
-    fields, :func:`rigfem.fe.partcase.finish`) through the cache when its solution is a cached one
-    (its entry's key names its mesh and loads)."""
+    """:func:`rigfem.report.vtu.write_fields` of the case result ``r`` (its critical row's fields,
+    :attr:`~rigfem.fe.partcase.CaseResult.critical_fields`) through the cache when its solution is
+    a cached one (its entry's key names its mesh and loads): a warm check recovers no stress for it."""
     from rigfem.report.vtu import write_fields
 
-    if not r.critical_fields:
-        raise ComputeError(f"{r.case.name} ({r.mode}) is not finished (rigfem.fe.partcase.finish): no fields to write")
     path, sol = Path(path), r.solution
     if not sol.key:
         return write_fields(path, sol.model.mesh, r.critical_fields, allowable)
