@@ -93,9 +93,8 @@ def array_digest(*arrays) -> str:
 
 
 def _encoded(value: Any) -> Any:
-    """A key's stand-in for what JSON cannot hold: a numpy scalar (or 0-d array) by its value, an
-    array by its digest (:func:`array_digest`; not one of objects, whose bytes are addresses),
-    anything else by its text."""
+    """A key's stand-in for what JSON cannot hold: a numpy scalar by its value, an array by its digest
+    (:func:`array_digest`; never one of objects, whose bytes are addresses), anything else by its text."""
     if type(value).__module__ == "numpy" and hasattr(value, "dtype"):  # numpy's own: not imported for it
         if value.dtype.hasobject:
             raise TypeError("an array of Python objects cannot key a cache entry")
@@ -266,7 +265,7 @@ class Cache:
         try:
             save(tmp)
             files = {p.name: file_sha256(p) for p in sorted(tmp.iterdir())}
-            man = {**SIGNATURE, "kind": kind, "inputs": _canonical(inputs), "rigfem": __version__,
+            man = {**SIGNATURE, "kind": kind, "inputs": inputs, "rigfem": __version__,
                    "package": package_hash(), "files": files}
             (tmp / MANIFEST).write_text(json.dumps(man))
             size = sum(p.stat().st_size for p in tmp.iterdir())
