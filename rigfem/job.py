@@ -124,7 +124,7 @@ def read_job(request: Request, cache: Cache) -> Job:
     settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
     sources = material_sources(settings.material)
     # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules.
-    # Checked last: a configuration allowed to break a rule has nothing else wrong with its input.
+    # The rules come last, so that --allow-rule-violations never uncovers another input error.
     rig_rules = sc.raw.get("linkage", {}).get("masses", "rig") == "rig" and bool(rules_for(lk.meta))
     broken = broken_rules(lk.meta) if rig_rules else []
     if broken and not request.allow_rule_violations:

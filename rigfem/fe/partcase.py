@@ -314,9 +314,9 @@ def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
     """The cases of a part that is final, holding only what a report reads: each case's animation
     frames (``frames`` rows of a cycle case: displacement, stress and von Mises on the mesh's
     vertices, float32, and the pin load on each loaded hole) and its solution reduced to the
-    critical rows' combinations
-    (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a solution share the reduced one):
-    the unit solutions of a finished part are not held while the next parts solve."""
+    critical rows' combinations (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a
+    solution share the reduced one): the unit solutions of a finished part are not held while the
+    next parts solve."""
     out, kept = [], {}
     for r in results:
         x = r.solution.model.mesh.nodes
