@@ -23,7 +23,7 @@ from rigfem.fe.partcase import CaseResult
 from rigfem.io.reactions_csv import read_csv
 from rigfem.linkage.mechanisms import crank_angles
 from rigfem.linkage.model import Linkage
-from rigfem.material import material_sources, table_material
+from rigfem.material import table_material
 from rigfem.rig.rules import broken_rules, rules_for
 from rigfem.scene import Scene, load_scene, resolve
 from rigfem.schema import validate_check
@@ -54,7 +54,7 @@ class Job:
     """A scene read for checking: its linkage with the forces it names, the check's settings, how
     the reactions are got, the animation frames, the rig rules it breaks (allowed explicitly) and
     whether they apply (not to a textbook linkage), the hashes of its inputs, the report's author and
-    the sources of its material's values."""
+    its reactions CSV as read."""
 
     scene: Scene
     linkage: Linkage
@@ -67,8 +67,6 @@ class Job:
     input_sha256: str = ""  #: SHA-256 of everything the result depends on (scene, [check] as run, reactions CSV)
     author: str = ""
     rig_rules: bool = True  #: whether the rig rules apply (a rig configuration, not a textbook linkage)
-    #: where each value of ``settings.material`` comes from (:func:`rigfem.material.material_sources`)
-    material_sources: Mapping[str, str] = dataclasses.field(default_factory=dict)
     #: the reactions CSV (``dynamics.reactions_csv``) as read, checked against the linkage's joints; None without one
     external: ReactionHistory | None = None
 
@@ -122,7 +120,6 @@ def read_job(request: Request, cache: Cache) -> Job:
     else:
         external = read_csv(csv_path, options.csv_missing, tuple(j.name for j in lk.joints))
     settings = dataclasses.replace(settings, material=table_material(table.get("material", "rig_steel")))
-    sources = material_sources(settings.material)
     # a rig scene is built from the rig's catalogue; the textbook linkages (masses = "none") have no rig rules.
     # The rules come last, so that --allow-rule-violations never uncovers another input error.
     rig_rules = sc.raw.get("linkage", {}).get("masses", "rig") == "rig" and bool(rules_for(lk.meta))
@@ -138,4 +135,4 @@ def read_job(request: Request, cache: Cache) -> Job:
     return Job(sc, lk, settings, options, int(dyn["frames"]), tuple(broken),
                sc.raw.get("description", sc.raw["linkage"].get("title", "")), scene_sha,
                _sha256(json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str).encode()),
-               plain(author, 200), rig_rules, sources, external)
+               plain(author, 200), rig_rules, external)

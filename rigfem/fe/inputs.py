@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from rigfem.errors import InputError
+from rigfem.mesh.partmesh import vertex_set_keys
 
 METHODS = ("auto", "pardiso", "superlu", "amg")  #: the linear solvers a caller may name
 
@@ -322,8 +323,6 @@ def _on(t: np.ndarray, corners: np.ndarray, n: int) -> np.ndarray:
     """Which rows of ``corners`` (vertex sets, K × k) are corner sets of ``t``'s rows (tet faces
     or edges, M × j × k), in any order: only the tet sets whose vertices all lie in ``corners``
     are keyed, so a surface costs a pass over the tets, not a sort of them."""
-    from rigfem.mesh.partmesh import vertex_set_keys
-
     used = np.zeros(n, bool)
     used[corners] = True
     cand = t[used[t].all(-1)]

@@ -17,7 +17,6 @@ cancels its resultant.  The relieved fraction is reported; the 3-2-1 support the
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 
 import numpy as np
@@ -189,13 +188,6 @@ class CaseResult:
         """The critical row's crank angle (deg)."""
         return float(self.case.rows[self.row])
 
-    @functools.cached_property
-    def critical_fields(self) -> dict[str, np.ndarray]:
-        """The critical row's fields on every node (displacement, stress, von Mises; float32): what a
-        report writes.  Computed when first asked, so a report whose VTU files are cached never
-        recovers them, and a cold one does while its pictures are drawn."""
-        return _fields(self.solution, self.coef[self.row])
-
     @property
     def outcome(self) -> Outcome:
         """What the verdict stage judges of this case."""
@@ -312,27 +304,21 @@ def frame_rows(result: CaseResult, frames: int) -> list[int]:
 
 def finish(results: list[CaseResult], frames: int) -> list[CaseResult]:
     """The cases of a part that is final, holding only what a report reads: each case's animation
-    frames (``frames`` rows of a cycle case: displacement, stress and von Mises on the mesh's
-    vertices, float32, and the pin load on each loaded hole) and its solution reduced to the
-    critical rows' combinations (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a
-    solution share the reduced one): the unit solutions of a finished part are not held while the
-    next parts solve."""
+    frames (``frames`` rows of a cycle case: von Mises, stress and displacement on the mesh's
+    vertices, float32, and the pin load on each loaded hole) and its solution reduced to the critical rows' combinations
+    (:meth:`~rigfem.fe.solution.Solution.kept`; cases sharing a solution share the reduced one):
+    the unit solutions of a finished part are not held while the next parts solve."""
     out, kept = [], {}
     for r in results:
         x = r.solution.model.mesh.nodes
         n = r.solution.model.mesh.n_vertices
-        loads = {i: [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
-                 for i in frame_rows(r, frames)}
-        fields = {i: _fields(r.solution, r.coef[i], n) for i in loads}
+        fields, loads = {}, {}
+        for i in frame_rows(r, frames):
+            s = r.solution.stress(r.coef[i])[:n]
+            fields[i] = {"displacement": r.solution.displacement(r.coef[i])[:n].astype(np.float32),
+                         "stress": s.astype(np.float32), "von_mises": von_mises(s).astype(np.float32)}
+            loads[i] = [(g, x[nodes].mean(0), f) for g, nodes, f in hole_forces(r, r.coef[i])]
         out.append(dataclasses.replace(r, frames=fields, frame_loads=loads))
         kept.setdefault(id(r.solution), (r.solution, []))[1].append(r.coef[r.row])
     small = {k: sol.kept(np.vstack(C)) for k, (sol, C) in kept.items()}
     return [dataclasses.replace(r, solution=small[id(r.solution)]) for r in out]
-
-
-def _fields(sol: Solution, c: np.ndarray, n: int | None = None) -> dict[str, np.ndarray]:
-    """The fields a report writes of the load combination ``c`` of ``sol`` on its first ``n`` nodes
-    (None: every node), float32."""
-    s = sol.stress(c)[:n]
-    return {"displacement": sol.displacement(c)[:n].astype(np.float32), "stress": s.astype(np.float32),
-            "von_mises": von_mises(s).astype(np.float32)}

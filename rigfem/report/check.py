@@ -31,8 +31,8 @@ from rigfem.report.picture_cache import (  # drawn once, then copied from the ca
     reactions_plot,
     started_part_pictures,
     utilisation_plot,
-    write_case_vtu,
     write_frames,
+    write_vtu,
 )
 from rigfem.report.vtu import write_frame
 
@@ -108,7 +108,7 @@ def document(checked: Checked) -> dict:
                      "bearing_directions": s.bearing_directions,
                      "material": s.material.name, "sigma_u_mpa": s.material.sigma_u,
                      "load_factor": s.load_factor, "limit_factor": s.limit_factor, "fatigue": s.fatigue},
-        "material": material_table(s.material, job.material_sources),
+        "material": material_table(s.material),
         "parts": parts, "differences": _differences([p for p in parts if p.get("peak_mpa") is not None]),
     }
 
@@ -178,8 +178,8 @@ def _outputs(d: Path, checked: Checked, parts: list[dict], output: Output, ctx: 
             plot_peaks(list(results), limit, d / "peak_von_mises.png", allowable, cache)
             first.append("peak_von_mises.png")
         for r, entry in zip(results, parts):
-            stem = f"{r.case.name}_{r.mode}"
-            write_case_vtu(d / f"{stem}.vtu", r, limit, cache)
+            stem, c = f"{r.case.name}_{r.mode}", r.coef[r.row]
+            write_vtu(d / f"{stem}.vtu", r.solution, c, allowable=limit, cache=cache)
             fields.append(f"{stem}.vtu")
             if output.export_inp:  # written last (write_check), once the report is
                 fields.append(f"{stem}.inp")

@@ -9,12 +9,11 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping
 from pathlib import Path
 
 from rigfem.errors import plain
-from rigfem.report.figures import (allowable_label, asked_text, band, by_utilisation, part_label, safety_factor,
-                                   sf_text, stopped_text)
+from rigfem.report.figures import (allowable_label, asked_text, band, by_utilisation, number, part_label,
+                                   safety_factor, sf_text, stopped_text)
 
 #: version of report.json's layout (docs/guide/report.md: the fields); raised when a field changes meaning, goes or
 #: is added (5: each part case's band_mpa and band_pct_of_allowable, the conclusion's band_mpa; 6: each part
@@ -82,9 +81,11 @@ _PICTURE = {"von_mises": "von Mises as utilisation", "displacement": "displaceme
             "safety_factor": "factor of safety against the allowable"}
 
 
-def material_table(m, src: Mapping[str, str]) -> list[dict]:
-    """The material table of a report (a rigfem.material.Material and the source of each value,
-    :attr:`rigfem.job.Job.material_sources`): each value with its unit and source."""
+def material_table(m) -> list[dict]:
+    """The material table of a report (rigfem.material.Material): each value with its unit and source."""
+    from rigfem.material import material_sources
+
+    src = material_sources(m)
     return [{"property": "E", "value": m.E, "unit": "MPa", "source": src["E"]},
             {"property": "nu", "value": m.nu, "unit": "-", "source": src["nu"]},
             {"property": "sigma_u", "value": m.sigma_u, "unit": "MPa", "source": src["sigma_u"]},
@@ -93,7 +94,7 @@ def material_table(m, src: Mapping[str, str]) -> list[dict]:
 
 
 def _vec(v, nd: int = 1) -> str:
-    return "(" + ", ".join(f"{round(x, nd) + 0.0:.{nd}f}" for x in v) + ")"
+    return "(" + ", ".join(number(x, nd) for x in v) + ")"
 
 
 def study_tables(r: dict) -> list[str]:
@@ -112,7 +113,7 @@ def study_tables(r: dict) -> list[str]:
         steps = ", ".join(f"{s['level']} {s['dofs']} ({s['seconds']:.1f})"
                           + "".join(f", {n} skipped" for n in s.get("skipped", [])) for s in m.get("ladder", []))
         lines.append(f"| {part_label(p['name'], p['part'])} | {p['mode']} | {m.get('element', '')} | {m.get('fe_nodes', m['nodes'])} | "
-                     f"{m['tets']} | {_fmt(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | {asked_text(p)} | "
+                     f"{m['tets']} | {number(m.get('size_at_peak_mm'), 2)} | {m['quality_min']:.2f} | {asked_text(p)} | "
                      f"{m.get('level', '')} | {m.get('stopped', '')} | {steps} |")
     lines += ["", "## Free-body balance per part (critical crank angle; moments about the part frame's origin; "
               "applied = pin loads and body forces, with the inertia relief of a free body)",
@@ -126,10 +127,6 @@ def study_tables(r: dict) -> list[str]:
                          f"{_vec(b['applied_Nmm'], 0)} | {_vec(b['supports_N'])}{free} | {_vec(b['supports_Nmm'], 0)} | "
                          f"{b['residual_N']:.2g} |")
     return lines
-
-
-def _fmt(x, nd: int = 1) -> str:
-    return "–" if x is None else f"{x:.{nd}f}"
 
 
 def _mesh_sizes(s: dict) -> str:
@@ -188,7 +185,7 @@ def conclusion_lines(r: dict) -> list[str]:
     if c:
         lo, hi = c["utilisation_band_pct"]
         out += ["", f"- governing: **{part_label(c['name'], c['part'])}, {c['mode']} mode** — "
-                f"{c['verdict'].upper()}, peak σvm {c['peak_mpa']:.1f} MPa at crank {_fmt(c['crank_deg'])}°",
+                f"{c['verdict'].upper()}, peak σvm {c['peak_mpa']:.1f} MPa at crank {number(c['crank_deg'])}°",
                 f"- utilisation {c['utilisation_pct']:.1f} % (band {lo:.1f}–{hi:.1f} %: "
                 + (f"±{c['band_mpa']:.1f} MPa, ±{(hi - lo) / 2:.1f} % of the allowable, ±{c['error_pct']:.1f} % of "
                    f"the peak)" if "band_mpa" in c else f"±{(hi - lo) / 2:.1f} % of the allowable)"),
@@ -223,13 +220,13 @@ def verdict_table(r: dict) -> list[str]:
                        f"**{p['verdict'].upper()}** | – | – | – | – | – |")
             continue
         fat = p.get("fatigue")
-        where = f"{p['surface']} ({', '.join(f'{round(x, 1) + 0.0:.1f}' for x in p['location_mm'])})"
+        where = f"{p['surface']} ({', '.join(number(x) for x in p['location_mm'])})"
         sf = p.get("safety_factor", safety_factor(p["peak_mpa"], r["limit_mpa"]))
         b = band(p)
         out.append(f"| {mark} | {part_label(p['name'], p['part'])} | {p['mode']} | {p['peak_mpa']:.1f} | "
                    f"{p['utilisation_pct']:.1f} | ±{b['mpa']:.1f} | ±{b['pct_of_allowable']:.1f} | "
                    f"±{b['pct_of_peak']:.1f} | **{p['verdict'].upper()}** | {sf_text(sf)} | "
-                   f"{_fmt(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} | "
+                   f"{number(p.get('crank_deg'))} | {where} | {sf_text(fat['safety_factor']) if fat else '–'} | "
                    f"{md_text(stopped_text(p))} |")
     minima = r.get("part_minima")
     if minima:
@@ -261,9 +258,9 @@ def configuration_lines(r: dict) -> list[str]:
                      f"{rule.get('unit', '') or '–'} | {'yes' if rule['ok'] else '**no**'} |")
     lines += ["", "## Peak reactions", "", "| joint | peak (N) | crank angle (deg) |", "|---|---|---|"]
     for name, p in r["peaks"].items():
-        lines.append(f"| {name} | {_fmt(p['force_N'])} | {_fmt(p['crank_deg'], 2)} |")
+        lines.append(f"| {name} | {number(p['force_N'])} | {number(p['crank_deg'], 2)} |")
     t = r["torque_Nm"]
-    lines.append(f"| driver torque (N·m) | {_fmt(t['peak'])} | {_fmt(t['crank_deg'], 2)} |")
+    lines.append(f"| driver torque (N·m) | {number(t['peak'])} | {number(t['crank_deg'], 2)} |")
     return lines
 
 
@@ -279,12 +276,7 @@ def assumption_lines(r: dict) -> list[str]:
 
 
 def _xyz(v) -> str:
-    """Table cells of a vector, 0.1 apart; a value that rounds to zero is 0.0, never -0.0.
-
-    >>> _xyz([-1e-9, 0.04, -0.06])
-    '0.0 | 0.0 | -0.1'
-    """
-    return " | ".join(f"{round(x, 1) + 0.0:.1f}" for x in v)
+    return " | ".join(number(x) for x in v)
 
 
 def loads_lines(r: dict) -> list[str]:

@@ -100,6 +100,16 @@ def part_minima(parts: list[dict]) -> list[dict]:
     return sorted(out.values(), key=lambda m: m["min_safety_factor"])
 
 
+def number(x: float | None, nd: int = 1) -> str:
+    """A number as a report prints it: ``nd`` decimals, ``–`` when there is none, and 0.0 where it
+    rounds to zero (never -0.0, which reads as a sign that means something).
+
+    >>> number(-1e-9), number(-0.06), number(None)
+    ('0.0', '-0.1', '–')
+    """
+    return "–" if x is None else f"{round(x, nd) + 0.0:.{nd}f}"
+
+
 def sf_text(x) -> str:
     """A factor of safety as printed: two decimals, ``–`` when there is none."""
     return "–" if x is None else f"{x:.2f}"

@@ -18,6 +18,8 @@ from markupsafe import Markup
 from mistune.plugins.table import render_table_cell
 from mistune.util import escape
 
+from rigfem.report.figures import number
+
 __all__ = ["render_page", "markdown_html", "png_uri", "json_script"]
 
 
@@ -26,7 +28,7 @@ def _env() -> jinja2.Environment:
     env = jinja2.Environment(loader=jinja2.PackageLoader("rigfem", "templates"),
                              autoescape=True, undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True)
-    env.filters["num"] = lambda x, digits=1: "–" if x is None else f"{round(x, digits) + 0.0:.{digits}f}"  # no -0.0
+    env.filters["num"] = number
     from rigfem.report.scale import scale_json
 
     env.globals["utilisation_scale"] = json_script(scale_json())  # the pages' colours: rigfem.report.scale

@@ -7,7 +7,7 @@ versions; the package's code is in every key) into the key of a verified cache e
 (:mod:`rigfem.cache`, kind ``pictures``), and a hit copies the stored files: byte for byte the
 pictures a cold run drew, without pyvista.  A fallback picture (matplotlib, where no OpenGL
 runs) is not stored: a machine that gains OpenGL draws the real one.  The VTU field files of a
-cached solution (:func:`write_case_vtu`) and a cycle case's animation frames (:func:`write_frames`)
+cached solution (:func:`write_vtu`) and a cycle case's animation frames (:func:`write_frames`)
 are stored the same way, keyed by the solution's entry and the load combinations.
 
 The drawing code (matplotlib) is imported only where a picture is drawn, so a warm check, which
@@ -24,16 +24,12 @@ import itertools
 import json
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rigfem.cache import Cache, Entry, resolve
 from rigfem.memory import trim_heap
 from rigfem.report.figures import PICTURES
-
-if TYPE_CHECKING:
-    from rigfem.fe.partcase import CaseResult
 
 _RESULT = "result.json"
 #: numbers the calls of started_part_pictures (their jobs' keys in the pool)
@@ -243,20 +239,18 @@ def plot_peaks(results: list, limit: float, path: Path, allowable: str, cache: C
     cached("peaks", inputs, Path(path).parent, draw, resolve(cache))
 
 
-def write_case_vtu(path: str | Path, r: CaseResult, allowable: float, cache: Cache | None = None) -> Path:
-    """:func:`rigfem.report.vtu.write_fields` of the case result ``r`` (its critical row's fields,
-    :attr:`~rigfem.fe.partcase.CaseResult.critical_fields`) through the cache when its solution is
-    a cached one (its entry's key names its mesh and loads): a warm check recovers no stress for it."""
-    from rigfem.report.vtu import write_fields
+def write_vtu(path: str | Path, sol, c, allowable: float, cache: Cache | None = None) -> Path:
+    """:func:`rigfem.report.vtu.write_vtu` through the cache when ``sol`` is a cached solution
+    (its entry's key names its mesh and loads); written directly otherwise."""
+    from rigfem.report.vtu import write_vtu as write
 
-    path, sol = Path(path), r.solution
+    path = Path(path)
     if not sol.key:
-        return write_fields(path, sol.model.mesh, r.critical_fields, allowable)
-    inputs = {"solution": sol.key, "c": np.asarray(r.coef[r.row], dtype=float), "allowable": allowable,
-              "name": path.name}
+        return write(path, sol, c, allowable)
+    inputs = {"solution": sol.key, "c": np.asarray(c, dtype=float), "allowable": allowable, "name": path.name}
 
     def draw(d: Path) -> tuple[dict, list[str]]:
-        write_fields(d / path.name, sol.model.mesh, r.critical_fields, allowable)
+        write(d / path.name, sol, c, allowable)
         return {}, [path.name]
 
     cached("vtu", inputs, path.parent, draw, resolve(cache))

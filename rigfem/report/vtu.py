@@ -17,16 +17,12 @@ connectivity Int32: same arrays, same names, a few times smaller than uncompress
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rigfem.errors import ComputeError
 from rigfem.fe.solution import Solution
 from rigfem.tensors import von_mises
-
-if TYPE_CHECKING:
-    from rigfem.fe.assembly import FEMesh
 
 SAFETY_CAP = 100.0
 
@@ -70,18 +66,12 @@ def _safety(vm: np.ndarray, allowable: float) -> np.ndarray:
 def write_vtu(path: str | Path, sol: Solution, c, allowable: float) -> Path:
     """Write the combination ``c`` of load cases (None: the only case) of ``sol`` as VTU, its safety
     factor against the ``allowable`` stress (MPa); every array float32 (computed in float64)."""
+    fm, allow = sol.model.mesh, float(allowable)
     s = sol.stress(c)
-    return write_fields(path, sol.model.mesh, {"displacement": sol.displacement(c), "stress": s,
-                                               "von_mises": von_mises(s)}, allowable)
-
-
-def write_fields(path: str | Path, fm: FEMesh, fields: dict[str, np.ndarray], allowable: float) -> Path:
-    """Write ``fields`` on every node of ``fm`` (displacement, stress, von Mises: what
-    :func:`write_vtu` computes, or a case's :attr:`~rigfem.fe.partcase.CaseResult.critical_fields`)
-    as VTU with the safety factor against the ``allowable`` stress (MPa); every array float32."""
-    data = {**fields, "safety_factor": _safety(fields["von_mises"], float(allowable))}
+    vm = von_mises(s)
+    data = {"displacement": sol.displacement(c), "stress": s, "von_mises": vm, "safety_factor": _safety(vm, allow)}
     return write_unstructured(path, fm.nodes.astype(np.float32), "tetra10" if fm.order == 2 else "tetra",
-                              fm.elements, {k: np.asarray(v).astype(np.float32) for k, v in data.items()})
+                              fm.elements, {k: v.astype(np.float32) for k, v in data.items()})
 
 
 def write_frame(path: str | Path, vertices: np.ndarray, tets: np.ndarray, fields: dict[str, np.ndarray],
